@@ -1,0 +1,42 @@
+# Every dependency comes from Debian 12 packages (deploy/setup.sh installs them).
+
+find_package(Threads REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(Boost 1.74 REQUIRED COMPONENTS system filesystem)
+find_package(OpenSSL REQUIRED)
+find_package(SQLite3 REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(spdlog REQUIRED)
+find_package(yaml-cpp REQUIRED)
+find_package(draco REQUIRED)
+find_package(Ceres REQUIRED)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs features2d calib3d)
+find_package(CGAL REQUIRED)
+find_package(PCL 1.12 REQUIRED COMPONENTS common io filters kdtree search registration)
+if(KEEL_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+  find_package(benchmark REQUIRED)
+endif()
+
+# Debian's yaml-cpp exports a plain `yaml-cpp` target.
+if(NOT TARGET yaml-cpp::yaml-cpp)
+  add_library(yaml-cpp::yaml-cpp INTERFACE IMPORTED)
+  set_target_properties(yaml-cpp::yaml-cpp PROPERTIES INTERFACE_LINK_LIBRARIES yaml-cpp)
+endif()
+
+# PCL as one interface target (its variables are not target-based on Debian 12).
+add_library(keel_pcl INTERFACE)
+target_include_directories(keel_pcl SYSTEM INTERFACE ${PCL_INCLUDE_DIRS})
+target_link_libraries(keel_pcl INTERFACE ${PCL_LIBRARIES})
+target_compile_definitions(keel_pcl INTERFACE ${PCL_DEFINITIONS})
+
+# ROS1 bags without ROS (PLATFORM-NOTES.md): `pkg-config rosbag_storage` is broken on
+# Debian 12, so the include dirs and libraries are listed by hand.
+add_library(keel_rosbag INTERFACE)
+target_include_directories(keel_rosbag SYSTEM INTERFACE
+  /usr/include/pluginlib /usr/include/class_loader /usr/include/rcpputils
+  /usr/include/rcutils /usr/include/ament_index_cpp)
+target_link_libraries(keel_rosbag INTERFACE
+  rosbag_storage roscpp_serialization rostime cpp_common console_bridge
+  Boost::filesystem boost_regex roslz4 bz2)

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package Keel's build, tests, benchmarks and demo need.
+# Non-interactive and idempotent: packages already present are skipped by apt.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build ccache pkg-config git clang-format
+  # product libraries (see DESIGN.md "Layers")
+  libboost-dev libboost-system-dev libboost-filesystem-dev libboost-regex-dev
+  libboost-iostreams-dev libboost-program-options-dev libboost-thread-dev
+  libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev
+  libdraco-dev draco libsqlite3-dev nlohmann-json3-dev libcli11-dev
+  libspdlog-dev libyaml-cpp-dev libssl-dev
+  # ROS1 bags without ROS (PLATFORM-NOTES.md)
+  librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
+  libtf2-msgs-dev libstd-msgs-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs
+  python3-tf2-msgs python3-numpy curl
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "keel setup: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+echo "keel setup: installing ${#missing[@]} packages: ${missing[*]}"
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "keel setup: done"

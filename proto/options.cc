@@ -1,0 +1,81 @@
+#include "proto/options.h"
+
+#include <algorithm>
+
+#include "proto/contract_error.h"
+
+namespace keel::proto {
+
+const std::vector<std::string>& known_stages() {
+  static const std::vector<std::string> stages = {"ingest", "refine", "map", "ba", "inspect"};
+  return stages;
+}
+
+bool is_known_stage(std::string_view stage) {
+  const auto& stages = known_stages();
+  return std::find(stages.begin(), stages.end(), stage) != stages.end();
+}
+
+static std::string known_list() {
+  std::string out;
+  for (const auto& s : known_stages()) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+std::vector<std::string> parse_stage_list(std::string_view text) {
+  std::vector<std::string> stages;
+  size_t start = 0;
+  while (start <= text.size()) {
+    size_t comma = text.find(',', start);
+    if (comma == std::string_view::npos) comma = text.size();
+    std::string name(text.substr(start, comma - start));
+    if (!name.empty()) stages.push_back(name);
+    start = comma + 1;
+  }
+  validate_stage_list(stages, "stages");
+  return stages;
+}
+
+void validate_stage_list(const std::vector<std::string>& stages, const std::string& path) {
+  if (stages.empty()) throw ContractError(path + ": expected at least one stage");
+  for (size_t i = 0; i < stages.size(); ++i) {
+    const std::string item = path + "[" + std::to_string(i) + "]";
+    if (!is_known_stage(stages[i]))
+      throw ContractError(item + ": unknown stage '" + stages[i] + "' (known: " + known_list() + ")");
+    for (size_t j = 0; j < i; ++j)
+      if (stages[j] == stages[i]) throw ContractError(item + ": stage '" + stages[i] + "' repeated");
+  }
+}
+
+void apply_option_assignment(nlohmann::json& options, std::string_view assignment) {
+  const size_t eq = assignment.find('=');
+  const std::string where = "option '" + std::string(assignment) + "'";
+  if (eq == std::string_view::npos) throw ContractError(where + ": expected stage.option=value");
+  const std::string_view key = assignment.substr(0, eq);
+  const size_t dot = key.find('.');
+  if (dot == std::string_view::npos || dot == 0 || dot + 1 == key.size())
+    throw ContractError(where + ": expected stage.option=value");
+  const std::string stage(key.substr(0, dot));
+  const std::string option(key.substr(dot + 1));
+  if (!is_known_stage(stage))
+    throw ContractError(where + ": unknown stage '" + stage + "' (known: " + known_list() + ")");
+  const std::string text(assignment.substr(eq + 1));
+  nlohmann::json value = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (value.is_discarded()) value = text;
+  if (!options.is_object()) options = nlohmann::json::object();
+  options[stage][option] = value;
+}
+
+void validate_options(const nlohmann::json& options, const std::string& path) {
+  if (options.is_null()) return;
+  if (!options.is_object()) throw ContractError(path + ": expected object, got " + json_type_name(options));
+  for (const auto& item : options.items()) {
+    const std::string child = path + "." + item.key();
+    if (!is_known_stage(item.key()))
+      throw ContractError(child + ": unknown stage (known: " + known_list() + ")");
+    if (!item.value().is_object())
+      throw ContractError(child + ": expected object of options, got " + json_type_name(item.value()));
+  }
+}
+
+}  // namespace keel::proto

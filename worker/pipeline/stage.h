@@ -1,0 +1,58 @@
+// A processing stage: reads the mission (and earlier stages' outputs) from disk, writes its
+// artifacts into the job's work folder and returns its section of report.json.
+// Stages know nothing of HTTP or databases: the same stage runs under `keel-worker` (leased
+// from a server) and `keel-worker run` (local, no server).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace keel::pipeline {
+
+// Thrown by StageContext::check_canceled(); the runner stops and reports nothing more.
+struct Canceled : std::runtime_error {
+  Canceled() : std::runtime_error("job canceled") {}
+};
+
+struct StageContext {
+  std::filesystem::path mission_dir;  // unpacked mission bundle (mission.yaml at its root)
+  std::filesystem::path cad_path;     // CAD mesh file, empty when the mission has none
+  std::filesystem::path work_dir;     // artifacts of every stage of this job live here
+  nlohmann::json options = nlohmann::json::object();  // this stage's options (--set stage.x=v)
+  nlohmann::json reports = nlohmann::json::object();  // sections of earlier stages, by stage name
+
+  // Progress of this stage in [0, 1]; a line for the job log. Both cheap; call freely.
+  std::function<void(double)> progress = [](double) {};
+  std::function<void(const std::string&)> log = [](const std::string&) {};
+  // True once the job is canceled; stages call check_canceled() in their loops.
+  std::function<bool()> canceled = [] { return false; };
+  void check_canceled() const {
+    if (canceled()) throw Canceled();
+  }
+};
+
+struct StageResult {
+  nlohmann::json report = nlohmann::json::object();  // this stage's section of report.json
+  std::vector<std::string> artifacts;                 // file names written into work_dir
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  virtual std::string name() const = 0;
+  // Throws std::exception with a message naming what is wrong; that message becomes the
+  // job's error.
+  virtual StageResult run(StageContext& context) = 0;
+};
+
+// The stages built into this worker, by name ("ingest", ...). Throws for an unknown name.
+std::unique_ptr<Stage> make_stage(const std::string& name);
+std::vector<std::string> available_stages();
+
+}  // namespace keel::pipeline
