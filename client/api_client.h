@@ -1,0 +1,113 @@
+// A blocking HTTP client for Keel's API v1 (Boost.Beast), used by the `keel` CLI and by
+// `keel-worker`. Every call has a deadline; non-2xx answers throw ApiCallError carrying the
+// server's {"error": {"code", "message"}}.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "proto/job.h"
+#include "proto/resources.h"
+#include "proto/worker_protocol.h"
+
+namespace keel::client {
+
+struct ClientConfig {
+  std::string url = "http://127.0.0.1:8080";  // http://host:port
+  std::string token;
+  double timeout_s = 60.0;                   // deadline of one request
+  int64_t chunk_bytes = 16 << 20;            // upload chunk size
+  int retries = 5;                           // reconnect attempts on a dropped link (uploads, downloads)
+};
+
+// A non-2xx answer (status > 0) or a transport failure (status 0).
+class ApiCallError : public std::runtime_error {
+ public:
+  ApiCallError(int status, std::string code, const std::string& message)
+      : std::runtime_error(message), status_(status), code_(std::move(code)) {}
+  int status() const { return status_; }
+  const std::string& code() const { return code_; }
+
+ private:
+  int status_;
+  std::string code_;
+};
+
+struct HttpResult {
+  int status = 0;
+  std::map<std::string, std::string> headers;  // lower-case names
+  std::string body;
+};
+
+// Bytes done, bytes total.
+using ProgressFn = std::function<void(int64_t done, int64_t total)>;
+
+class ApiClient {
+ public:
+  explicit ApiClient(ClientConfig config);
+  ~ApiClient();
+  ApiClient(const ApiClient&) = delete;
+  ApiClient& operator=(const ApiClient&) = delete;
+
+  const ClientConfig& config() const { return config_; }
+
+  // Raw request on a kept-alive connection (reconnects when the server closed it).
+  // Does not throw on non-2xx; throws ApiCallError(0, "transport", ...) when unreachable.
+  HttpResult request(const std::string& method, const std::string& target, const std::string& body = "",
+                     const std::map<std::string, std::string>& headers = {});
+  // JSON helpers: throw ApiCallError on non-2xx.
+  nlohmann::json get_json(const std::string& target);
+  nlohmann::json post_json(const std::string& target, const nlohmann::json& body,
+                           const std::map<std::string, std::string>& headers = {});
+
+  // Uploads `file` resumably and returns its blob id (SHA-256). The upload id is remembered
+  // in `state_dir` (keyed by the file's SHA-256 and size), so running it again after a
+  // dropped link or a killed client resumes at the server's committed offset.
+  std::string upload_file(const std::filesystem::path& file, const std::filesystem::path& state_dir,
+                          const ProgressFn& progress = {});
+  // Downloads a GET target (artifact or blob) to `destination` with Range resume: bytes go
+  // to `destination.part` first and it is renamed when complete and its SHA-256 matches
+  // `expected_sha256` (when given).
+  void download(const std::string& target, const std::filesystem::path& destination,
+                const std::string& expected_sha256 = "", const ProgressFn& progress = {});
+
+  // --- client API ---
+  proto::Mission create_mission(const proto::MissionRequest& request);
+  std::vector<proto::Mission> list_missions(const std::string& prefix = "");
+  proto::Job create_job(const proto::JobRequest& request, const std::string& idempotency_key = "");
+  proto::Job get_job(const std::string& job_id);
+  std::vector<proto::Job> list_jobs(const std::string& state = "");
+  proto::Job cancel_job(const std::string& job_id);
+  proto::Job retry_job(const std::string& job_id);
+  std::vector<proto::Job> reprocess(const proto::ReprocessRequest& request);
+  proto::LogPage read_log(const std::string& job_id, int64_t from);
+  std::vector<proto::Artifact> list_artifacts(const std::string& job_id);
+
+  // --- worker API ---
+  std::optional<proto::Lease> lease(const proto::LeaseRequest& request);  // nullopt on 204
+  proto::HeartbeatReply heartbeat(const std::string& job_id, const proto::Heartbeat& beat);
+  proto::Artifact register_artifact(const std::string& job_id, const proto::ArtifactRegistration& reg);
+  void complete_stage(const std::string& job_id, const std::string& stage,
+                      const proto::StageCompletion& completion);
+  proto::Job finish_job(const std::string& job_id, const proto::JobFinish& finish, bool succeeded);
+
+ private:
+  struct Connection;
+  ClientConfig config_;
+  std::unique_ptr<Connection> connection_;
+};
+
+// SHA-256 of a file as 64 lowercase hex digits (OpenSSL EVP, streamed).
+std::string sha256_file(const std::filesystem::path& file);
+std::string sha256_bytes(const std::string& bytes);
+
+}  // namespace keel::client
