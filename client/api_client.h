@@ -106,8 +106,4 @@ class ApiClient {
   std::unique_ptr<Connection> connection_;
 };
 
-// SHA-256 of a file as 64 lowercase hex digits (OpenSSL EVP, streamed).
-std::string sha256_file(const std::filesystem::path& file);
-std::string sha256_bytes(const std::string& bytes);
-
 }  // namespace keel::client
