@@ -11,7 +11,7 @@ packages=(
   libboost-iostreams-dev libboost-program-options-dev libboost-thread-dev
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev
   libdraco-dev draco libsqlite3-dev nlohmann-json3-dev libcli11-dev
-  libspdlog-dev libyaml-cpp-dev libssl-dev
+  libspdlog-dev libyaml-cpp-dev libssl-dev libarchive-dev
   # ROS1 bags without ROS (PLATFORM-NOTES.md)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev
