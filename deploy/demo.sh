@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The README's demo: install packages, build, start keel-server with local workers, simulate
+# a mission with keel-sim, submit it with `keel`, wait, and fetch every artifact.
+#   bash deploy/demo.sh [output-folder]        (default: ./demo-out)
+set -euo pipefail
+here="$(cd "$(dirname "$0")/.." && pwd)"
+out="$(mkdir -p "${1:-$here/demo-out}" && cd "${1:-$here/demo-out}" && pwd)"
+build="${KEEL_BUILD_DIR:-$here/build}"
+scenario="${KEEL_DEMO_SCENARIO:-usv-bridge}"
+duration="${KEEL_DEMO_DURATION:-60}"
+stages="${KEEL_DEMO_STAGES:-ingest}"
+
+bash "$here/deploy/setup.sh"
+export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/keel-ccache}"
+cmake -G Ninja -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+ninja -C "$build" keel-server keel-worker keel keel-sim
+
+server_bin="$build/server/keel-server"
+keel_bin="$build/client/keel"
+sim_bin="$build/tests/sim/keel-sim"
+data="$out/server-data"
+rm -rf "$data" "$out/mission" "$out/artifacts"
+mkdir -p "$data"
+
+echo "== starting keel-server with 2 workers (data in $data)"
+"$server_bin" --data-dir "$data" --listen 127.0.0.1:0 --workers 2 >"$out/server.log" 2>&1 &
+server_pid=$!
+trap 'kill -TERM $server_pid 2>/dev/null; wait $server_pid 2>/dev/null || true' EXIT
+for _ in $(seq 1 100); do
+  [ -s "$data/server.url" ] && [ -s "$data/token" ] && break
+  sleep 0.1
+done
+[ -s "$data/server.url" ] || { echo "keel-server did not start; see $out/server.log"; exit 1; }
+export KEEL_URL="$(cat "$data/server.url")"
+export KEEL_TOKEN_FILE="$data/token"
+echo "   listening on $KEEL_URL"
+
+echo "== simulating a $scenario mission ($duration s)"
+"$sim_bin" --scenario "$scenario" --seed 1 --duration "$duration" --out "$out/mission"
+
+echo "== submitting with keel (stages: $stages)"
+job="$("$keel_bin" submit "$out/mission" --stages "$stages" --cache-dir "$out/.keel-cache")"
+echo "   job $job"
+"$keel_bin" watch "$job"
+
+echo "== fetching artifacts"
+"$keel_bin" fetch "$job" -o "$out/artifacts"
+ls -l "$out/artifacts"
+echo "== done: artifacts in $out/artifacts, report at $out/artifacts/report.json"
