@@ -27,6 +27,14 @@ struct ClientConfig {
   double timeout_s = 60.0;                   // deadline of one request
   int64_t chunk_bytes = 16 << 20;            // upload chunk size
   int retries = 5;                           // reconnect attempts on a dropped link (uploads, downloads)
+  double retry_backoff_s = 0.25;             // first pause after a failure; doubles, capped at 5 s
+};
+
+// Body bytes moved by one ApiClient since its construction (tests check resume with these).
+struct TransferStats {
+  int64_t upload_body_bytes = 0;    // PUT chunk bodies written to the socket
+  int64_t download_body_bytes = 0;  // download bodies written to `.part` files
+  int64_t connections = 0;          // TCP connections opened (reconnects included)
 };
 
 // A non-2xx answer (status > 0) or a transport failure (status 0).
@@ -59,6 +67,7 @@ class ApiClient {
   ApiClient& operator=(const ApiClient&) = delete;
 
   const ClientConfig& config() const { return config_; }
+  const TransferStats& stats() const { return stats_; }
 
   // Raw request on a kept-alive connection (reconnects when the server closed it).
   // Does not throw on non-2xx; throws ApiCallError(0, "transport", ...) when unreachable.
@@ -102,7 +111,21 @@ class ApiClient {
 
  private:
   struct Connection;
+  HttpResult request_or_throw(const std::string& method, const std::string& target,
+                              const std::string& body,
+                              const std::map<std::string, std::string>& headers);
+  std::optional<int64_t> upload_offset(const std::string& upload_id);
+  std::string create_upload(const std::string& name, int64_t size);
+  HttpResult put_chunk(const std::string& upload_id, const char* data, int64_t first,
+                       int64_t size, int64_t total);
+  bool blob_exists(const std::string& sha256);
+  // One GET attempt appending to `part`; returns false when the part had to be restarted.
+  bool download_once(const std::string& target, const std::filesystem::path& part,
+                     const ProgressFn& progress);
+  void pause_before_retry(int failures) const;
+
   ClientConfig config_;
+  TransferStats stats_;
   std::unique_ptr<Connection> connection_;
 };
 

@@ -27,6 +27,19 @@ struct NotFound : std::runtime_error { using std::runtime_error::runtime_error; 
 struct Conflict : std::runtime_error { using std::runtime_error::runtime_error; };
 struct Invalid : std::runtime_error { using std::runtime_error::runtime_error; };
 
+// Refinements, so the server can choose the HTTP code (catching the base still works).
+// append_upload: the chunk does not start at the committed offset (409 offset_mismatch).
+struct OffsetMismatch : Conflict {
+  OffsetMismatch(const std::string& message, int64_t committed)
+      : Conflict(message), committed_offset(committed) {}
+  int64_t committed_offset;  // where the client must resume (Upload-Offset header)
+};
+// Worker calls whose lease is not the job's current one (409 lease_lost).
+struct LeaseLost : Conflict { using Conflict::Conflict; };
+// complete_upload: the bytes do not match; the upload was deleted (422).
+struct Sha256Mismatch : Invalid { using Invalid::Invalid; };
+struct SizeMismatch : Invalid { using Invalid::Invalid; };
+
 // Milliseconds since the Unix epoch; injectable so tests can move time (lease expiry).
 using Clock = std::function<int64_t()>;
 int64_t system_clock_ms();
@@ -73,6 +86,7 @@ class Store {
   // --- missions ---
   virtual proto::Mission create_mission(const proto::MissionRequest& request) = 0;  // NotFound for blobs
   virtual proto::Mission get_mission(const std::string& mission_id) = 0;
+  // Newest first; the prefix matches names byte for byte (case-sensitive).
   virtual std::vector<proto::Mission> list_missions(const std::string& name_prefix = "") = 0;
 
   // --- jobs ---

@@ -1,0 +1,127 @@
+// One kept-alive HTTP/1.1 connection to a Keel server, driven synchronously: every
+// operation is an async Beast operation run to completion on a private io_context, which
+// is what makes `tcp_stream::expires_after` deadlines apply (Beast ignores them for
+// blocking calls). Internal to client/: ApiClient is the public face.
+#pragma once
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include "client/api_client.h"
+#include "client/http_url.h"
+
+namespace keel::client {
+
+namespace http = boost::beast::http;
+
+class HttpConnection {
+ public:
+  HttpConnection(BaseUrl url, double timeout_s, TransferStats& stats);
+
+  const BaseUrl& url() const { return url_; }
+  // "METHOD http://host:port/target", for error messages.
+  std::string describe(const std::string& method, const std::string& target) const;
+
+  // Writes `request` and reads the whole answer. A kept-alive connection that the server
+  // closed while idle is detected (before sending, or by an immediate EOF/reset) and
+  // replaced transparently, once. Throws ApiCallError(0, "transport", ...) otherwise.
+  template <class Body>
+  http::response<http::string_body> exchange(http::request<Body>& request);
+
+  // Opens the connection when needed; returns true when an open connection was reused.
+  bool ensure_open(const std::string& what);
+  // Async-with-deadline versions of Beast's write/read; errors come back, never thrown.
+  template <class Body>
+  boost::beast::error_code write(http::request<Body>& request);
+  template <class Parser>
+  boost::beast::error_code read_header(Parser& parser);
+  template <class Parser>
+  boost::beast::error_code read_some(Parser& parser);
+  template <class Parser>
+  boost::beast::error_code read(Parser& parser);
+  void close();
+
+ private:
+  template <class Start>
+  boost::beast::error_code run(Start&& start);
+  bool peer_closed() const;
+  std::chrono::steady_clock::duration timeout() const;
+
+  BaseUrl url_;
+  double timeout_s_;
+  TransferStats& stats_;
+  boost::asio::io_context ioc_;
+  boost::beast::tcp_stream stream_;
+  boost::beast::flat_buffer buffer_;
+  boost::asio::ip::tcp::resolver::results_type endpoints_;
+  bool open_ = false;
+};
+
+// True for the errors a server's idle close produces on the next request.
+bool is_stale_connection_error(const boost::beast::error_code& ec);
+
+template <class Start>
+boost::beast::error_code HttpConnection::run(Start&& start) {
+  boost::beast::error_code result = boost::asio::error::would_block;
+  start([&result](boost::beast::error_code ec, std::size_t) { result = ec; });
+  ioc_.restart();
+  ioc_.run();
+  if (result == boost::beast::error::timeout) open_ = false;  // tcp_stream closed it
+  return result;
+}
+
+template <class Body>
+boost::beast::error_code HttpConnection::write(http::request<Body>& request) {
+  stream_.expires_after(timeout());
+  return run([&](auto handler) { http::async_write(stream_, request, std::move(handler)); });
+}
+
+template <class Parser>
+boost::beast::error_code HttpConnection::read_header(Parser& parser) {
+  stream_.expires_after(timeout());
+  return run(
+      [&](auto handler) { http::async_read_header(stream_, buffer_, parser, std::move(handler)); });
+}
+
+template <class Parser>
+boost::beast::error_code HttpConnection::read_some(Parser& parser) {
+  stream_.expires_after(timeout());
+  return run(
+      [&](auto handler) { http::async_read_some(stream_, buffer_, parser, std::move(handler)); });
+}
+
+template <class Parser>
+boost::beast::error_code HttpConnection::read(Parser& parser) {
+  stream_.expires_after(timeout());
+  return run([&](auto handler) { http::async_read(stream_, buffer_, parser, std::move(handler)); });
+}
+
+template <class Body>
+http::response<http::string_body> HttpConnection::exchange(http::request<Body>& request) {
+  const std::string what =
+      describe(std::string(request.method_string()), std::string(request.target()));
+  for (int attempt = 0;; ++attempt) {
+    const bool reused = ensure_open(what);
+    http::response_parser<http::string_body> parser;
+    parser.body_limit(boost::none);
+    parser.skip(request.method() == http::verb::head);
+    boost::beast::error_code ec = write(request);
+    if (!ec) ec = read(parser);
+    if (!ec) {
+      http::response<http::string_body> response = parser.release();
+      if (!response.keep_alive()) close();
+      return response;
+    }
+    close();
+    if (reused && attempt == 0 && is_stale_connection_error(ec)) continue;
+    throw ApiCallError(0, "transport", what + ": " + ec.message());
+  }
+}
+
+}  // namespace keel::client

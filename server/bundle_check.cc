@@ -1,0 +1,149 @@
+#include "server/bundle_check.h"
+
+#include <archive.h>
+#include <archive_entry.h>
+
+#include <memory>
+#include <optional>
+#include <set>
+#include <vector>
+
+namespace keel::server {
+
+namespace {
+
+using ArchivePtr = std::unique_ptr<archive, decltype(&archive_read_free)>;
+
+std::vector<std::string> split_components(const std::string& path) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (start <= path.size()) {
+    size_t slash = path.find('/', start);
+    if (slash == std::string::npos) slash = path.size();
+    std::string part = path.substr(start, slash - start);
+    if (!part.empty() && part != ".") parts.push_back(part);
+    start = slash + 1;
+  }
+  return parts;
+}
+
+std::string join(const std::vector<std::string>& parts, size_t count) {
+  std::string out;
+  for (size_t i = 0; i < count; ++i) out += (i ? "/" : "") + parts[i];
+  return out;
+}
+
+// The member's normalized relative components; throws unsafe_path for '/' or '..'.
+std::vector<std::string> safe_components(const std::string& name, const std::string& what) {
+  if (!name.empty() && name.front() == '/')
+    throw BundleError("unsafe_path", what + " '" + name + "' is an absolute path");
+  std::vector<std::string> parts = split_components(name);
+  for (const auto& part : parts)
+    if (part == "..") throw BundleError("unsafe_path", what + " '" + name + "' has a '..' component");
+  return parts;
+}
+
+// A symlink at `link_parts` pointing at `target` must resolve inside the bundle (see header).
+void check_symlink_target(const std::string& member, const std::vector<std::string>& link_parts,
+                          const std::string& target) {
+  const std::string what = "member '" + member + "': symlink target '" + target + "'";
+  if (target.empty()) throw BundleError("bad_bundle", what + " is empty");
+  if (target.front() == '/') throw BundleError("unsafe_path", what + " is absolute");
+  std::vector<std::string> parts = split_components(target);
+  size_t depth = link_parts.empty() ? 0 : link_parts.size() - 1;  // folder holding the link
+  bool seen_normal = false;
+  for (const auto& part : parts) {
+    if (part == "..") {
+      if (seen_normal) throw BundleError("unsafe_path", what + " has '..' after a folder name");
+      if (depth == 0) throw BundleError("unsafe_path", what + " leaves the bundle");
+      --depth;
+    } else {
+      seen_normal = true;
+    }
+  }
+}
+
+struct Member {
+  std::string name;
+  std::vector<std::string> parts;
+};
+
+}  // namespace
+
+BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
+  ArchivePtr reader(archive_read_new(), &archive_read_free);
+  if (!reader) throw std::runtime_error("libarchive: out of memory");
+  archive_read_support_format_tar(reader.get());  // ustar, GNU and pax; no compression
+  if (archive_read_open_filename(reader.get(), tar_file.c_str(), 1 << 16) != ARCHIVE_OK)
+    throw BundleError("bad_bundle", std::string("bundle is not a readable tar: ") +
+                                        archive_error_string(reader.get()));
+
+  BundleSummary summary;
+  std::vector<Member> members;
+  std::set<std::string> symlinks;
+  bool has_manifest = false;
+  archive_entry* entry = nullptr;
+  for (;;) {
+    int status = archive_read_next_header(reader.get(), &entry);
+    if (status == ARCHIVE_EOF) break;
+    if (status < ARCHIVE_WARN) {
+      const char* error = archive_error_string(reader.get());
+      throw BundleError("bad_bundle", "bundle is not a valid tar after " +
+                                          std::to_string(summary.members) +
+                                          " members: " + (error ? error : "unknown error"));
+    }
+    ++summary.members;
+    const char* raw_name = archive_entry_pathname(entry);
+    std::string name = raw_name ? raw_name : "";
+    if (name.empty()) throw BundleError("bad_bundle", "member #" + std::to_string(summary.members) + " has no name");
+    std::vector<std::string> parts = safe_components(name, "member");
+    const mode_t type = archive_entry_filetype(entry);
+    const char* hardlink = archive_entry_hardlink(entry);
+
+    if (hardlink) {
+      safe_components(hardlink, "member '" + name + "': hardlink target");
+    } else if (type == AE_IFLNK) {
+      const char* target = archive_entry_symlink(entry);
+      check_symlink_target(name, parts, target ? target : "");
+      symlinks.insert(join(parts, parts.size()));
+    } else if (type == AE_IFREG) {
+      summary.file_bytes += archive_entry_size(entry);
+    } else if (type != AE_IFDIR) {
+      throw BundleError("bad_bundle", "member '" + name +
+                                          "': only files, folders and links are allowed");
+    }
+    if (parts.size() == 1 && parts[0] == "mission.yaml") {
+      if (type != AE_IFREG || hardlink)
+        throw BundleError("bad_bundle", "member '" + name + "' must be a regular file");
+      has_manifest = true;
+    }
+    members.push_back({name, std::move(parts)});
+    if (hardlink) {
+      // A hardlink's target may not pass through a symlink either.
+      members.push_back({name, split_components(hardlink)});
+    }
+
+    // Reading the data (rather than trusting the header) catches a truncated tar here.
+    if (archive_read_data_skip(reader.get()) != ARCHIVE_OK) {
+      const char* error = archive_error_string(reader.get());
+      throw BundleError("bad_bundle", "member '" + name + "' is truncated: " +
+                                          (error ? error : "unknown error"));
+    }
+  }
+
+  // Unpacking a member below a symlink would write through it, wherever it points.
+  for (const auto& member : members) {
+    for (size_t count = 1; count < member.parts.size(); ++count) {
+      std::string prefix = join(member.parts, count);
+      if (symlinks.count(prefix))
+        throw BundleError("unsafe_path",
+                          "member '" + member.name + "' lies under the symlink '" + prefix + "'");
+    }
+  }
+  if (!has_manifest)
+    throw BundleError("bad_bundle", "bundle has no mission.yaml at its root (" +
+                                        std::to_string(summary.members) + " members read)");
+  return summary;
+}
+
+}  // namespace keel::server

@@ -1,0 +1,56 @@
+// Keel's HTTP API v1 (docs/api.md) as a pure function of a request: no sockets, no Beast.
+// The socket side (http_server.h) reads a Request, calls handle() and writes the Response;
+// tests call handle() directly against a real Store.
+//
+// handle() never throws: route errors become {"error": {"code", "message"}} answers
+// (ContractError -> 400 invalid_field, NotFound -> 404, Conflict -> 409, Invalid -> 400,
+// anything unexpected -> 500 internal) and the handler stays usable.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "server/http_types.h"
+#include "server/request_counters.h"
+#include "storage/store.h"
+
+namespace keel::server {
+
+struct HandlerOptions {
+  uint64_t max_chunk_bytes = 64ull << 20;  // PUT /v1/uploads/{id} body limit
+  uint64_t max_json_bytes = 1ull << 20;    // every other body
+  std::string version = "0.1.0";           // shown by /healthz
+  std::function<int()> workers_alive;      // for /metrics; empty = 0
+};
+
+class HttpHandler {
+ public:
+  HttpHandler(storage::Store& store, HandlerOptions options = {});
+  ~HttpHandler();
+  HttpHandler(const HttpHandler&) = delete;
+  HttpHandler& operator=(const HttpHandler&) = delete;
+
+  // Thread-safe; never throws.
+  Response handle(const Request& request);
+
+  // The largest body the route of (method, target) accepts, known once the header is read.
+  uint64_t body_limit(std::string_view method, std::string_view target) const;
+
+  // Counts an answer the socket side made itself (413, 431, ...) for /metrics.
+  void count_response(int status) { counters_.count(status); }
+  const RequestCounters& counters() const { return counters_; }
+  const HandlerOptions& options() const { return options_; }
+
+ private:
+  Response dispatch(const Request& request);
+  bool authorized(const Request& request);
+
+  storage::Store& store_;
+  HandlerOptions options_;
+  RequestCounters counters_;
+};
+
+}  // namespace keel::server

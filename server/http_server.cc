@@ -1,0 +1,377 @@
+#include "server/http_server.h"
+
+#include <boost/asio/bind_executor.hpp>
+#include <boost/asio/dispatch.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <atomic>
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "server/api_response.h"
+#include "server/file_region_body.h"
+
+namespace keel::server {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace http = boost::beast::http;
+using tcp = net::ip::tcp;
+using error_code = boost::system::error_code;
+
+class Session;
+
+// State shared by the acceptor and every session.
+struct ServerCore {
+  HttpHandler& handler;
+  ServerOptions options;
+  std::atomic<bool> stopping{false};
+
+  std::mutex sessions_mutex;
+  std::condition_variable sessions_done;
+  std::map<const Session*, std::weak_ptr<Session>> sessions;
+
+  ServerCore(HttpHandler& h, ServerOptions o) : handler(h), options(std::move(o)) {}
+};
+
+namespace {
+
+constexpr uint64_t kUnlimitedUntilHeader = ~uint64_t{0};
+
+}  // namespace
+
+class Session : public std::enable_shared_from_this<Session> {
+ public:
+  Session(tcp::socket&& socket, ServerCore& core) : stream_(std::move(socket)), core_(core) {}
+
+  ~Session() {
+    std::lock_guard<std::mutex> lock(core_.sessions_mutex);
+    core_.sessions.erase(this);
+    if (core_.sessions.empty()) core_.sessions_done.notify_all();
+  }
+
+  void start() {
+    {
+      std::lock_guard<std::mutex> lock(core_.sessions_mutex);
+      core_.sessions[this] = weak_from_this();
+    }
+    net::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->read_header(); });
+  }
+
+  // Called on the session's strand when the server stops: an idle connection (waiting for
+  // a request) closes now; a request in flight finishes and then closes.
+  void on_server_stop() {
+    if (idle_) stream_.cancel();
+  }
+
+  net::any_io_executor executor() { return stream_.get_executor(); }
+
+ private:
+  // --- reading ---
+  void read_header() {
+    if (core_.stopping) return close();
+    parser_.emplace();
+    parser_->header_limit(core_.options.header_limit_bytes);
+    parser_->body_limit(kUnlimitedUntilHeader);
+    idle_ = true;
+    stream_.expires_after(core_.options.read_timeout);
+    http::async_read_header(stream_, buffer_, *parser_,
+                            [self = shared_from_this()](error_code ec, size_t) { self->on_header(ec); });
+  }
+
+  void on_header(error_code ec) {
+    idle_ = false;
+    if (ec == http::error::header_limit)
+      return send_error(431, "too_large",
+                        "request header over " + std::to_string(core_.options.header_limit_bytes) + " bytes");
+    if (ec == http::error::end_of_stream || ec == net::error::eof || ec == beast::error::timeout ||
+        ec == net::error::operation_aborted || ec == net::error::connection_reset)
+      return close();
+    if (ec && ec.category() == http::make_error_code(http::error::end_of_stream).category())
+      return send_error(400, "bad_request", "malformed HTTP request: " + ec.message());
+    if (ec) return close();
+
+    const auto& header = parser_->get();
+    const uint64_t limit =
+        core_.handler.body_limit(std::string(header.method_string()), std::string(header.target()));
+    if (auto length = parser_->content_length(); length && *length > limit)
+      return send_error(413, "too_large",
+                        "body of " + std::to_string(*length) + " bytes is over this route's limit of " +
+                            std::to_string(limit));
+    parser_->body_limit(limit);
+    if (parser_->is_done()) return handle_request();
+    if (beast::iequals(header[http::field::expect], "100-continue")) return send_continue();
+    read_body();
+  }
+
+  void send_continue() {
+    auto reply = std::make_shared<http::response<http::empty_body>>(http::status::continue_, 11);
+    stream_.expires_after(core_.options.write_timeout);
+    http::async_write(stream_, *reply, [self = shared_from_this(), reply](error_code ec, size_t) {
+      if (ec) return self->close();
+      self->read_body();
+    });
+  }
+
+  // The body is read piece by piece with a fresh deadline each time: a slow uplink that keeps
+  // sending survives, a stalled one is dropped. A cut connection never reaches the handler,
+  // so a partial chunk commits nothing.
+  void read_body() {
+    stream_.expires_after(core_.options.read_timeout);
+    http::async_read_some(stream_, buffer_, *parser_,
+                          [self = shared_from_this()](error_code ec, size_t) { self->on_body(ec); });
+  }
+
+  void on_body(error_code ec) {
+    if (ec == http::error::body_limit)
+      return send_error(413, "too_large", "body is over this route's limit");
+    if (ec) return close();
+    if (!parser_->is_done()) return read_body();
+    handle_request();
+  }
+
+  // --- answering ---
+  void handle_request() {
+    http::request<http::string_body> message = parser_->release();
+    Request request;
+    request.method = std::string(message.method_string());
+    request.target = std::string(message.target());
+    for (const auto& field : message)
+      request.headers.add(std::string(field.name_string()), std::string(field.value()));
+    request.body = std::move(message.body());
+    const bool keep_alive = message.keep_alive();
+    const unsigned version = message.version();
+    const bool head = message.method() == http::verb::head;
+
+    Response response = core_.handler.handle(request);
+    write_response(std::move(response), version, keep_alive && !core_.stopping, head);
+  }
+
+  void send_error(int status, const std::string& code, const std::string& message) {
+    core_.handler.count_response(status);
+    const unsigned version = parser_ ? parser_->get().version() : 11;
+    drain_after_write_ = true;
+    write_response(error_response(status, code, message), version == 10 ? 10 : 11, false, false);
+  }
+
+  template <class Body>
+  void set_common(http::response<Body>& message, const Response& response, bool keep_alive) {
+    message.result(static_cast<unsigned>(response.status));
+    for (const auto& [name, value] : response.headers.fields()) message.set(name, value);
+    message.set(http::field::server, "keel-server");
+    message.keep_alive(keep_alive);
+  }
+
+  void write_response(Response response, unsigned version, bool keep_alive, bool head) {
+    if (response.file) {
+      FileRegionBody::value_type body;
+      error_code ec;
+      body.open(response.file->path, response.file->offset, response.file->length, ec);
+      if (!ec) {
+        http::response<FileRegionBody> message;
+        message.version(version);
+        set_common(message, response, keep_alive);
+        message.body() = std::move(body);
+        message.prepare_payload();
+        return write_message(std::move(message), !keep_alive, head);
+      }
+      spdlog::error("cannot open {} for an answer: {}", response.file->path.string(), ec.message());
+      response = error_response(500, "internal", "stored file cannot be read");
+      core_.handler.count_response(500);
+    }
+    http::response<http::string_body> message;
+    message.version(version);
+    set_common(message, response, keep_alive);
+    message.body() = std::move(response.body);
+    const int status = response.status;
+    if (status < 200 || status == 204 || status == 304)
+      message.erase(http::field::content_length);  // these carry no body (RFC 9110 8.6)
+    else
+      message.prepare_payload();
+    write_message(std::move(message), !keep_alive, head);
+  }
+
+  // Writes piece by piece with a fresh deadline for each, so a large download to a slow but
+  // live reader is not cut while a reader that stops reading is.
+  template <class Body>
+  void write_message(http::response<Body>&& message, bool close_after, bool head) {
+    auto held = std::make_shared<http::response<Body>>(std::move(message));
+    auto serializer = std::make_shared<http::response_serializer<Body>>(*held);
+    if (head) serializer->split(true);
+    write_some(held, serializer, close_after, head);
+  }
+
+  template <class Body>
+  void write_some(std::shared_ptr<http::response<Body>> held,
+                  std::shared_ptr<http::response_serializer<Body>> serializer, bool close_after,
+                  bool head) {
+    stream_.expires_after(core_.options.write_timeout);
+    auto next = [self = shared_from_this(), held, serializer, close_after, head](error_code ec, size_t) {
+      if (ec) return self->close();
+      const bool done = head ? serializer->is_header_done() : serializer->is_done();
+      if (!done) return self->write_some(held, serializer, close_after, head);
+      if (close_after) return self->drain_after_write_ ? self->drain_and_close() : self->close();
+      self->read_header();
+    };
+    if (head)
+      http::async_write_header(stream_, *serializer, std::move(next));
+    else
+      http::async_write_some(stream_, *serializer, std::move(next));
+  }
+
+  // After an early error answer the client may still be sending a body; closing with unread
+  // bytes would reset the connection and the client could lose the answer. So: stop sending,
+  // read and drop what still comes (bounded in time and bytes), then close.
+  void drain_and_close() {
+    error_code ignored;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    drain_deadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    drain_some();
+  }
+
+  void drain_some() {
+    constexpr size_t kMaxDrainBytes = 256ull << 20;
+    if (drained_ > kMaxDrainBytes || std::chrono::steady_clock::now() >= drain_deadline_) return close();
+    stream_.expires_at(drain_deadline_);
+    stream_.async_read_some(net::buffer(drain_buffer_),
+                            [self = shared_from_this()](error_code ec, size_t n) {
+                              if (ec) return self->close();
+                              self->drained_ += n;
+                              self->drain_some();
+                            });
+  }
+
+  void close() {
+    error_code ignored;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    stream_.close();
+  }
+
+  beast::tcp_stream stream_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  ServerCore& core_;
+  bool idle_ = false;
+  bool drain_after_write_ = false;
+  std::chrono::steady_clock::time_point drain_deadline_;
+  size_t drained_ = 0;
+  std::array<char, 16 * 1024> drain_buffer_;
+};
+
+struct HttpServer::Impl {
+  // Declared before io_context: sessions destroyed with the io_context still unregister.
+  ServerCore core;
+  net::io_context io_context;
+  tcp::acceptor acceptor;
+  net::steady_timer accept_retry;
+  std::vector<std::thread> threads;
+  uint16_t port = 0;
+  bool started = false;
+  bool stopped = false;
+  std::mutex stop_mutex;
+
+  Impl(HttpHandler& handler, ServerOptions options)
+      : core(handler, std::move(options)),
+        io_context(core.options.threads),
+        acceptor(net::make_strand(io_context)),
+        accept_retry(acceptor.get_executor()) {}
+
+  void accept() {
+    acceptor.async_accept(net::make_strand(io_context), [this](error_code ec, tcp::socket socket) {
+      if (ec == net::error::operation_aborted || !acceptor.is_open()) return;
+      if (ec) {
+        // Typically EMFILE: wait a little rather than spin.
+        spdlog::warn("accept failed: {}; retrying in 100 ms", ec.message());
+        accept_retry.expires_after(std::chrono::milliseconds(100));
+        accept_retry.async_wait([this](error_code wait_ec) {
+          if (!wait_ec) accept();
+        });
+        return;
+      }
+      error_code ignored;
+      socket.set_option(tcp::no_delay(true), ignored);
+      std::make_shared<Session>(std::move(socket), core)->start();
+      accept();
+    });
+  }
+};
+
+HttpServer::HttpServer(HttpHandler& handler, ServerOptions options)
+    : impl_(std::make_unique<Impl>(handler, std::move(options))) {}
+
+HttpServer::~HttpServer() { stop(); }
+
+void HttpServer::start() {
+  auto& impl = *impl_;
+  if (impl.started) throw std::logic_error("HttpServer::start called twice");
+  const auto& options = impl.core.options;
+  error_code ec;
+  const auto address = net::ip::make_address(options.address, ec);
+  if (ec) throw std::runtime_error("listen address '" + options.address + "': " + ec.message());
+  const tcp::endpoint endpoint(address, options.port);
+  const std::string where = options.address + ":" + std::to_string(options.port);
+  impl.acceptor.open(endpoint.protocol(), ec);
+  if (!ec) impl.acceptor.set_option(net::socket_base::reuse_address(true), ec);
+  if (!ec) impl.acceptor.bind(endpoint, ec);
+  if (!ec) impl.acceptor.listen(net::socket_base::max_listen_connections, ec);
+  if (ec) throw std::runtime_error("cannot listen on " + where + ": " + ec.message());
+  impl.port = impl.acceptor.local_endpoint().port();
+  impl.started = true;
+  impl.accept();
+  const int count = options.threads > 0 ? options.threads : 1;
+  for (int i = 0; i < count; ++i) impl.threads.emplace_back([&impl] { impl.io_context.run(); });
+}
+
+uint16_t HttpServer::port() const { return impl_->port; }
+
+std::string HttpServer::url() const {
+  const std::string& address = impl_->core.options.address;
+  const bool v6 = address.find(':') != std::string::npos;
+  return "http://" + (v6 ? "[" + address + "]" : address) + ":" + std::to_string(impl_->port);
+}
+
+void HttpServer::stop() {
+  auto& impl = *impl_;
+  std::lock_guard<std::mutex> stop_lock(impl.stop_mutex);
+  if (!impl.started || impl.stopped) return;
+  impl.stopped = true;
+  impl.core.stopping = true;
+  net::post(impl.acceptor.get_executor(), [&impl] {
+    error_code ignored;
+    impl.acceptor.close(ignored);
+    impl.accept_retry.cancel();
+  });
+  std::vector<std::shared_ptr<Session>> live;
+  {
+    std::lock_guard<std::mutex> lock(impl.core.sessions_mutex);
+    for (auto& [raw, weak] : impl.core.sessions)
+      if (auto session = weak.lock()) live.push_back(std::move(session));
+  }
+  // Outside the lock: dropping the last owner runs ~Session, which takes the lock.
+  for (auto& session : live)
+    net::post(session->executor(), [session] { session->on_server_stop(); });
+  live.clear();
+  {
+    std::unique_lock<std::mutex> lock(impl.core.sessions_mutex);
+    impl.core.sessions_done.wait_for(lock, impl.core.options.shutdown_grace,
+                                     [&impl] { return impl.core.sessions.empty(); });
+  }
+  impl.io_context.stop();
+  for (auto& thread : impl.threads) thread.join();
+  impl.threads.clear();
+}
+
+}  // namespace keel::server

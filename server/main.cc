@@ -1,0 +1,134 @@
+// keel-server: Keel's HTTP API, its store in --data-dir and N local workers.
+//
+//   keel-server --data-dir DIR [--listen 127.0.0.1:8080] [--workers N] [--worker-binary P]
+//               [--max-chunk-bytes B] [--threads T]
+//
+// Prints the URL it listens on (also written to <data-dir>/server.url) once it accepts
+// connections. SIGTERM/SIGINT: workers are stopped first (they may still report to the
+// server while they wind down), then the server stops accepting, lets requests in flight
+// finish, and exits 0.
+#include <CLI/CLI.hpp>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "server/data_dir.h"
+#include "server/http_handler.h"
+#include "server/http_server.h"
+#include "server/worker_supervisor.h"
+#include "storage/store.h"
+
+namespace {
+
+std::filesystem::path default_worker_binary() {
+  std::error_code ec;
+  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "keel-worker";
+  return self.parent_path() / "keel-worker";
+}
+
+struct Settings {
+  std::filesystem::path data_dir;
+  std::string listen = "127.0.0.1:8080";
+  int workers = 1;
+  std::string worker_binary;
+  uint64_t max_chunk_bytes = 64ull << 20;
+  int threads = 2;
+  double read_timeout_s = 30.0;
+  std::string log_level = "info";
+};
+
+int run(const Settings& settings) {
+  namespace ks = keel::server;
+  // Block the stop signals in every thread (threads inherit the mask); main waits for them.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+
+  const ks::ListenAddress listen = ks::parse_listen_address(settings.listen);
+  std::filesystem::create_directories(settings.data_dir);
+  auto store = keel::storage::open_sqlite_store(settings.data_dir);
+  if (ks::ensure_initial_token(*store, settings.data_dir))
+    spdlog::info("made a first API token in {}", (settings.data_dir / "token").string());
+
+  ks::SupervisorOptions supervisor_options;
+  supervisor_options.workers = settings.workers;
+  supervisor_options.worker_binary =
+      settings.worker_binary.empty() ? default_worker_binary()
+                                     : std::filesystem::path(settings.worker_binary);
+  supervisor_options.log_dir = settings.data_dir / "logs";
+  ks::WorkerSupervisor supervisor(supervisor_options);
+
+  ks::HandlerOptions handler_options;
+  handler_options.max_chunk_bytes = settings.max_chunk_bytes;
+  handler_options.workers_alive = [&supervisor] { return supervisor.alive(); };
+  ks::HttpHandler handler(*store, handler_options);
+
+  ks::ServerOptions server_options;
+  server_options.address = listen.host;
+  server_options.port = listen.port;
+  server_options.threads = settings.threads;
+  server_options.read_timeout = std::chrono::milliseconds(static_cast<int64_t>(settings.read_timeout_s * 1000));
+  ks::HttpServer server(handler, server_options);
+  server.start();
+  const std::string url = server.url();
+  ks::write_file_atomically(settings.data_dir / "server.url", url);
+
+  // Workers reach the server on loopback whatever address it listens on.
+  const std::string worker_url =
+      listen.host == "0.0.0.0" || listen.host == "127.0.0.1" || listen.host == "localhost"
+          ? "http://127.0.0.1:" + std::to_string(server.port())
+          : url;
+  supervisor.start({"--server", worker_url, "--token-file", (settings.data_dir / "token").string()});
+
+  std::cout << url << std::endl;
+  spdlog::info("keel-server listening on {} with {} io threads, {} workers, data in {}", url,
+               settings.threads, settings.workers, settings.data_dir.string());
+
+  int received = 0;
+  sigwait(&stop_signals, &received);
+  spdlog::info("signal {}: stopping workers, then the server", received);
+  supervisor.stop();
+  server.stop();
+  spdlog::info("stopped");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"keel-server: Keel's HTTP API, job queue and artifact store"};
+  Settings settings;
+  app.add_option("--data-dir", settings.data_dir, "folder for keel.db, blobs, uploads, token, logs")->required();
+  app.add_option("--listen", settings.listen, "address:port to listen on (port 0 = any free port)")
+      ->capture_default_str();
+  app.add_option("--workers", settings.workers, "local keel-worker processes to run (0 = none)")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
+  app.add_option("--worker-binary", settings.worker_binary,
+                 "keel-worker executable (default: next to keel-server)");
+  app.add_option("--max-chunk-bytes", settings.max_chunk_bytes, "largest upload chunk (PUT body)")
+      ->check(CLI::Range(uint64_t{1}, uint64_t{1} << 34))
+      ->capture_default_str();
+  app.add_option("--threads", settings.threads, "io threads")->check(CLI::Range(1, 256))->capture_default_str();
+  app.add_option("--read-timeout", settings.read_timeout_s, "seconds a read may stall before the connection is dropped")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
+  app.add_option("--log-level", settings.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  spdlog::set_level(spdlog::level::from_str(settings.log_level));
+  try {
+    return run(settings);
+  } catch (const std::exception& e) {
+    spdlog::critical("keel-server: {}", e.what());
+    return 1;
+  }
+}

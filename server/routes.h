@@ -1,0 +1,68 @@
+// Route functions of the API, one file per resource (routes_*.cc). Internal to the server:
+// http_handler.cc matches a request to one of these and maps exceptions to error answers.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "server/http_handler.h"
+#include "server/http_types.h"
+#include "server/url.h"
+#include "storage/store.h"
+
+namespace keel::server::routes {
+
+struct Call {
+  storage::Store& store;
+  const Request& request;
+  const Target& target;
+  const std::vector<std::string>& params;  // path parameters ("{id}", "{stage}") in order
+  const HandlerOptions& options;
+  const RequestCounters& counters;
+};
+
+using RouteFn = Response (*)(const Call&);
+
+// routes_health.cc
+Response healthz(const Call& call);
+Response metrics(const Call& call);
+
+// routes_uploads.cc
+Response create_upload(const Call& call);
+Response head_upload(const Call& call);
+Response get_upload(const Call& call);
+Response put_upload_chunk(const Call& call);
+Response complete_upload(const Call& call);
+Response delete_upload(const Call& call);
+Response get_blob(const Call& call);
+
+// routes_missions.cc
+Response create_mission(const Call& call);
+Response list_missions(const Call& call);
+Response get_mission(const Call& call);
+
+// routes_jobs.cc
+Response create_job(const Call& call);
+Response list_jobs(const Call& call);
+Response get_job(const Call& call);
+Response read_job_log(const Call& call);
+Response cancel_job(const Call& call);
+Response retry_job(const Call& call);
+Response reprocess(const Call& call);
+Response list_job_artifacts(const Call& call);
+Response get_artifact(const Call& call);
+
+// routes_worker.cc
+Response worker_lease(const Call& call);
+Response worker_heartbeat(const Call& call);
+Response worker_add_artifact(const Call& call);
+Response worker_complete_stage(const Call& call);
+Response worker_complete_job(const Call& call);
+Response worker_fail_job(const Call& call);
+
+// Query helpers shared by route files: ApiException 400 `invalid_field` on bad values.
+int64_t query_int(const Call& call, const std::string& name, int64_t fallback, int64_t min,
+                  int64_t max);
+std::string query_string(const Call& call, const std::string& name);
+
+}  // namespace keel::server::routes

@@ -1,0 +1,41 @@
+// POST /v1/missions (checks the bundle tar first), GET /v1/missions[?prefix=], GET /v1/missions/{id}.
+#include "proto/resources.h"
+#include "server/api_response.h"
+#include "server/bundle_check.h"
+#include "server/routes.h"
+
+namespace keel::server::routes {
+
+namespace {
+
+void require_blob(storage::Store& store, const std::string& field, const std::string& sha256) {
+  if (!store.has_blob(sha256))
+    throw ApiException(404, "not_found", field + ": no blob " + sha256 + " (upload it first)");
+}
+
+}  // namespace
+
+Response create_mission(const Call& call) {
+  proto::MissionRequest request = proto::MissionRequest::from_json(parse_json_body(call.request));
+  require_blob(call.store, "bundle_blob", request.bundle_blob);
+  if (!request.cad_blob.empty()) require_blob(call.store, "cad_blob", request.cad_blob);
+  try {
+    check_mission_bundle(call.store.blob_path(request.bundle_blob));
+  } catch (const BundleError& e) {
+    throw ApiException(400, e.code(), "bundle_blob " + request.bundle_blob + ": " + e.what());
+  }
+  return json_response(201, call.store.create_mission(request).to_json());
+}
+
+Response list_missions(const Call& call) {
+  nlohmann::json missions = nlohmann::json::array();
+  for (const auto& mission : call.store.list_missions(query_string(call, "prefix")))
+    missions.push_back(mission.to_json());
+  return json_response(200, {{"missions", missions}});
+}
+
+Response get_mission(const Call& call) {
+  return json_response(200, call.store.get_mission(call.params[0]).to_json());
+}
+
+}  // namespace keel::server::routes

@@ -1,0 +1,157 @@
+#include "storage/migrations.h"
+
+#include <stdexcept>
+
+namespace keel::storage {
+
+namespace {
+
+// Version 1: every table. Ids are TEXT with a kind prefix (m_, j_, u_, a_, l_); tables that
+// are listed in creation order carry an INTEGER PRIMARY KEY `seq`, which VACUUM keeps stable.
+const char* const kCoreTables = R"sql(
+CREATE TABLE blobs (
+  sha256        TEXT PRIMARY KEY CHECK (length(sha256) = 64),
+  size          INTEGER NOT NULL CHECK (size >= 0),
+  created_at_ms INTEGER NOT NULL
+);
+CREATE TABLE uploads (
+  id            TEXT PRIMARY KEY,
+  name          TEXT NOT NULL,
+  size          INTEGER NOT NULL CHECK (size >= 0),
+  committed     INTEGER NOT NULL DEFAULT 0 CHECK (committed >= 0 AND committed <= size),
+  created_at_ms INTEGER NOT NULL
+);
+CREATE TABLE missions (
+  seq           INTEGER PRIMARY KEY,
+  id            TEXT NOT NULL UNIQUE,
+  name          TEXT NOT NULL,
+  bundle_blob   TEXT NOT NULL REFERENCES blobs (sha256),
+  cad_blob      TEXT REFERENCES blobs (sha256),
+  cad_name      TEXT NOT NULL DEFAULT '',
+  created_at_ms INTEGER NOT NULL
+);
+CREATE TABLE jobs (
+  seq                 INTEGER PRIMARY KEY,
+  id                  TEXT NOT NULL UNIQUE,
+  mission_id          TEXT NOT NULL REFERENCES missions (id),
+  state               TEXT NOT NULL
+                      CHECK (state IN ('queued', 'running', 'succeeded', 'failed', 'canceled')),
+  stages              TEXT NOT NULL,
+  options             TEXT NOT NULL,
+  stage               TEXT NOT NULL DEFAULT '',
+  progress            REAL NOT NULL DEFAULT 0,
+  error               TEXT NOT NULL DEFAULT '',
+  attempts            INTEGER NOT NULL DEFAULT 0,
+  lease_expiries      INTEGER NOT NULL DEFAULT 0,
+  lease_id            TEXT,
+  lease_expires_at_ms INTEGER,
+  lease_ms            INTEGER NOT NULL DEFAULT 30000,
+  worker              TEXT NOT NULL DEFAULT '',
+  idempotency_key     TEXT UNIQUE,
+  created_at_ms       INTEGER NOT NULL,
+  started_at_ms       INTEGER NOT NULL DEFAULT 0,
+  finished_at_ms      INTEGER NOT NULL DEFAULT 0
+);
+CREATE TABLE stage_outputs (
+  seq           INTEGER PRIMARY KEY,
+  job_id        TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+  stage         TEXT NOT NULL,
+  report        TEXT NOT NULL,
+  seconds       REAL NOT NULL,
+  completed_at_ms INTEGER NOT NULL,
+  UNIQUE (job_id, stage)
+);
+CREATE TABLE artifacts (
+  seq           INTEGER PRIMARY KEY,
+  id            TEXT NOT NULL UNIQUE,
+  job_id        TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+  stage         TEXT NOT NULL,
+  name          TEXT NOT NULL,
+  sha256        TEXT NOT NULL REFERENCES blobs (sha256),
+  size          INTEGER NOT NULL,
+  created_at_ms INTEGER NOT NULL,
+  UNIQUE (job_id, stage, name)
+);
+CREATE TABLE job_logs (
+  job_id        TEXT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,
+  seq           INTEGER NOT NULL,
+  t_ms          INTEGER NOT NULL,
+  text          TEXT NOT NULL,
+  PRIMARY KEY (job_id, seq)
+) WITHOUT ROWID;
+CREATE TABLE api_tokens (
+  token_sha256  TEXT PRIMARY KEY CHECK (length(token_sha256) = 64),
+  label         TEXT NOT NULL,
+  created_at_ms INTEGER NOT NULL
+);
+)sql";
+
+// Version 2: indexes for the listings and the lease query (oldest queued job first).
+const char* const kListingIndexes = R"sql(
+CREATE INDEX jobs_by_state ON jobs (state, seq);
+CREATE INDEX jobs_by_mission ON jobs (mission_id, seq);
+CREATE INDEX missions_by_name ON missions (name);
+CREATE INDEX artifacts_by_job ON artifacts (job_id, seq);
+)sql";
+
+void record_version(Database& db, int version) {
+  auto statement = db.cached("UPDATE schema_version SET version = ?1");
+  statement->bind_int64(1, version).run();
+}
+
+}  // namespace
+
+const std::vector<Migration>& sqlite_migrations() {
+  static const std::vector<Migration> migrations = {
+      {1, "core tables", kCoreTables},
+      {2, "listing indexes", kListingIndexes},
+  };
+  return migrations;
+}
+
+int schema_version(Database& db) {
+  auto exists =
+      db.cached("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'");
+  if (!exists->step()) return 0;
+  auto statement = db.cached("SELECT MAX(version) FROM schema_version");
+  return statement->step() ? static_cast<int>(statement->column_int64(0)) : 0;
+}
+
+int apply_migrations(Database& db, const std::vector<Migration>& migrations) {
+  for (size_t i = 0; i < migrations.size(); ++i)
+    if (migrations[i].version != static_cast<int>(i + 1))
+      throw std::logic_error("migration '" + migrations[i].name + "' has version " +
+                             std::to_string(migrations[i].version) + ", expected " +
+                             std::to_string(i + 1));
+  {
+    Transaction transaction(db);
+    db.exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
+    db.exec("INSERT INTO schema_version SELECT 0 WHERE NOT EXISTS (SELECT 1 FROM schema_version)");
+    transaction.commit();
+  }
+  int version = schema_version(db);
+  const int newest = static_cast<int>(migrations.size());
+  if (version > newest)
+    throw std::runtime_error(db.file().string() + ": schema version " + std::to_string(version) +
+                             " is newer than this program knows (" + std::to_string(newest) +
+                             "); use a newer keel-server");
+  for (const Migration& migration : migrations) {
+    if (migration.version <= version) continue;
+    Transaction transaction(db);
+    // Re-read inside the write lock: another process may have migrated meanwhile.
+    if (schema_version(db) >= migration.version) continue;
+    try {
+      db.exec(migration.sql);
+    } catch (const std::exception& error) {
+      throw std::runtime_error(db.file().string() + ": migration " +
+                               std::to_string(migration.version) + " (" + migration.name +
+                               ") failed: " + error.what());
+    }
+    record_version(db, migration.version);
+    transaction.commit();
+    version = migration.version;
+  }
+  return version;
+}
+
+}  // namespace keel::storage

@@ -1,0 +1,30 @@
+// The SQLite schema as an ordered list of migrations. The database records the applied
+// version in `schema_version`; opening applies only the missing ones, each in its own
+// transaction, so a crash mid-migration leaves the previous version intact.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "storage/sqlite_db.h"
+
+namespace keel::storage {
+
+struct Migration {
+  int version;       // 1, 2, 3, ... in order; never renumber or edit a released one
+  std::string name;  // what it does, for errors and logs
+  std::string sql;   // one or more statements
+};
+
+// Keel's migrations, oldest first.
+const std::vector<Migration>& sqlite_migrations();
+
+// The version recorded in `schema_version` (0 for a fresh database).
+int schema_version(Database& db);
+
+// Applies the migrations newer than the database's version, each in one transaction, and
+// returns the resulting version. Throws when the database is newer than `migrations`
+// (a downgrade would misread it) or when the list is not numbered 1, 2, 3, ...
+int apply_migrations(Database& db, const std::vector<Migration>& migrations);
+
+}  // namespace keel::storage

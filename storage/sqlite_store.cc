@@ -1,0 +1,342 @@
+// SqliteStore: construction and recovery, uploads, blobs, missions, tokens and metrics.
+// Jobs, leases, artifacts and logs are in sqlite_store_jobs.cc.
+#include "storage/sqlite_store.h"
+
+#include <chrono>
+#include <functional>
+#include <system_error>
+
+#include "storage/ids.h"
+#include "storage/migrations.h"
+#include "storage/sha256.h"
+#include "storage/sqlite_queries.h"
+
+namespace keel::storage {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path& ensure_directory(const fs::path& dir) {
+  fs::create_directories(dir);
+  return dir;
+}
+
+void require_sha256(const std::string& sha256, const std::string& field) {
+  if (!proto::is_sha256_hex(sha256))
+    throw Invalid(field + ": expected 64 lowercase hex digits (SHA-256), got '" + sha256 + "'");
+}
+
+NotFound upload_not_found(const std::string& upload_id) {
+  return NotFound("upload " + upload_id + " not found");
+}
+
+}  // namespace
+
+int64_t system_clock_ms() {
+  using namespace std::chrono;
+  return duration_cast<milliseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+std::unique_ptr<Store> open_sqlite_store(const fs::path& data_dir, Clock clock) {
+  return std::make_unique<SqliteStore>(data_dir, std::move(clock));
+}
+
+SqliteStore::SqliteStore(const fs::path& data_dir, Clock clock)
+    : data_dir_(ensure_directory(data_dir)),
+      clock_(clock ? std::move(clock) : Clock(system_clock_ms)),
+      blobs_(data_dir_ / "blobs", data_dir_ / "tmp"),
+      uploads_(data_dir_ / "uploads"),
+      writer_(std::make_unique<Database>(data_dir_ / "keel.db")),
+      readers_(data_dir_ / "keel.db", DatabaseOptions{5000, /*query_only=*/true}) {
+  apply_migrations(*writer_, sqlite_migrations());
+  blobs_.clear_tmp();
+  recover_uploads();
+}
+
+// --- uploads ---
+
+std::mutex& SqliteStore::upload_lock(const std::string& upload_id) {
+  return upload_locks_[std::hash<std::string>{}(upload_id) % upload_locks_.size()];
+}
+
+void SqliteStore::recover_uploads() {
+  write([&](Database& db) {
+    std::vector<proto::Upload> open;
+    {
+      auto statement = db.cached("SELECT id, committed FROM uploads");
+      while (statement->step()) {
+        proto::Upload upload;
+        upload.id = statement->column_text(0);
+        upload.offset = statement->column_int64(1);
+        open.push_back(upload);
+      }
+    }
+    for (const proto::Upload& upload : open) {
+      // A chunk written and fsynced whose offset never committed (killed in between)
+      // leaves the file longer than the committed offset: cut it so a resume is exact.
+      const int64_t kept = uploads_.truncate_to(upload.id, upload.offset);
+      if (kept < upload.offset) {
+        // Committed bytes are gone (the file was damaged): resume from what is there.
+        auto statement = db.cached("UPDATE uploads SET committed = ?2 WHERE id = ?1");
+        statement->bind_text(1, upload.id).bind_int64(2, kept).run();
+      }
+    }
+    for (const std::string& id : uploads_.part_ids())
+      if (!find_upload(db, id)) uploads_.remove(id);
+  });
+}
+
+proto::Upload SqliteStore::create_upload(const proto::UploadRequest& request) {
+  if (request.size < 0)
+    throw Invalid("upload size: expected >= 0 bytes, got " + std::to_string(request.size));
+  proto::Upload upload;
+  upload.id = new_id(kUploadPrefix);
+  upload.name = request.name;
+  upload.size = request.size;
+  std::lock_guard<std::mutex> lock(upload_lock(upload.id));
+  uploads_.create(upload.id);  // the file first: a crash before the row leaves an orphan
+  try {
+    write([&](Database& db) {
+      auto statement = db.cached(
+          "INSERT INTO uploads (id, name, size, committed, created_at_ms) "
+          "VALUES (?1, ?2, ?3, 0, ?4)");
+      statement->bind_text(1, upload.id)
+          .bind_text(2, upload.name)
+          .bind_int64(3, upload.size)
+          .bind_int64(4, clock_())
+          .run();
+    });
+  } catch (...) {
+    uploads_.remove(upload.id);
+    throw;
+  }
+  return upload;
+}
+
+proto::Upload SqliteStore::get_upload(const std::string& upload_id) {
+  auto upload = read([&](Database& db) { return find_upload(db, upload_id); });
+  if (!upload) throw upload_not_found(upload_id);
+  return *upload;
+}
+
+proto::Upload SqliteStore::append_upload(const std::string& upload_id, int64_t offset,
+                                         const char* data, size_t size) {
+  std::lock_guard<std::mutex> lock(upload_lock(upload_id));
+  proto::Upload upload = get_upload(upload_id);
+  if (offset != upload.offset)
+    throw OffsetMismatch("upload " + upload_id + ": chunk starts at byte " +
+                             std::to_string(offset) + " but " + std::to_string(upload.offset) +
+                             " bytes are committed; resume from byte " +
+                             std::to_string(upload.offset),
+                         upload.offset);
+  if (size > static_cast<uint64_t>(upload.size - upload.offset))
+    throw Invalid("upload " + upload_id + ": chunk of " + std::to_string(size) + " bytes at byte " +
+                  std::to_string(offset) + " ends beyond the announced size of " +
+                  std::to_string(upload.size) + " bytes");
+  // Durable bytes first, then the offset: a crash in between leaves extra bytes in the file
+  // that the next append or open cuts, never a committed offset without its bytes.
+  uploads_.write_chunk(upload_id, offset, data, size);
+  const int64_t committed = offset + static_cast<int64_t>(size);
+  write([&](Database& db) {
+    auto statement =
+        db.cached("UPDATE uploads SET committed = ?3 WHERE id = ?1 AND committed = ?2");
+    statement->bind_text(1, upload_id).bind_int64(2, offset).bind_int64(3, committed).run();
+    if (db.changes() != 1) throw upload_not_found(upload_id);
+  });
+  upload.offset = committed;
+  return upload;
+}
+
+void SqliteStore::discard_upload(const std::string& upload_id) {
+  write([&](Database& db) {
+    auto statement = db.cached("DELETE FROM uploads WHERE id = ?1");
+    statement->bind_text(1, upload_id).run();
+  });
+  uploads_.remove(upload_id);
+}
+
+std::string SqliteStore::complete_upload(const std::string& upload_id, const std::string& sha256) {
+  require_sha256(sha256, "sha256");
+  std::lock_guard<std::mutex> lock(upload_lock(upload_id));
+  const proto::Upload upload = get_upload(upload_id);
+  const int64_t actual_size = uploads_.truncate_to(upload_id, upload.offset);
+  if (actual_size != upload.size) {
+    discard_upload(upload_id);
+    throw SizeMismatch("upload " + upload_id + " (" + upload.name + "): expected " +
+                       std::to_string(upload.size) + " bytes, got " + std::to_string(actual_size) +
+                       "; the upload was deleted");
+  }
+  const fs::path part = uploads_.part_path(upload_id);
+  const std::string actual_sha256 = sha256_file(part);
+  if (actual_sha256 != sha256) {
+    discard_upload(upload_id);
+    throw Sha256Mismatch("upload " + upload_id + " (" + upload.name + "): expected SHA-256 " +
+                         sha256 + ", got " + actual_sha256 + "; the upload was deleted");
+  }
+  blobs_.adopt(part, sha256);
+  write([&](Database& db) {
+    auto insert =
+        db.cached("INSERT OR IGNORE INTO blobs (sha256, size, created_at_ms) VALUES (?1, ?2, ?3)");
+    insert->bind_text(1, sha256).bind_int64(2, upload.size).bind_int64(3, clock_()).run();
+    auto remove = db.cached("DELETE FROM uploads WHERE id = ?1");
+    remove->bind_text(1, upload_id).run();
+  });
+  return sha256;
+}
+
+void SqliteStore::delete_upload(const std::string& upload_id) {
+  std::lock_guard<std::mutex> lock(upload_lock(upload_id));
+  write([&](Database& db) {
+    auto statement = db.cached("DELETE FROM uploads WHERE id = ?1");
+    statement->bind_text(1, upload_id).run();
+    if (db.changes() != 1) throw upload_not_found(upload_id);
+  });
+  uploads_.remove(upload_id);
+}
+
+// --- blobs ---
+
+bool SqliteStore::has_blob(const std::string& sha256) {
+  if (!proto::is_sha256_hex(sha256)) return false;
+  return read([&](Database& db) { return find_blob_size(db, sha256).has_value(); });
+}
+
+int64_t SqliteStore::blob_size(const std::string& sha256) {
+  require_sha256(sha256, "blob");
+  auto size = read([&](Database& db) { return find_blob_size(db, sha256); });
+  if (!size) throw NotFound("blob " + sha256 + " not found");
+  return *size;
+}
+
+fs::path SqliteStore::blob_path(const std::string& sha256) {
+  blob_size(sha256);  // NotFound / Invalid
+  return blobs_.path_of(sha256);
+}
+
+std::string SqliteStore::put_blob(const std::string& bytes) {
+  const std::string sha256 = blobs_.put(bytes);
+  write([&](Database& db) {
+    auto statement =
+        db.cached("INSERT OR IGNORE INTO blobs (sha256, size, created_at_ms) VALUES (?1, ?2, ?3)");
+    statement->bind_text(1, sha256)
+        .bind_int64(2, static_cast<int64_t>(bytes.size()))
+        .bind_int64(3, clock_())
+        .run();
+  });
+  return sha256;
+}
+
+// --- missions ---
+
+proto::Mission SqliteStore::create_mission(const proto::MissionRequest& request) {
+  if (request.name.empty()) throw Invalid("name: expected a non-empty mission name");
+  require_sha256(request.bundle_blob, "bundle_blob");
+  if (!request.cad_blob.empty()) {
+    require_sha256(request.cad_blob, "cad_blob");
+    if (request.cad_name.empty())
+      throw Invalid("cad_name: required with cad_blob (its extension tells the mesh format)");
+  } else if (!request.cad_name.empty()) {
+    throw Invalid("cad_name: given without cad_blob");
+  }
+  proto::Mission mission;
+  mission.id = new_id(kMissionPrefix);
+  mission.name = request.name;
+  mission.bundle_blob = request.bundle_blob;
+  mission.cad_blob = request.cad_blob;
+  mission.cad_name = request.cad_name;
+  mission.created_at_ms = clock_();
+  write([&](Database& db) {
+    if (!find_blob_size(db, mission.bundle_blob))
+      throw NotFound("bundle_blob: blob " + mission.bundle_blob + " not found (upload it first)");
+    if (!mission.cad_blob.empty() && !find_blob_size(db, mission.cad_blob))
+      throw NotFound("cad_blob: blob " + mission.cad_blob + " not found (upload it first)");
+    auto statement = db.cached(
+        "INSERT INTO missions (id, name, bundle_blob, cad_blob, cad_name, created_at_ms) "
+        "VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+    statement->bind_text(1, mission.id)
+        .bind_text(2, mission.name)
+        .bind_text(3, mission.bundle_blob)
+        .bind_text_or_null(4, mission.cad_blob)
+        .bind_text(5, mission.cad_name)
+        .bind_int64(6, mission.created_at_ms)
+        .run();
+  });
+  return mission;
+}
+
+proto::Mission SqliteStore::get_mission(const std::string& mission_id) {
+  auto mission = read([&](Database& db) { return find_mission(db, mission_id); });
+  if (!mission) throw NotFound("mission " + mission_id + " not found");
+  return *mission;
+}
+
+std::vector<proto::Mission> SqliteStore::list_missions(const std::string& name_prefix) {
+  return read([&](Database& db) { return query_missions(db, name_prefix); });
+}
+
+// --- tokens ---
+
+void SqliteStore::add_token(const std::string& token, const std::string& label) {
+  if (token.empty()) throw Invalid("token: expected a non-empty token");
+  const std::string hash = sha256_bytes(token);  // the clear token is never stored
+  write([&](Database& db) {
+    auto statement = db.cached(
+        "INSERT INTO api_tokens (token_sha256, label, created_at_ms) VALUES (?1, ?2, ?3) "
+        "ON CONFLICT (token_sha256) DO NOTHING");
+    statement->bind_text(1, hash).bind_text(2, label).bind_int64(3, clock_()).run();
+  });
+}
+
+bool SqliteStore::check_token(const std::string& token) {
+  if (token.empty()) return false;
+  const std::string hash = sha256_bytes(token);
+  return read([&](Database& db) {
+    auto statement = db.cached("SELECT 1 FROM api_tokens WHERE token_sha256 = ?1");
+    statement->bind_text(1, hash);
+    return statement->step();
+  });
+}
+
+int64_t SqliteStore::token_count() {
+  return read([&](Database& db) {
+    auto statement = db.cached("SELECT COUNT(*) FROM api_tokens");
+    statement->step();
+    return statement->column_int64(0);
+  });
+}
+
+// --- metrics ---
+
+Metrics SqliteStore::metrics() {
+  return read([&](Database& db) {
+    Metrics metrics;
+    Transaction snapshot(db, Transaction::Mode::kDeferred);  // all counts from one state
+    {
+      auto statement = db.cached("SELECT state, COUNT(*) FROM jobs GROUP BY state");
+      while (statement->step())
+        metrics.jobs_by_state[static_cast<int>(
+            proto::job_state_from_string(statement->column_text(0)))] = statement->column_int64(1);
+    }
+    {
+      auto statement = db.cached("SELECT COUNT(*) FROM missions");
+      statement->step();
+      metrics.missions = statement->column_int64(0);
+    }
+    {
+      auto statement = db.cached("SELECT COUNT(*), COALESCE(SUM(size), 0) FROM blobs");
+      statement->step();
+      metrics.blobs = statement->column_int64(0);
+      metrics.blob_bytes = statement->column_int64(1);
+    }
+    {
+      auto statement = db.cached("SELECT COUNT(*) FROM uploads");
+      statement->step();
+      metrics.uploads_open = statement->column_int64(0);
+    }
+    snapshot.commit();
+    return metrics;
+  });
+}
+
+}  // namespace keel::storage

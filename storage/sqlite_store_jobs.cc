@@ -1,0 +1,417 @@
+// SqliteStore: jobs, the worker protocol (leases, heartbeats, stages, artifacts, finish),
+// artifacts and logs.
+#include <cmath>
+
+#include "proto/contract_error.h"
+#include "proto/options.h"
+#include "storage/ids.h"
+#include "storage/sqlite_queries.h"
+#include "storage/sqlite_store.h"
+
+namespace keel::storage {
+
+namespace {
+
+// After this many expired leases a job fails instead of being leased again (docs/api.md).
+constexpr int kMaxLeaseExpiries = 3;
+constexpr size_t kMaxIdempotencyKeyBytes = 255;
+constexpr size_t kMaxArtifactNameBytes = 255;
+constexpr int kMaxListLimit = 10000;
+
+NotFound job_not_found(const std::string& job_id) {
+  return NotFound("job " + job_id + " not found");
+}
+
+proto::Job require_job(Database& db, const std::string& job_id) {
+  auto job = find_job(db, job_id);
+  if (!job) throw job_not_found(job_id);
+  return *job;
+}
+
+void require_stage_of(const proto::Job& job, const std::string& stage, const std::string& field) {
+  if (pipeline_index(job.stages, stage) == job.stages.size())
+    throw Invalid(field + ": job " + job.id + " has no stage '" + stage +
+                  "' (its stages: " + nlohmann::json(job.stages).dump() + ")");
+}
+
+// Artifact names become download file names: one plain path component.
+void require_artifact_name(const std::string& name) {
+  if (name.empty() || name.size() > kMaxArtifactNameBytes || name == "." || name == "..")
+    throw Invalid("name: expected a file name of 1.." + std::to_string(kMaxArtifactNameBytes) +
+                  " bytes, got '" + name + "'");
+  for (char c : name)
+    if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20)
+      throw Invalid("name: artifact name '" + name +
+                    "' must not contain '/', '\\' or control characters");
+}
+
+bool same_request(const proto::Job& job, const proto::JobRequest& request) {
+  return job.mission_id == request.mission_id && job.stages == request.stages &&
+         job.options == request.options;
+}
+
+}  // namespace
+
+// --- jobs ---
+
+proto::Job SqliteStore::create_job(const proto::JobRequest& request,
+                                   const std::string& idempotency_key, bool* created) {
+  try {
+    proto::validate_stage_list(request.stages, "stages");
+    proto::validate_options(request.options, "options");
+  } catch (const proto::ContractError& error) {
+    throw Invalid(error.what());
+  }
+  if (idempotency_key.size() > kMaxIdempotencyKeyBytes)
+    throw Invalid("Idempotency-Key: expected at most " + std::to_string(kMaxIdempotencyKeyBytes) +
+                  " bytes");
+  return write([&](Database& db) {
+    if (!idempotency_key.empty()) {
+      auto existing = db.cached("SELECT id FROM jobs WHERE idempotency_key = ?1");
+      existing->bind_text(1, idempotency_key);
+      if (existing->step()) {
+        proto::Job job = require_job(db, existing->column_text(0));
+        if (!same_request(job, request))
+          throw Conflict("Idempotency-Key '" + idempotency_key + "' was used for job " + job.id +
+                         " with a different request");
+        if (created) *created = false;
+        return job;
+      }
+    }
+    if (!find_mission(db, request.mission_id))
+      throw NotFound("mission_id: mission " + request.mission_id + " not found");
+    const std::string job_id = new_id(kJobPrefix);
+    auto insert = db.cached(
+        "INSERT INTO jobs (id, mission_id, state, stages, options, idempotency_key, "
+        "created_at_ms) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6)");
+    insert->bind_text(1, job_id)
+        .bind_text(2, request.mission_id)
+        .bind_text(3, nlohmann::json(request.stages).dump())
+        .bind_text(4, request.options.dump())
+        .bind_text_or_null(5, idempotency_key)
+        .bind_int64(6, clock_())
+        .run();
+    if (created) *created = true;
+    return require_job(db, job_id);
+  });
+}
+
+proto::Job SqliteStore::get_job(const std::string& job_id) {
+  return read([&](Database& db) { return require_job(db, job_id); });
+}
+
+std::vector<proto::Job> SqliteStore::list_jobs(const JobFilter& filter) {
+  if (filter.limit < 1 || filter.limit > kMaxListLimit)
+    throw Invalid("limit: expected 1.." + std::to_string(kMaxListLimit) + ", got " +
+                  std::to_string(filter.limit));
+  return read(
+      [&](Database& db) { return query_jobs(db, filter.state, filter.mission_id, filter.limit); });
+}
+
+proto::Job SqliteStore::cancel_job(const std::string& job_id) {
+  return write([&](Database& db) {
+    const proto::Job job = require_job(db, job_id);
+    if (proto::is_terminal(job.state))
+      throw Conflict("job " + job_id + " is " + proto::to_string(job.state) +
+                     "; only queued or running jobs can be canceled");
+    // The lease stays, so the worker's next heartbeat is answered "canceled".
+    auto statement =
+        db.cached("UPDATE jobs SET state = 'canceled', finished_at_ms = ?2 WHERE id = ?1");
+    statement->bind_text(1, job_id).bind_int64(2, clock_()).run();
+    return require_job(db, job_id);
+  });
+}
+
+proto::Job SqliteStore::retry_job(const std::string& job_id) {
+  return write([&](Database& db) {
+    const proto::Job job = require_job(db, job_id);
+    if (job.state != proto::JobState::kFailed && job.state != proto::JobState::kCanceled)
+      throw Conflict("job " + job_id + " is " + proto::to_string(job.state) +
+                     "; only failed or canceled jobs can be retried");
+    // Stage outputs and artifacts stay: the next lease hands them over and the worker
+    // resumes after the last completed stage.
+    auto statement = db.cached(
+        "UPDATE jobs SET state = 'queued', stage = '', progress = 0, error = '', "
+        "lease_id = NULL, lease_expires_at_ms = NULL, lease_expiries = 0, worker = '', "
+        "started_at_ms = 0, finished_at_ms = 0 WHERE id = ?1");
+    statement->bind_text(1, job_id).run();
+    return require_job(db, job_id);
+  });
+}
+
+// --- worker protocol ---
+
+void SqliteStore::expire_leases(Database& db, int64_t now_ms) {
+  struct Expired {
+    std::string job_id, lease_id, worker;
+    int expiries;
+  };
+  std::vector<Expired> expired;
+  {
+    auto statement = db.cached(
+        "SELECT id, lease_id, worker, lease_expiries FROM jobs "
+        "WHERE state = 'running' AND lease_expires_at_ms <= ?1");
+    statement->bind_int64(1, now_ms);
+    while (statement->step())
+      expired.push_back({statement->column_text(0), statement->column_text(1),
+                         statement->column_text(2),
+                         static_cast<int>(statement->column_int64(3)) + 1});
+  }
+  for (const Expired& job : expired) {
+    const bool give_up = job.expiries >= kMaxLeaseExpiries;
+    auto statement = db.cached(
+        "UPDATE jobs SET state = ?2, lease_expiries = ?3, error = ?4, finished_at_ms = ?5, "
+        "lease_id = NULL, lease_expires_at_ms = NULL, stage = '', progress = 0 WHERE id = ?1");
+    statement->bind_text(1, job.job_id)
+        .bind_text(2, give_up ? "failed" : "queued")
+        .bind_int64(3, job.expiries)
+        .bind_text(4, give_up ? "lease expired " + std::to_string(job.expiries) +
+                                    " times (last worker: " + job.worker + ")"
+                              : "")
+        .bind_int64(5, give_up ? now_ms : 0)
+        .run();
+    insert_log_lines(db, job.job_id,
+                     {"lease " + job.lease_id + " of worker " + job.worker + " expired" +
+                      (give_up ? "; the job failed" : "; the job is queued again")},
+                     now_ms);
+  }
+}
+
+std::optional<proto::Lease> SqliteStore::lease_job(const proto::LeaseRequest& request) {
+  if (request.lease_seconds < 1)
+    throw Invalid("lease_seconds: expected >= 1, got " + std::to_string(request.lease_seconds));
+  return write([&](Database& db) -> std::optional<proto::Lease> {
+    const int64_t now_ms = clock_();
+    expire_leases(db, now_ms);
+    std::string job_id;
+    {
+      auto oldest = db.cached("SELECT id FROM jobs WHERE state = 'queued' ORDER BY seq LIMIT 1");
+      if (!oldest->step()) return std::nullopt;
+      job_id = oldest->column_text(0);
+    }
+    proto::Lease lease;
+    lease.lease_id = new_id(kLeasePrefix);
+    const int64_t lease_ms = int64_t{request.lease_seconds} * 1000;
+    lease.expires_at_ms = now_ms + lease_ms;
+    auto statement = db.cached(
+        "UPDATE jobs SET state = 'running', attempts = attempts + 1, lease_id = ?2, "
+        "lease_expires_at_ms = ?3, lease_ms = ?4, worker = ?5, stage = '', progress = 0, "
+        "started_at_ms = CASE WHEN started_at_ms = 0 THEN ?6 ELSE started_at_ms END "
+        "WHERE id = ?1");
+    statement->bind_text(1, job_id)
+        .bind_text(2, lease.lease_id)
+        .bind_int64(3, lease.expires_at_ms)
+        .bind_int64(4, lease_ms)
+        .bind_text(5, request.worker)
+        .bind_int64(6, now_ms)
+        .run();
+    lease.job = require_job(db, job_id);
+    auto mission = find_mission(db, lease.job.mission_id);
+    if (!mission) throw NotFound("mission " + lease.job.mission_id + " of job " + job_id);
+    lease.mission = *mission;
+    lease.completed = completed_outputs(db, lease.job);
+    return lease;
+  });
+}
+
+proto::Job SqliteStore::require_running_lease(Database& db, const std::string& job_id,
+                                              const std::string& lease_id) {
+  auto statement = db.cached("SELECT state, lease_id FROM jobs WHERE id = ?1");
+  statement->bind_text(1, job_id);
+  if (!statement->step()) throw job_not_found(job_id);
+  const std::string state = statement->column_text(0);
+  if (statement->column_is_null(1) || statement->column_text(1) != lease_id)
+    throw LeaseLost("job " + job_id + ": lease " + lease_id +
+                    " is not the job's current lease (it expired and the job was queued "
+                    "again, or the job finished or was retried)");
+  if (state != "running")
+    throw Conflict("job " + job_id + " is " + state + "; the worker must stop");
+  return require_job(db, job_id);
+}
+
+proto::HeartbeatReply SqliteStore::heartbeat(const std::string& job_id,
+                                             const proto::Heartbeat& beat) {
+  if (!(beat.progress >= 0.0 && beat.progress <= 1.0))
+    throw Invalid("progress: expected a fraction in [0, 1]");
+  return write([&](Database& db) {
+    const int64_t now_ms = clock_();
+    proto::HeartbeatReply reply;
+    {
+      auto statement = db.cached(
+          "SELECT state, lease_id, lease_expires_at_ms, lease_ms FROM jobs WHERE id = ?1");
+      statement->bind_text(1, job_id);
+      if (!statement->step()) throw job_not_found(job_id);
+      const std::string state = statement->column_text(0);
+      if (statement->column_is_null(1) || statement->column_text(1) != beat.lease_id ||
+          (state != "running" && state != "canceled"))
+        throw LeaseLost("job " + job_id + ": lease " + beat.lease_id +
+                        " is not the job's current lease (it expired and the job was queued "
+                        "again, or the job finished or was retried)");
+      if (state == "canceled") {
+        reply.canceled = true;
+        reply.expires_at_ms = statement->column_int64(2);
+        return reply;
+      }
+      reply.expires_at_ms = now_ms + statement->column_int64(3);
+    }
+    if (!beat.stage.empty()) require_stage_of(require_job(db, job_id), beat.stage, "stage");
+    auto update = db.cached(
+        "UPDATE jobs SET lease_expires_at_ms = ?2, stage = ?3, progress = ?4 WHERE id = ?1");
+    update->bind_text(1, job_id)
+        .bind_int64(2, reply.expires_at_ms)
+        .bind_text(3, beat.stage)
+        .bind_double(4, beat.progress)
+        .run();
+    insert_log_lines(db, job_id, beat.log, now_ms);
+    return reply;
+  });
+}
+
+proto::Artifact SqliteStore::add_artifact(const std::string& job_id,
+                                          const proto::ArtifactRegistration& registration) {
+  require_artifact_name(registration.name);
+  if (!proto::is_sha256_hex(registration.blob))
+    throw Invalid("blob: expected 64 lowercase hex digits (SHA-256), got '" + registration.blob +
+                  "'");
+  return write([&](Database& db) {
+    const proto::Job job = require_running_lease(db, job_id, registration.lease_id);
+    require_stage_of(job, registration.stage, "stage");
+    const auto size = find_blob_size(db, registration.blob);
+    if (!size) throw NotFound("blob " + registration.blob + " not found (upload it first)");
+    proto::Artifact artifact;
+    artifact.id = new_id(kArtifactPrefix);
+    artifact.job_id = job_id;
+    artifact.stage = registration.stage;
+    artifact.name = registration.name;
+    artifact.sha256 = registration.blob;
+    artifact.size = *size;
+    artifact.created_at_ms = clock_();
+    // A repeated name (a stage rerun) replaces the earlier artifact; ids stay immutable.
+    auto remove = db.cached("DELETE FROM artifacts WHERE job_id = ?1 AND stage = ?2 AND name = ?3");
+    remove->bind_text(1, job_id).bind_text(2, artifact.stage).bind_text(3, artifact.name).run();
+    auto insert = db.cached(
+        "INSERT INTO artifacts (id, job_id, stage, name, sha256, size, created_at_ms) "
+        "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+    insert->bind_text(1, artifact.id)
+        .bind_text(2, job_id)
+        .bind_text(3, artifact.stage)
+        .bind_text(4, artifact.name)
+        .bind_text(5, artifact.sha256)
+        .bind_int64(6, artifact.size)
+        .bind_int64(7, artifact.created_at_ms)
+        .run();
+    return artifact;
+  });
+}
+
+void SqliteStore::complete_stage(const std::string& job_id, const std::string& stage,
+                                 const proto::StageCompletion& completion) {
+  if (!std::isfinite(completion.seconds) || completion.seconds < 0)
+    throw Invalid("seconds: expected a finite duration >= 0");
+  write([&](Database& db) {
+    const proto::Job job = require_running_lease(db, job_id, completion.lease_id);
+    require_stage_of(job, stage, "stage");
+    auto statement = db.cached(
+        "INSERT INTO stage_outputs (job_id, stage, report, seconds, completed_at_ms) "
+        "VALUES (?1, ?2, ?3, ?4, ?5) ON CONFLICT (job_id, stage) DO UPDATE SET "
+        "report = excluded.report, seconds = excluded.seconds, "
+        "completed_at_ms = excluded.completed_at_ms");
+    statement->bind_text(1, job_id)
+        .bind_text(2, stage)
+        .bind_text(3, completion.report.dump())
+        .bind_double(4, completion.seconds)
+        .bind_int64(5, clock_())
+        .run();
+  });
+}
+
+proto::Job SqliteStore::finish_job(const std::string& job_id, const proto::JobFinish& finish,
+                                   bool succeeded) {
+  return write([&](Database& db) {
+    require_running_lease(db, job_id, finish.lease_id);
+    const std::string error =
+        succeeded ? ""
+                  : (finish.error.empty() ? "the worker failed without a message" : finish.error);
+    auto statement = db.cached(
+        "UPDATE jobs SET state = ?2, error = ?3, finished_at_ms = ?4, stage = '', "
+        "progress = CASE WHEN ?2 = 'succeeded' THEN 1 ELSE progress END, "
+        "lease_id = NULL, lease_expires_at_ms = NULL WHERE id = ?1");
+    statement->bind_text(1, job_id)
+        .bind_text(2, succeeded ? "succeeded" : "failed")
+        .bind_text(3, error)
+        .bind_int64(4, clock_())
+        .run();
+    return require_job(db, job_id);
+  });
+}
+
+// --- artifacts and logs ---
+
+std::vector<proto::Artifact> SqliteStore::list_artifacts(const std::string& job_id) {
+  return read([&](Database& db) {
+    Transaction snapshot(db, Transaction::Mode::kDeferred);
+    if (!find_job(db, job_id)) throw job_not_found(job_id);
+    auto artifacts = job_artifacts(db, job_id);
+    snapshot.commit();
+    return artifacts;
+  });
+}
+
+proto::Artifact SqliteStore::get_artifact(const std::string& artifact_id) {
+  auto artifact = read([&](Database& db) { return find_artifact(db, artifact_id); });
+  if (!artifact) throw NotFound("artifact " + artifact_id + " not found");
+  return *artifact;
+}
+
+void SqliteStore::insert_log_lines(Database& db, const std::string& job_id,
+                                   const std::vector<std::string>& lines, int64_t now_ms) {
+  if (lines.empty()) return;
+  int64_t seq = 0;
+  {
+    auto next = db.cached("SELECT COALESCE(MAX(seq) + 1, 0) FROM job_logs WHERE job_id = ?1");
+    next->bind_text(1, job_id);
+    next->step();
+    seq = next->column_int64(0);
+  }
+  auto insert = db.cached("INSERT INTO job_logs (job_id, seq, t_ms, text) VALUES (?1, ?2, ?3, ?4)");
+  for (const std::string& line : lines) {
+    insert->bind_text(1, job_id).bind_int64(2, seq++).bind_int64(3, now_ms).bind_text(4, line);
+    insert->run();
+    insert->reset();
+  }
+}
+
+void SqliteStore::append_log(const std::string& job_id, const std::vector<std::string>& lines) {
+  write([&](Database& db) {
+    if (!find_job(db, job_id)) throw job_not_found(job_id);
+    insert_log_lines(db, job_id, lines, clock_());
+  });
+}
+
+proto::LogPage SqliteStore::read_log(const std::string& job_id, int64_t from, int limit) {
+  if (from < 0) throw Invalid("from: expected >= 0, got " + std::to_string(from));
+  if (limit < 1 || limit > kMaxListLimit)
+    throw Invalid("limit: expected 1.." + std::to_string(kMaxListLimit) + ", got " +
+                  std::to_string(limit));
+  return read([&](Database& db) {
+    Transaction snapshot(db, Transaction::Mode::kDeferred);
+    if (!find_job(db, job_id)) throw job_not_found(job_id);
+    proto::LogPage page;
+    page.next = from;
+    {
+      auto statement = db.cached(
+          "SELECT seq, t_ms, text FROM job_logs WHERE job_id = ?1 AND seq >= ?2 "
+          "ORDER BY seq LIMIT ?3");
+      statement->bind_text(1, job_id).bind_int64(2, from).bind_int64(3, limit);
+      while (statement->step()) {
+        page.lines.push_back(
+            {statement->column_int64(0), statement->column_int64(1), statement->column_text(2)});
+        page.next = page.lines.back().seq + 1;
+      }
+    }
+    snapshot.commit();
+    return page;
+  });
+}
+
+}  // namespace keel::storage

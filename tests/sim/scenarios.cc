@@ -1,0 +1,290 @@
+#include "tests/sim/scenarios.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "tests/sim/mesh_bvh.h"
+#include "tests/sim/rng.h"
+
+namespace keel::sim {
+namespace {
+
+Pose3 pose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
+}
+
+Eigen::Matrix3d rot_x(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix(); }
+Eigen::Matrix3d rot_y(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()).toRotationMatrix(); }
+Eigen::Matrix3d rot_z(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+
+// Camera looking along body +x: camera x = body -y, camera y = body -z, camera z = body x.
+Eigen::Matrix3d forward_looking() {
+  Eigen::Matrix3d R;
+  R.col(0) = -Eigen::Vector3d::UnitY();
+  R.col(1) = -Eigen::Vector3d::UnitZ();
+  R.col(2) = Eigen::Vector3d::UnitX();
+  return R;
+}
+
+const Material kWater{0.12, false, Texture::kWater};
+const Material kSeabed{0.3, true, Texture::kSeabed};
+const Material kConcrete{0.55, true, Texture::kConcrete};
+const Material kCinder{0.5, true, Texture::kCinder};
+const Material kWhiteWall{0.85, true, Texture::kPlain};
+
+void add_water(AnalyticScene* scene) {
+  scene->add(make_plane({0, 0, 0}, {0, 0, 1}, kWater, "water"));
+  scene->add(make_plane({0, 0, -6}, {0, 0, 1}, kSeabed, "seabed"));
+}
+
+void add_stadium_pier(AnalyticScene* scene, const Eigen::Vector3d& center, const std::string& name) {
+  // Rounded-end concrete pier from the seabed to the deck (Welland Canal Bridge 13 style).
+  const double half_length = 2.5, radius = 1.2, z0 = -6.0, z1 = 6.0;
+  const Eigen::Vector3d c(center.x(), center.y(), 0.5 * (z0 + z1));
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  scene->add(make_box(c, I, {radius, half_length, 0.5 * (z1 - z0)}, kConcrete, name));
+  scene->add(make_cylinder(c + Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0), kConcrete, name + "_north"));
+  scene->add(make_cylinder(c - Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0), kConcrete, name + "_south"));
+}
+
+std::unique_ptr<AnalyticScene> bridge_scene() {
+  auto scene = std::make_unique<AnalyticScene>();
+  add_water(scene.get());
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  // Partially submerged cinder-block walls along both banks (seed 000 Fig. 3(a)).
+  ReliefWallGeometry north;
+  north.center = {0, 20, 0}, north.yaw_rad = M_PI, north.length_m = 140, north.z_min = -6, north.z_max = 2.5;
+  scene->add(make_relief_wall(north, kCinder, "north_wall"));
+  ReliefWallGeometry south = north;
+  south.center = {0, -20, 0}, south.yaw_rad = 0.0;
+  scene->add(make_relief_wall(south, kCinder, "south_wall"));
+  // Pilasters at irregular spacing break the walls' translational symmetry.
+  const double north_x[] = {-52, -37, -21, -12, 9, 23, 41, 55};
+  const double south_x[] = {-58, -44, -29, -14, 14, 31, 38, 52};
+  for (double x : north_x)
+    scene->add(make_box({x, 19.6, -1.75}, I, {0.35, 0.4, 4.25}, kConcrete, "pilaster"));
+  for (double x : south_x)
+    scene->add(make_box({x, -19.6, -1.75}, I, {0.35, 0.4, 4.25}, kConcrete, "pilaster"));
+  // The bridge: two piers, deck and girders.
+  add_stadium_pier(scene.get(), {0, 7, 0}, "pier_north");
+  add_stadium_pier(scene.get(), {0, -7, 0}, "pier_south");
+  scene->add(make_box({0, 0, 6.75}, I, {3.5, 21.0, 0.75}, kConcrete, "deck"));
+  scene->add(make_box({2.6, 0, 5.75}, I, {0.2, 21.0, 0.25}, kConcrete, "girder_east"));
+  scene->add(make_box({-2.6, 0, 5.75}, I, {0.2, 21.0, 0.25}, kConcrete, "girder_west"));
+  // Mooring dolphins (timber piles).
+  const Eigen::Vector3d piles[] = {{-27, 11, -1.5}, {-18, -12, -1.5}, {19, -13, -1.5}, {33, 10, -1.5}};
+  for (const auto& p : piles) scene->add(make_cylinder(p, I, 0.35, 5.5, kConcrete, "pile"));
+  return scene;
+}
+
+std::vector<Eigen::Vector3d> bridge_waypoints() {
+  // Approach along the channel, figure-eight around both piers (loop closures), back along
+  // the south wall to the start. Scaled so the path is ~265 m (seed 000 Sec. V-C).
+  const double xy[][2] = {
+      {-60, 1.5}, {-48, 1.5}, {-36, 1.5}, {-24, 1.0}, {-14, 0.5}, {-7, 0.0}, {0, 0.0},
+      {5, 1.5}, {8.5, 6.5}, {6.5, 12.5}, {0, 15.5}, {-6.5, 12.5}, {-8.5, 7.0}, {-5, 1.5},
+      {0, -0.5}, {5, -2.0}, {8.5, -7.0}, {6.5, -12.5}, {0, -15.5}, {-6.5, -12.5},
+      {-10, -14.5}, {-20, -15.5}, {-32, -15.0}, {-44, -12.5}, {-53, -8.0}, {-58, -3.0}, {-60, 1.0}};
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& p : xy) out.emplace_back(p[0], p[1], 0.0);
+  return out;
+}
+
+std::unique_ptr<AnalyticScene> corridor_scene() {
+  auto scene = std::make_unique<AnalyticScene>();
+  add_water(scene.get());
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  // Opaque white walls, far longer than the lidar range (seed 000 Fig. 3(b)).
+  scene->add(make_box({25, 3.5, -1.75}, I, {180, 0.5, 4.25}, kWhiteWall, "north_wall"));
+  scene->add(make_box({25, -3.5, -1.75}, I, {180, 0.5, 4.25}, kWhiteWall, "south_wall"));
+  return scene;
+}
+
+std::vector<Eigen::Vector3d> corridor_waypoints() {
+  std::vector<Eigen::Vector3d> out;
+  for (int i = 0; i <= 36; ++i) out.emplace_back(i, 1.0 * std::sin(2.0 * M_PI * i / 12.0), 0.0);
+  return out;  // ~38 m winding path
+}
+
+void add_usv_rig(Scenario* s) {
+  s->T_body_sensor["imu"] = Pose3::Identity();
+  s->T_body_sensor["dvl"] = pose(rot_x(M_PI), {0.2, 0.0, -0.4});  // boresight down
+  s->T_body_sensor["lidar_h"] = pose(Eigen::Matrix3d::Identity(), {0.3, 0.0, 1.0});
+  s->T_body_sensor["lidar_v"] = pose(rot_y(M_PI / 2), {0.5, 0.0, 1.2});  // spin axis forward
+  // Sonar fan in the body y-z plane, centred 45 deg down to starboard.
+  s->T_body_sensor["sonar"] = pose(rot_x(M_PI / 4) * rot_z(-M_PI / 2), {0.4, -0.3, -0.3});
+  s->T_body_sensor["cam0"] = pose(forward_looking(), {0.6, 0.0, 0.8});
+  s->T_body_sensor["depth"] = pose(Eigen::Matrix3d::Identity(), {0.0, 0.0, -0.2});
+  s->default_sensors = {"imu", "dvl", "lidar_h", "lidar_v", "sonar", "camera", "depth"};
+  // Seed 000 Table I Kannala-Brandt camera, scaled from 2048x1536 to 512x384 (1/4): rendering
+  // 3.2 MP at 20 Hz by ray casting is not affordable; --set camera.rate_hz raises the rate.
+  CameraModel& c = s->camera;
+  c.kind = CameraModel::Kind::kKannalaBrandt;
+  c.width = 512, c.height = 384;
+  c.fx = 763.159 / 4, c.fy = 762.408 / 4, c.cx = 1017.926 / 4, c.cy = 791.398 / 4;
+  c.distortion = {3.866e-3, 2.494e-2, -2.006e-2, 4.700e-3};
+  c.max_theta_rad = 185.0 / 2.0 * M_PI / 180.0;
+  s->camera_rate_hz = 2.0;
+}
+
+Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions& options) {
+  Scenario s;
+  s.name = name;
+  s.platform = "usv";
+  const bool bridge = name == "usv-bridge";
+  auto scene = bridge ? bridge_scene() : corridor_scene();
+  s.analytic = scene.get();
+  s.world = std::move(scene);
+  MotionOptions motion = options.motion;
+  motion.yaw_follows_path = true;
+  s.motion = std::make_unique<PathMotion>(SmoothPath(bridge ? bridge_waypoints() : corridor_waypoints()),
+                                          motion, seed);
+  s.default_duration_s = std::ceil(s.motion->end_time());
+  if (!bridge) s.degenerate_axis_world = Eigen::Vector3d::UnitX();
+  add_usv_rig(&s);
+  return s;
+}
+
+// ---- hauv-hull -------------------------------------------------------------------------
+
+Pose3 misalignment(Rng& rng) {
+  // A few cm and ~1 deg between the CAD drawing and the real hull.
+  Eigen::Vector3d axis(rng.gaussian(), rng.gaussian(), rng.gaussian());
+  axis.normalize();
+  const double angle = rng.uniform(0.7, 1.3) * M_PI / 180.0;
+  const Eigen::Vector3d t(0.03 * rng.gaussian(), 0.03 * rng.gaussian(), 0.03 * rng.gaussian());
+  return pose(Eigen::AngleAxisd(angle, axis).toRotationMatrix(), t);
+}
+
+// Snaps an analytic hull point onto the CAD mesh (along the normal) and places it in world.
+bool place_on_real_hull(const MeshBvh& cad_bvh, const SurfacePoint& sp, const Pose3& T_world_cad,
+                        Eigen::Vector3d* p_world, Eigen::Vector3d* n_world) {
+  MeshHit hit;
+  const Eigen::Vector3d origin = sp.p + 0.3 * sp.normal;
+  if (!cad_bvh.raycast(origin, -sp.normal, 0.0, 1.0, &hit)) return false;
+  Eigen::Vector3d n = cad_bvh.normal(hit.triangle);
+  if (n.dot(sp.normal) < 0.0) n = -n;
+  *p_world = T_world_cad * (origin - hit.t * sp.normal);
+  *n_world = T_world_cad.linear() * n;
+  return true;
+}
+
+Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
+  Scenario s;
+  s.name = "hauv-hull";
+  s.platform = "hauv";
+  s.hull_options = options.hull;
+  const HullShape shape(options.hull);
+  s.cad_mesh = make_hull_mesh(options.hull);
+  Rng rng(seed, Stream::kHull);
+  s.T_world_cad = misalignment(rng);
+  const MeshBvh cad_bvh(s.cad_mesh);
+
+  // Survey lanes along the starboard side and bilge; the vehicle faces the hull (yaw 90 deg)
+  // and the tray servo points the DVL and camera along the inward normal.
+  const double lanes[] = {0.85, 0.72, 0.59, 0.46, 0.33};
+  const double half_span_m = 5.0;
+  std::vector<Eigen::Vector3d> waypoints;
+  std::vector<double> angles;
+  for (int lane = 0; lane < 5; ++lane) {
+    for (int k = 0; k <= 10; ++k) {
+      const double x = (lane % 2 == 0 ? -1.0 : 1.0) * half_span_m * (1.0 - 0.2 * k);
+      const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m, lanes[lane]);
+      waypoints.push_back(sp.p + options.hull_standoff_m * sp.normal);
+      angles.push_back(std::atan2(-sp.normal.z(), -sp.normal.y()));
+    }
+  }
+  MotionOptions motion = options.motion;
+  motion.yaw_follows_path = false;
+  motion.fixed_yaw_rad = M_PI / 2;
+  if (!options.speed_overridden) motion.cruise_speed_mps = 0.25;
+  motion.roll_amplitude_rad = 0.005, motion.pitch_amplitude_rad = 0.004, motion.heave_amplitude_m = 0.01;
+  s.motion = std::make_unique<PathMotion>(SmoothPath(waypoints, {angles}), motion, seed);
+  s.default_duration_s = std::ceil(s.motion->end_time());
+
+  // Foreign objects on the real hull (seed 001 Sec. 4: a 0.11 m cylinder, biofouling
+  // 0.06-0.18 m), positions jittered by the seed.
+  struct Placement { ForeignObject::Kind kind; double x, sigma; };
+  const Placement placements[] = {{ForeignObject::Kind::kCylinder, 1.5, 0.72},
+                                  {ForeignObject::Kind::kPatch, -2.8, 0.85},
+                                  {ForeignObject::Kind::kPatch, 3.2, 0.46},
+                                  {ForeignObject::Kind::kPatch, -0.6, 0.33}};
+  TriangleMesh real = transform_mesh(s.cad_mesh, s.T_world_cad);
+  const auto hull_landmarks = scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
+  std::vector<Landmark> landmarks = hull_landmarks;
+  for (const auto& place : placements) {
+    ForeignObject object;
+    object.kind = place.kind;
+    const double x = place.x + rng.uniform(-0.5, 0.5);
+    const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m, place.sigma + rng.uniform(-0.02, 0.02));
+    if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object.center, &object.axis))
+      throw std::logic_error("hauv-hull: foreign object misses the CAD mesh");
+    if (object.kind == ForeignObject::Kind::kCylinder) {
+      object.radius_m = 0.08, object.height_m = 0.11;
+    } else {
+      object.radius_m = rng.uniform(0.1, 0.25), object.height_m = rng.uniform(0.06, 0.18);
+    }
+    const TriangleMesh object_mesh = foreign_object_mesh(object);
+    const auto on_object = scatter_landmarks(object_mesh, 150.0, 2.0, false,
+                                             1000000 + 10000 * int64_t(s.foreign_objects.size()), seed,
+                                             1 + s.foreign_objects.size());
+    landmarks.insert(landmarks.end(), on_object.begin(), on_object.end());
+    append_mesh(&real, object_mesh);
+    s.foreign_objects.push_back(object);
+  }
+  s.real_mesh_world = real;
+  auto world = std::make_unique<HullWorld>(real, std::move(landmarks));
+  s.hull_world = world.get();
+  s.world = std::move(world);
+
+  // Sensor rig: IMU and depth at the body origin; the tray pivots about body -y through the
+  // DVL origin (so the DVL origin does not move when the tray turns).
+  s.T_body_sensor["imu"] = Pose3::Identity();
+  s.T_body_sensor["depth"] = Pose3::Identity();
+  s.has_servo = true;
+  s.T_body_servo = pose(Eigen::Matrix3d::Identity(), {0.6, 0.0, -0.1});
+  s.servo_axis = -Eigen::Vector3d::UnitY();
+  s.T_body_sensor["dvl"] = pose(forward_looking(), {0.6, 0.0, -0.1});
+  s.T_body_sensor["dvl_ranges"] = s.T_body_sensor["dvl"];
+  s.T_body_sensor["cam0"] = pose(forward_looking(), {0.65, 0.15, 0.05});
+  s.T_body_sensor["servo"] = s.T_body_servo;
+  s.tray_sensors = {"dvl", "dvl_ranges", "cam0"};
+  s.default_sensors = {"imu", "dvl", "camera", "depth"};
+  s.camera = CameraModel{};  // pinhole 640x480, f = 560 px
+  s.camera_rate_hz = 2.0;
+  return s;
+}
+
+}  // namespace
+
+double Scenario::servo_angle(double t_s) const {
+  if (!has_servo) return 0.0;
+  double s, s_dot, s_ddot, value, d1, d2;
+  motion->arc_length(t_s, &s, &s_dot, &s_ddot);
+  motion->path().extra_at(0, s, &value, &d1, &d2);
+  return value;
+}
+
+Pose3 Scenario::T_body_sensor_at(const std::string& sensor, double t_s) const {
+  const auto it = T_body_sensor.find(sensor);
+  if (it == T_body_sensor.end()) throw std::invalid_argument("no sensor " + sensor + " in " + name);
+  if (std::find(tray_sensors.begin(), tray_sensors.end(), sensor) == tray_sensors.end()) return it->second;
+  Pose3 rotation = Pose3::Identity();
+  rotation.linear() = Eigen::AngleAxisd(servo_angle(t_s), servo_axis.normalized()).toRotationMatrix();
+  return T_body_servo * rotation * T_body_servo.inverse() * it->second;
+}
+
+std::vector<std::string> scenario_names() { return {"usv-bridge", "usv-corridor", "hauv-hull"}; }
+
+Scenario make_scenario(const std::string& name, uint64_t seed, const ScenarioOptions& options) {
+  if (name == "usv-bridge" || name == "usv-corridor") return make_usv(name, seed, options);
+  if (name == "hauv-hull") return make_hauv(seed, options);
+  throw std::invalid_argument("unknown scenario '" + name +
+                              "' (expected usv-bridge, usv-corridor or hauv-hull)");
+}
+
+}  // namespace keel::sim

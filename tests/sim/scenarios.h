@@ -1,0 +1,61 @@
+// The three scenarios of issue 3: usv-bridge (seed 000 Environment 1), usv-corridor
+// (Environment 2) and hauv-hull (seed 001's hull survey with a servo-driven sensor tray).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tests/sim/analytic_scene.h"
+#include "tests/sim/camera_sim.h"
+#include "tests/sim/hull_model.h"
+#include "tests/sim/hull_world.h"
+#include "tests/sim/motion.h"
+#include "worker/core/pose.h"
+
+namespace keel::sim {
+
+struct ScenarioOptions {
+  MotionOptions motion;         // the scenario sets speed/heading defaults, overrides follow
+  bool speed_overridden = false;
+  HullOptions hull;
+  double hull_standoff_m = 1.5;  // seed 001: 1-2 m
+  double landmark_density_per_m2 = 40.0;
+};
+
+struct Scenario {
+  std::string name;
+  std::string platform;  // usv | hauv
+  std::unique_ptr<PathMotion> motion;
+  std::unique_ptr<SimWorld> world;
+  const AnalyticScene* analytic = nullptr;  // usv scenarios
+  const HullWorld* hull_world = nullptr;    // hauv-hull
+  double default_duration_s = 0.0;
+  std::vector<std::string> default_sensors;  // --sensors names
+  std::map<std::string, Pose3> T_body_sensor;  // at servo angle 0 for tray sensors
+  std::vector<std::string> tray_sensors;       // sensors riding the servo tray
+  Eigen::Vector3d degenerate_axis_world = Eigen::Vector3d::Zero();
+  CameraModel camera;
+  double camera_rate_hz = 2.0;
+  // Servo tray (hauv-hull).
+  bool has_servo = false;
+  Pose3 T_body_servo = Pose3::Identity();
+  Eigen::Vector3d servo_axis = Eigen::Vector3d::UnitY();  // in the servo frame
+  // Hull truth (hauv-hull).
+  HullOptions hull_options;
+  TriangleMesh cad_mesh;  // CAD frame
+  Pose3 T_world_cad = Pose3::Identity();
+  std::vector<ForeignObject> foreign_objects;
+  TriangleMesh real_mesh_world;  // CAD at T_world_cad plus the objects
+
+  double servo_angle(double t_s) const;
+  // Extrinsic at time t (tray sensors follow the servo angle).
+  Pose3 T_body_sensor_at(const std::string& sensor, double t_s) const;
+};
+
+// Throws std::invalid_argument for an unknown name.
+Scenario make_scenario(const std::string& name, uint64_t seed, const ScenarioOptions& options = {});
+std::vector<std::string> scenario_names();
+
+}  // namespace keel::sim

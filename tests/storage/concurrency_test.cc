@@ -1,0 +1,87 @@
+// Several threads using one store at once, as the server's request threads do.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <set>
+#include <thread>
+
+#include "storage/sha256.h"
+#include "store_fixture.h"
+
+namespace keel::storage {
+namespace {
+
+using testing::StoreTest;
+using ConcurrencyTest = StoreTest;
+
+TEST_F(ConcurrencyTest, CreateLeaseHeartbeatReadFromManyThreads) {
+  const proto::Mission mission = make_mission();
+  constexpr int kThreads = 4;
+  constexpr int kJobsPerThread = 25;
+  std::atomic<int> errors{0};
+  std::vector<std::thread> threads;
+  std::vector<std::vector<std::string>> created(kThreads);
+  for (int t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t] {
+      try {
+        for (int i = 0; i < kJobsPerThread; ++i) {
+          const std::string key = "k-" + std::to_string(t) + "-" + std::to_string(i % 20);
+          created[t].push_back(store_->create_job(job_request(mission), key).id);
+          auto lease = store_->lease_job({"w" + std::to_string(t), 60});
+          if (lease) {
+            store_->heartbeat(lease->job.id, {lease->lease_id, "ingest", 0.5, {"line"}});
+            store_->complete_stage(lease->job.id, "ingest", {lease->lease_id, {}, 1.0});
+          }
+          store_->get_job(created[t].back());
+          store_->list_jobs({});
+          store_->metrics();
+        }
+      } catch (const std::exception& error) {
+        ADD_FAILURE() << "thread " << t << ": " << error.what();
+        ++errors;
+      }
+    });
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(errors.load(), 0);
+  // Keys repeat after 20 per thread: 20 distinct jobs per thread, the repeats returned them.
+  std::set<std::string> distinct;
+  for (const auto& ids : created) distinct.insert(ids.begin(), ids.end());
+  EXPECT_EQ(distinct.size(), static_cast<size_t>(kThreads * 20));
+  const Metrics metrics = store_->metrics();
+  EXPECT_EQ(metrics.jobs_by_state[static_cast<int>(proto::JobState::kRunning)] +
+                metrics.jobs_by_state[static_cast<int>(proto::JobState::kQueued)],
+            kThreads * 20);
+  // Every leased job saw exactly one heartbeat line (a job is never leased twice at once).
+  for (const proto::Job& job : store_->list_jobs({proto::JobState::kRunning, ""})) {
+    EXPECT_EQ(job.attempts, 1) << job.id;
+    EXPECT_EQ(store_->read_log(job.id, 0, 10).lines.size(), 1u) << job.id;
+  }
+}
+
+TEST_F(ConcurrencyTest, ParallelUploadsAndBlobs) {
+  constexpr int kThreads = 4;
+  std::atomic<int> errors{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t] {
+      try {
+        // Two threads upload the same content: still one blob.
+        const std::string bytes = testing::random_bytes(40'000, static_cast<unsigned>(t % 2));
+        const proto::Upload upload = store_->create_upload({"f", 40'000});
+        for (int64_t at = 0; at < 40'000; at += 8'000)
+          store_->append_upload(upload.id, at, bytes.data() + at, 8'000);
+        EXPECT_EQ(store_->complete_upload(upload.id, sha256_bytes(bytes)), sha256_bytes(bytes));
+        store_->put_blob("small " + std::to_string(t % 2));
+      } catch (const std::exception& error) {
+        ADD_FAILURE() << "thread " << t << ": " << error.what();
+        ++errors;
+      }
+    });
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(errors.load(), 0);
+  EXPECT_EQ(store_->metrics().blobs, 4);  // 2 uploaded contents + 2 small blobs
+  EXPECT_EQ(store_->metrics().uploads_open, 0);
+}
+
+}  // namespace
+}  // namespace keel::storage

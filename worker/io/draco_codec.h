@@ -1,0 +1,70 @@
+// Draco compression of Keel's maps (point clouds) and remeshed hulls (meshes), with the
+// position error the quantization introduced measured by decoding the result.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "worker/core/point_cloud.h"
+#include "worker/core/triangle_mesh.h"
+#include "worker/io/mesh_scalar_field.h"
+
+namespace keel::io {
+
+struct DracoOptions {
+  int position_bits = 14;   // quantization of positions, 1..30 (Draco's own default is 11)
+  int field_bits = 12;      // quantization of scalar fields, 1..30; 0 stores them lossless
+  int compression_level = 7;  // 0 (fastest) .. 10 (smallest); Draco speed = 10 - level
+};
+
+struct DracoEncoded {
+  std::string bytes;  // a complete .drc file
+  // Largest |decoded - original| over all points (vertices used by faces), measured by
+  // decoding `bytes`.
+  double max_position_error_m = 0.0;
+  // Draco quantizes positions on a cube of this side (largest bounding-box extent), in
+  // 2^bits - 1 steps, so each coordinate is off by at most half a step.
+  double position_range_m = 0.0;
+  double position_error_bound_m = 0.0;  // sqrt(3)/2 * range / (2^bits - 1)
+};
+
+// Positions plus per-point scalar fields (stored as generic attributes named by metadata
+// entry "name", as draco_transcoder and Keel's decoder read them). Throws
+// std::invalid_argument for an empty cloud, non-finite positions, bad options or fields,
+// std::runtime_error when Draco fails.
+DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positions,
+                                      const std::vector<ScalarField>& fields = {},
+                                      const DracoOptions& options = {});
+// As above; a cloud's intensity becomes the field "intensity".
+DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
+                                      const std::vector<ScalarField>& fields = {},
+                                      const DracoOptions& options = {});
+
+// Positions, faces (edgebreaker) and per-vertex scalar fields such as `deviation`. Vertices
+// that no face uses are not stored (Draco drops them).
+DracoEncoded encode_draco_mesh(const TriangleMesh& mesh,
+                               const std::vector<ScalarField>& vertex_fields = {},
+                               const DracoOptions& options = {});
+
+struct DracoPointCloud {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<ScalarField> fields;  // generic 1-component attributes, by metadata name
+};
+struct DracoMesh {
+  TriangleMesh mesh;
+  std::vector<ScalarField> fields;
+};
+
+// Throw std::runtime_error naming `what` (a file name, say) when the bytes do not decode.
+DracoPointCloud decode_draco_point_cloud(const std::string& bytes,
+                                         const std::string& what = "draco buffer");
+DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what = "draco buffer");
+
+// Writes bytes to a temporary sibling, then renames it into place; throws naming the file.
+void write_draco_file(const std::filesystem::path& path, const std::string& bytes);
+std::string read_draco_file(const std::filesystem::path& path);
+
+}  // namespace keel::io

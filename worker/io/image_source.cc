@@ -1,0 +1,107 @@
+#include "worker/io/image_source.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include "worker/io/io_error.h"
+#include "worker/io/text_lines.h"
+
+namespace keel::io {
+
+namespace {
+
+uint32_t big_endian32(const uint8_t* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
+  cv::Mat mat = decoded;
+  if (mat.channels() == 4) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
+  if (mat.channels() == 3) cv::cvtColor(mat, mat, cv::COLOR_BGR2RGB);
+  if (mat.channels() != 1 && mat.channels() != 3)
+    throw IoError(source + ": " + std::to_string(mat.channels()) + " channels; expected gray or RGB");
+  if (mat.depth() != CV_8U && mat.depth() != CV_16U)
+    throw IoError(source + ": unsupported pixel depth; expected 8 or 16 bit");
+  ImageFrame frame;
+  frame.width = mat.cols;
+  frame.height = mat.rows;
+  frame.channels = mat.channels();
+  frame.bit_depth = mat.depth() == CV_8U ? 8 : 16;
+  const size_t row_bytes = mat.cols * mat.elemSize();
+  frame.pixels.resize(row_bytes * mat.rows);
+  for (int r = 0; r < mat.rows; ++r) std::memcpy(frame.pixels.data() + r * row_bytes, mat.ptr(r), row_bytes);
+  return frame;
+}
+
+}  // namespace
+
+ImageFrame read_png_info(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
+  if (!f) throw IoError(file + ": cannot open");
+  uint8_t head[33];
+  const size_t n = std::fread(head, 1, sizeof(head), f.get());
+  static const uint8_t kMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (n < 8 || std::memcmp(head, kMagic, 8) != 0) throw IoError(file + ": not a PNG file");
+  if (n < 33 || std::memcmp(head + 12, "IHDR", 4) != 0) throw IoError(file + ": truncated PNG (no IHDR chunk)");
+  ImageFrame frame;
+  frame.width = static_cast<int>(big_endian32(head + 16));
+  frame.height = static_cast<int>(big_endian32(head + 20));
+  frame.bit_depth = head[24];
+  switch (head[25]) {  // PNG colour type
+    case 0: frame.channels = 1; break;
+    case 2: frame.channels = 3; break;
+    case 3: frame.channels = 3; break;  // palette, decoded to RGB
+    case 4: frame.channels = 2; break;
+    case 6: frame.channels = 4; break;
+    default: throw IoError(file + ": bad PNG colour type " + std::to_string(head[25]));
+  }
+  if (frame.width <= 0 || frame.height <= 0) throw IoError(file + ": PNG with zero size");
+  return frame;
+}
+
+ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source) {
+  const cv::Mat buffer(1, static_cast<int>(encoded.size()), CV_8U, const_cast<uint8_t*>(encoded.data()));
+  const cv::Mat mat = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  if (mat.empty()) throw IoError(source + ": cannot decode image (truncated or not PNG/JPEG)");
+  return from_mat(mat, source);
+}
+
+ImageFrame read_png(const std::filesystem::path& path) {
+  const std::string bytes = read_file_bytes(path);
+  return decode_image(std::vector<uint8_t>(bytes.begin(), bytes.end()), path.string());
+}
+
+void write_png(const std::filesystem::path& path, const ImageFrame& image) {
+  const std::string file = path.string();
+  if (image.bit_depth != 8 || (image.channels != 1 && image.channels != 3) ||
+      image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels)
+    throw IoError(file + ": write_png expects 8-bit gray or RGB pixels of width*height*channels bytes");
+  cv::Mat mat(image.height, image.width, image.channels == 1 ? CV_8UC1 : CV_8UC3,
+              const_cast<uint8_t*>(image.pixels.data()));
+  cv::Mat out = mat;
+  if (image.channels == 3) cv::cvtColor(mat, out, cv::COLOR_RGB2BGR);
+  if (!cv::imwrite(file, out)) throw IoError(file + ": cannot write PNG");
+}
+
+ImageFolderReader::ImageFolderReader(const std::filesystem::path& folder)
+    : entries_(read_folder_index(folder)) {}
+
+bool ImageFolderReader::next(ImageFrame& frame, bool decode) {
+  if (next_ >= entries_.size()) return false;
+  const IndexEntry& entry = entries_[next_++];
+  frame = decode ? read_png(entry.path) : read_png_info(entry.path);
+  frame.t_ns = entry.t_ns;
+  return true;
+}
+
+std::string ImageFolderReader::current_source() const {
+  return next_ == 0 ? std::string() : entries_[next_ - 1].path.string();
+}
+
+}  // namespace keel::io

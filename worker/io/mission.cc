@@ -1,0 +1,104 @@
+#include "worker/io/mission.h"
+
+#include "proto/contract_error.h"
+#include "worker/io/io_error.h"
+#include "worker/io/yaml_json.h"
+
+namespace keel::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+enum class Kind { kFile, kFolder, kIndexedFolder };
+
+class Resolver {
+ public:
+  Resolver(fs::path dir, std::string manifest) : dir_(std::move(dir)), manifest_(std::move(manifest)) {}
+
+  fs::path resolve(const std::string& relative, const std::string& field, Kind kind) const {
+    const fs::path rel(relative);
+    if (rel.is_absolute() || escapes(rel))
+      fail(field, "'" + relative + "' must be a relative path inside the bundle");
+    const fs::path path = (dir_ / rel).lexically_normal();
+    std::error_code ec;
+    const auto status = fs::status(path, ec);
+    if (!fs::exists(status)) fail(field, "'" + relative + "' not found (" + path.string() + ")");
+    if (kind == Kind::kFile && !fs::is_regular_file(status))
+      fail(field, "'" + relative + "' is not a file (" + path.string() + ")");
+    if (kind != Kind::kFile && !fs::is_directory(status))
+      fail(field, "'" + relative + "' is not a folder (" + path.string() + ")");
+    if (kind == Kind::kIndexedFolder && !fs::is_regular_file(path / "index.csv"))
+      fail(field, "'" + relative + "' has no index.csv (" + (path / "index.csv").string() + ")");
+    return path;
+  }
+
+  [[noreturn]] void fail(const std::string& field, const std::string& message) const {
+    throw IoError(manifest_ + ": " + field + ": " + message);
+  }
+
+ private:
+  static bool escapes(const fs::path& rel) {
+    int depth = 0;
+    for (const auto& part : rel.lexically_normal()) {
+      if (part == "..") --depth;
+      else if (part != ".") ++depth;
+      if (depth < 0) return true;
+    }
+    return false;
+  }
+
+  fs::path dir_;
+  std::string manifest_;
+};
+
+}  // namespace
+
+const fs::path& Mission::sensor_path(std::string_view name) const {
+  const auto it = sensor_paths.find(std::string(name));
+  if (it == sensor_paths.end())
+    throw IoError(manifest_path.string() + ": sensor '" + std::string(name) +
+                  "' has no file or folder (it reads from bag topic '" + sensor(name).topic + "')");
+  return it->second;
+}
+
+Mission load_mission(const fs::path& dir_in) {
+  Mission mission;
+  std::error_code ec;
+  mission.dir = fs::absolute(dir_in, ec).lexically_normal();
+  mission.manifest_path = mission.dir / "mission.yaml";
+  if (!fs::is_regular_file(mission.manifest_path))
+    throw IoError(mission.manifest_path.string() + ": not found (a mission bundle has mission.yaml at its root)");
+  const std::string manifest_name = mission.manifest_path.string();
+  const nlohmann::json document = load_yaml_file(mission.manifest_path);
+  try {
+    mission.manifest = proto::MissionManifest::from_json(document, "");
+  } catch (const proto::ContractError& e) {
+    throw IoError(manifest_name + ": " + e.what());
+  }
+
+  const Resolver resolver(mission.dir, manifest_name);
+  const auto& m = mission.manifest;
+  if (!m.bag.empty()) mission.bag_path = resolver.resolve(m.bag, "bag", Kind::kFile);
+  for (size_t i = 0; i < m.sensors.size(); ++i) {
+    const auto& s = m.sensors[i];
+    const std::string item = "sensors[" + std::to_string(i) + "]";
+    if (!s.file.empty())
+      mission.sensor_paths[s.name] = resolver.resolve(s.file, item + ".file", Kind::kFile);
+    if (!s.scans.empty())
+      mission.sensor_paths[s.name] = resolver.resolve(s.scans, item + ".scans", Kind::kIndexedFolder);
+    if (!s.images.empty())
+      mission.sensor_paths[s.name] = resolver.resolve(s.images, item + ".images", Kind::kIndexedFolder);
+  }
+  for (const auto& [name, t] : m.trajectories)
+    if (!t.file.empty())
+      mission.trajectory_paths[name] = resolver.resolve(t.file, "trajectories." + name, Kind::kFile);
+  if (!m.loop_closures.empty())
+    mission.loop_closures_path = resolver.resolve(m.loop_closures, "loop_closures", Kind::kFile);
+  if (!m.ground_truth.empty())
+    mission.ground_truth_path = resolver.resolve(m.ground_truth, "ground_truth", Kind::kFile);
+  if (!m.cad_mesh.empty()) mission.cad_mesh_path = resolver.resolve(m.cad_mesh, "cad_mesh", Kind::kFile);
+  return mission;
+}
+
+}  // namespace keel::io

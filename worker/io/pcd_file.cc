@@ -1,0 +1,173 @@
+// PCD through PCL's reader/writer (pcl::PCLPointCloud2), kept out of every header.
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/io/pcd_io.h>
+
+#include <cstdio>
+#include <cstring>
+
+#include "worker/io/io_error.h"
+#include "worker/io/scan_file.h"
+
+namespace keel::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+FieldType from_pcl(const pcl::PCLPointField& field, const std::string& file) {
+  using T = pcl::PCLPointField;
+  switch (field.datatype) {
+    case T::INT8: return FieldType::kInt8;
+    case T::UINT8: return FieldType::kUint8;
+    case T::INT16: return FieldType::kInt16;
+    case T::UINT16: return FieldType::kUint16;
+    case T::INT32: return FieldType::kInt32;
+    case T::UINT32: return FieldType::kUint32;
+    case T::INT64: return FieldType::kInt64;
+    case T::UINT64: return FieldType::kUint64;
+    case T::FLOAT32: return FieldType::kFloat32;
+    case T::FLOAT64: return FieldType::kFloat64;
+    default:
+      throw IoError(file + ": field '" + field.name + "' has unsupported PCD type " +
+                    std::to_string(field.datatype));
+  }
+}
+
+uint8_t to_pcl(FieldType type) {
+  using T = pcl::PCLPointField;
+  switch (type) {
+    case FieldType::kInt8: return T::INT8;
+    case FieldType::kUint8: return T::UINT8;
+    case FieldType::kInt16: return T::INT16;
+    case FieldType::kUint16: return T::UINT16;
+    case FieldType::kInt32: return T::INT32;
+    case FieldType::kUint32: return T::UINT32;
+    case FieldType::kInt64: return T::INT64;
+    case FieldType::kUint64: return T::UINT64;
+    case FieldType::kFloat32: return T::FLOAT32;
+    case FieldType::kFloat64: return T::FLOAT64;
+  }
+  return T::FLOAT32;
+}
+
+std::vector<PackedField> fields_of(const pcl::PCLPointCloud2& cloud, const std::string& file) {
+  std::vector<PackedField> fields;
+  for (const auto& f : cloud.fields) {
+    if (f.name == "_") continue;  // PCL's padding
+    fields.push_back({f.name, from_pcl(f, file), f.offset, std::max<size_t>(1, f.count)});
+  }
+  return fields;
+}
+
+const char* kEncodings[] = {"ascii", "binary", "binary_compressed"};
+
+struct PcdHeader {
+  pcl::PCLPointCloud2 cloud;  // fields, width, height, point_step; no data
+  int data_type = 0;          // 0 ascii, 1 binary, 2 binary_compressed
+  unsigned int data_idx = 0;  // byte offset of the body
+};
+
+PcdHeader read_header(const fs::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw IoError(file + ": not found");
+  PcdHeader h;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  int version = 0;
+  pcl::PCDReader reader;
+  if (reader.readHeader(file, h.cloud, origin, orientation, version, h.data_type, h.data_idx) < 0)
+    throw IoError(file + ": malformed PCD header (expected VERSION, FIELDS, SIZE, TYPE, COUNT, "
+                         "WIDTH, HEIGHT, POINTS, DATA)");
+  if (h.data_type < 0 || h.data_type > 2) throw IoError(file + ": unknown PCD DATA encoding");
+  return h;
+}
+
+// Binary bodies are checked against the file size here so that a truncated file names the
+// bytes missing (PCL's own message is generic).
+void check_body_size(const fs::path& path, const PcdHeader& h) {
+  const std::string file = path.string();
+  const uint64_t file_size = fs::file_size(path);
+  const uint64_t points = static_cast<uint64_t>(h.cloud.width) * h.cloud.height;
+  const uint64_t body = points * h.cloud.point_step;
+  if (h.data_type == 1 && h.data_idx + body > file_size)
+    throw IoError(file + ": truncated PCD: " + std::to_string(points) + " points of " +
+                  std::to_string(h.cloud.point_step) + " bytes need " + std::to_string(body) +
+                  " bytes of data, the file has " + std::to_string(file_size - std::min<uint64_t>(file_size, h.data_idx)));
+  if (h.data_type == 2) {
+    uint32_t sizes[2] = {0, 0};  // compressed, uncompressed
+    std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
+    if (!f || std::fseek(f.get(), h.data_idx, SEEK_SET) != 0 || std::fread(sizes, 4, 2, f.get()) != 2)
+      throw IoError(file + ": truncated PCD: missing the binary_compressed size header");
+    if (h.data_idx + 8ull + sizes[0] > file_size)
+      throw IoError(file + ": truncated PCD: compressed body of " + std::to_string(sizes[0]) +
+                    " bytes, the file has " + std::to_string(file_size - h.data_idx - 8));
+    if (sizes[1] != body)
+      throw IoError(file + ": malformed PCD: compressed body unpacks to " + std::to_string(sizes[1]) +
+                    " bytes, the header needs " + std::to_string(body));
+  }
+}
+
+}  // namespace
+
+ScanFileInfo read_pcd_info(const fs::path& path) {
+  const PcdHeader h = read_header(path);
+  ScanFileInfo info;
+  info.num_points = static_cast<size_t>(h.cloud.width) * h.cloud.height;
+  info.fields = fields_of(h.cloud, path.string());
+  info.format = std::string("pcd ") + kEncodings[h.data_type];
+  return info;
+}
+
+PointCloud read_pcd(const fs::path& path, TimeNs t_ns, const ScanReadOptions& options) {
+  const std::string file = path.string();
+  const PcdHeader h = read_header(path);
+  check_body_size(path, h);
+  pcl::PCLPointCloud2 cloud;
+  pcl::PCDReader reader;
+  if (reader.read(file, cloud) < 0)
+    throw IoError(file + ": malformed or truncated PCD " + kEncodings[h.data_type] + " body (" +
+                  std::to_string(static_cast<uint64_t>(h.cloud.width) * h.cloud.height) +
+                  " points expected)");
+  const size_t points = static_cast<size_t>(cloud.width) * cloud.height;
+  if (cloud.data.size() < points * cloud.point_step)
+    throw IoError(file + ": truncated PCD: fewer data bytes than " + std::to_string(points) + " points");
+  PackedCloudView view{cloud.data.data(), points, cloud.point_step, fields_of(cloud, file)};
+  return unpack_cloud(view, t_ns, options, file);
+}
+
+void write_pcd(const fs::path& path, const PointCloud& cloud, const ScanWriteOptions& options) {
+  const PackedCloud packed = pack_cloud(cloud, options.time);
+  pcl::PCLPointCloud2 out;
+  out.width = static_cast<uint32_t>(packed.num_points);
+  out.height = 1;
+  out.point_step = static_cast<uint32_t>(packed.point_step);
+  out.row_step = out.point_step * out.width;
+  out.is_dense = false;
+  for (const auto& f : packed.fields) {
+    pcl::PCLPointField field;
+    field.name = f.name;
+    field.offset = static_cast<uint32_t>(f.offset);
+    field.datatype = to_pcl(f.type);
+    field.count = 1;
+    out.fields.push_back(field);
+  }
+  out.data = packed.data;
+  pcl::PCDWriter writer;
+  const std::string file = path.string();
+  int result = 0;
+  switch (options.encoding) {
+    case ScanEncoding::kAscii:
+      result = writer.writeASCII(file, out, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity(), 17);
+      break;
+    case ScanEncoding::kBinary:
+      result = writer.writeBinary(file, out);
+      break;
+    case ScanEncoding::kBinaryCompressed:
+      result = writer.writeBinaryCompressed(file, out);
+      break;
+  }
+  if (result < 0) throw IoError(file + ": cannot write PCD");
+}
+
+}  // namespace keel::io

@@ -1,0 +1,20 @@
+// Writes a point cloud as a binary PLY with optional per-point scalar fields (`deviation`,
+// `density`, ...), for tools without Draco.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "worker/core/point_cloud.h"
+#include "worker/io/mesh_scalar_field.h"
+
+namespace keel::io {
+
+// Writes float x/y/z, then `intensity` (float), `ring` (ushort) and `time` (float, s after
+// cloud.t_ns) when the cloud has them, then each field as a float property. Throws
+// std::invalid_argument for fields of the wrong size or name, std::runtime_error naming the
+// file when writing fails.
+void write_ply_cloud(const std::filesystem::path& path, const PointCloud& cloud,
+                     const std::vector<ScalarField>& point_fields = {});
+
+}  // namespace keel::io

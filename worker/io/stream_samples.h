@@ -1,0 +1,56 @@
+// Typed samples of the stream sensors (docs/mission-format.md "Stream CSV files"). The same
+// types come out of CSV files and ROS bags.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <vector>
+
+#include "worker/core/time.h"
+
+namespace keel::io {
+
+struct ImuSample {
+  TimeNs t_ns = 0;
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();   // body rate in the IMU frame
+  Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();   // specific force (+9.81 z at rest)
+};
+
+struct DvlSample {
+  TimeNs t_ns = 0;
+  Eigen::Vector3d velocity_m_s = Eigen::Vector3d::Zero();  // DVL w.r.t. bottom, DVL frame
+  bool valid = true;                                       // false marks a dropout
+};
+
+struct DvlRangesSample {
+  TimeNs t_ns = 0;
+  std::array<double, 4> range_m = {0, 0, 0, 0};  // along the four beams; NaN = no return
+};
+
+struct DepthSample {
+  TimeNs t_ns = 0;
+  double depth_m = 0.0;  // positive down
+};
+
+struct ServoSample {
+  TimeNs t_ns = 0;
+  double angle_rad = 0.0;
+};
+
+using ImuSeries = std::vector<ImuSample>;
+using DvlSeries = std::vector<DvlSample>;
+using DvlRangesSeries = std::vector<DvlRangesSample>;
+using DepthSeries = std::vector<DepthSample>;
+using ServoSeries = std::vector<ServoSample>;
+
+// Stamps of any series (for rate and gap statistics).
+template <typename Series>
+std::vector<TimeNs> stamps_of(const Series& series) {
+  std::vector<TimeNs> stamps;
+  stamps.reserve(series.size());
+  for (const auto& sample : series) stamps.push_back(sample.t_ns);
+  return stamps;
+}
+
+}  // namespace keel::io

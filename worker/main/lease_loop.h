@@ -1,0 +1,47 @@
+// `keel-worker serve`: lease a job, run it (LeasedJob), lease the next, until asked to stop.
+// The server may be unreachable for a while (restarts, network): leasing retries with
+// exponential backoff and never gives up. A 401 is a configuration error and ends the loop.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "client/api_client.h"
+#include "worker/pipeline/job_runner.h"
+
+namespace keel::worker {
+
+struct LeaseLoopOptions {
+  std::string worker_name;          // "host:pid" by default
+  std::filesystem::path cache_dir;  // blobs/, jobs/, uploads/ live here
+  int lease_seconds = 30;
+  double poll_seconds = 1.0;         // pause when no job is queued
+  double heartbeat_seconds = 1.0;    // cancel is honoured within ~2 heartbeats
+  double max_backoff_seconds = 30.0;  // longest pause between retries on server trouble
+  bool once = false;                 // handle one job (waiting for it), then return
+  bool keep_work = false;            // keep each job's folder (debugging)
+};
+
+// "hostname:pid".
+std::string default_worker_name();
+
+class LeaseLoop {
+ public:
+  LeaseLoop(client::ClientConfig config, LeaseLoopOptions options,
+            pipeline::StageFactory factory = {});
+
+  // Runs until stop_requested() turns true (or after one job with `once`). Returns the
+  // process exit code: 0, or 1 when the server rejects the token.
+  int run(const std::function<bool()>& stop_requested);
+
+  int jobs_handled() const { return jobs_handled_; }
+
+ private:
+  client::ClientConfig config_;
+  LeaseLoopOptions options_;
+  pipeline::StageFactory factory_;
+  int jobs_handled_ = 0;
+};
+
+}  // namespace keel::worker

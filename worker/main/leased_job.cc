@@ -1,0 +1,270 @@
+#include "worker/main/leased_job.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <system_error>
+
+#include "worker/main/job_heartbeat.h"
+#include "worker/pipeline/bundle_unpack.h"
+#include "worker/pipeline/report.h"
+
+namespace keel::worker {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Errors of the server or the link, not of the job: the job is abandoned and its lease
+// expires, so it is retried later (by this or another worker).
+bool is_server_trouble(const client::ApiCallError& e) {
+  return e.status() == 0 || e.status() == 408 || e.status() == 409 || e.status() == 429 ||
+         e.status() >= 500;
+}
+
+// A name the server sent that becomes a file name here must be a plain file name.
+std::string plain_file_name(const std::string& name, const std::string& what) {
+  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos ||
+      name.find('\\') != std::string::npos)
+    throw std::invalid_argument(what + " '" + name + "' is not a plain file name");
+  return name;
+}
+
+// Raised when the job must stop without reporting anything more.
+struct Abandon {
+  std::string why;
+};
+
+}  // namespace
+
+std::string to_string(JobEnd end) {
+  switch (end) {
+    case JobEnd::kSucceeded: return "succeeded";
+    case JobEnd::kFailed: return "failed";
+    case JobEnd::kCanceled: return "canceled";
+    case JobEnd::kAbandoned: return "abandoned";
+  }
+  return "unknown";
+}
+
+LeasedJob::LeasedJob(client::ApiClient& api, client::ApiClient& heartbeat_api, BlobCache& blobs,
+                     const proto::Lease& lease, const LeasedJobOptions& options,
+                     pipeline::StageFactory factory, std::function<bool()> stop_requested)
+    : api_(api),
+      heartbeat_api_(heartbeat_api),
+      blobs_(blobs),
+      lease_(lease),
+      options_(options),
+      factory_(std::move(factory)),
+      stop_requested_(std::move(stop_requested)) {}
+
+void LeasedJob::log(const std::string& line) {
+  spdlog::info("job {}: {}", lease_.job.id, line);
+  if (heartbeat_) heartbeat_->log(line);
+}
+
+JobEnd LeasedJob::run() {
+  const proto::Job& job = lease_.job;
+  JobHeartbeat heartbeat(heartbeat_api_, job.id, lease_.lease_id, options_.heartbeat_seconds);
+  heartbeat_ = &heartbeat;
+  for (const auto& stage : job.stages) {
+    if (std::find(job.completed_stages.begin(), job.completed_stages.end(), stage) ==
+        job.completed_stages.end()) {
+      heartbeat.set_stage(stage);
+      break;
+    }
+  }
+  heartbeat.start();
+
+  JobEnd end = JobEnd::kAbandoned;
+  try {
+    job_dir_ = options_.jobs_dir / plain_file_name(job.id, "job id");
+    work_dir_ = job_dir_ / "work";
+    log("leased (attempt " + std::to_string(job.attempts) + ", stages " +
+        std::to_string(job.stages.size()) + ", " + std::to_string(lease_.completed.size()) +
+        " completed earlier)");
+    const pipeline::JobSpec spec = prepare();
+
+    pipeline::JobHooks hooks;
+    hooks.on_stage_start = [&](const std::string& stage) { heartbeat.set_stage(stage); };
+    hooks.progress = [&](const std::string&, double p) { heartbeat.set_progress(p); };
+    hooks.log = [&](const std::string& line) { log(line); };
+    hooks.canceled = [&] {
+      return heartbeat.canceled() || heartbeat.lease_lost() || stop_requested_();
+    };
+    hooks.on_stage_done = [&](const std::string& stage, const pipeline::StageResult& result,
+                              double seconds) { on_stage_done(stage, result, seconds); };
+    const pipeline::JobResult result = pipeline::JobRunner(factory_).run(spec, hooks);
+    heartbeat.stop();
+    end = finish(result);
+  } catch (const Abandon& a) {
+    heartbeat.stop();
+    end = heartbeat.canceled() ? JobEnd::kCanceled : abandon(a.why);
+  } catch (const client::ApiCallError& e) {
+    heartbeat.stop();
+    if (is_server_trouble(e) || heartbeat.lease_lost())
+      end = abandon(std::string("server: ") + e.what());
+    else
+      end = fail(e.what());
+  } catch (const std::exception& e) {
+    heartbeat.stop();
+    end = heartbeat.lease_lost() || stop_requested_() ? abandon(e.what()) : fail(e.what());
+  }
+  heartbeat_ = nullptr;
+
+  if (!options_.keep_work && !job_dir_.empty()) {
+    std::error_code ec;
+    fs::remove_all(job_dir_, ec);
+    if (ec) spdlog::warn("job {}: cannot remove {}: {}", job.id, job_dir_.string(), ec.message());
+  }
+  spdlog::info("job {}: {}", job.id, to_string(end));
+  return end;
+}
+
+pipeline::JobSpec LeasedJob::prepare() {
+  auto check_stop = [this](const char* step) {
+    if (heartbeat_->canceled()) throw Abandon{std::string("canceled during ") + step};
+    if (heartbeat_->lease_lost()) throw Abandon{std::string("lease lost during ") + step};
+    if (stop_requested_()) throw Abandon{std::string("stopping during ") + step};
+  };
+  std::error_code ec;
+  fs::remove_all(job_dir_, ec);  // a folder left by an earlier attempt on this machine
+  fs::create_directories(work_dir_);
+
+  pipeline::JobSpec spec;
+  const proto::Mission& mission = lease_.mission;
+
+  log("fetching mission bundle " + mission.bundle_blob);
+  const fs::path bundle = blobs_.fetch(api_, mission.bundle_blob);
+  check_stop("bundle download");
+  try {
+    spec.mission_dir = pipeline::unpack_bundle(bundle, job_dir_ / "mission");
+  } catch (const pipeline::BundleError& e) {
+    // Name the bundle by its blob id, not by this worker's cache path.
+    std::string message = e.what();
+    const std::string prefix = bundle.string() + ": ";
+    if (message.rfind(prefix, 0) == 0) message = message.substr(prefix.size());
+    throw std::runtime_error("mission bundle " + mission.bundle_blob + ": " + message);
+  }
+  check_stop("bundle unpack");
+
+  if (!mission.cad_blob.empty()) {
+    log("fetching CAD mesh " + mission.cad_blob);
+    const fs::path cad = blobs_.fetch(api_, mission.cad_blob);
+    const std::string name =
+        plain_file_name(mission.cad_name.empty() ? "cad.ply" : mission.cad_name, "cad_name");
+    fs::create_directories(job_dir_ / "cad");
+    spec.cad_path = job_dir_ / "cad" / name;
+    // The extension tells readers the format; a hard link avoids copying a large mesh.
+    fs::create_hard_link(cad, spec.cad_path, ec);
+    if (ec) fs::copy_file(cad, spec.cad_path);
+    check_stop("CAD download");
+  }
+
+  download_completed_artifacts(work_dir_);
+  check_stop("artifact download");
+
+  spec.work_dir = work_dir_;
+  spec.stages = lease_.job.stages;
+  spec.options = lease_.job.options;
+  for (const auto& output : lease_.completed) {
+    spec.completed.push_back({output.stage, output.report, output.seconds});
+    reports_[output.stage] = output.report;
+    stage_seconds_[output.stage] = output.seconds;
+  }
+  return spec;
+}
+
+void LeasedJob::download_completed_artifacts(const fs::path& work_dir) {
+  for (const auto& output : lease_.completed) {
+    for (const auto& artifact : output.artifacts) {
+      const std::string name = plain_file_name(artifact.name, "artifact name");
+      log("resuming: fetching " + output.stage + " artifact " + name);
+      api_.download("/v1/artifacts/" + artifact.id, work_dir / name, artifact.sha256);
+    }
+  }
+}
+
+void LeasedJob::on_stage_done(const std::string& stage, const pipeline::StageResult& result,
+                              double seconds) {
+  reports_[stage] = result.report;
+  stage_seconds_[stage] = seconds;
+  for (const auto& name : result.artifacts) upload_artifact(stage, name);
+  if (stage == lease_.job.stages.back()) upload_report(stage);
+  proto::StageCompletion completion;
+  completion.lease_id = lease_.lease_id;
+  completion.report = result.report;
+  completion.seconds = seconds;
+  api_.complete_stage(lease_.job.id, stage, completion);
+  log(stage + ": completion posted");
+}
+
+void LeasedJob::upload_artifact(const std::string& stage, const std::string& name) {
+  const fs::path file = work_dir_ / name;
+  const std::string blob = api_.upload_file(file, options_.uploads_dir);
+  proto::ArtifactRegistration registration;
+  registration.lease_id = lease_.lease_id;
+  registration.stage = stage;
+  registration.name = name;
+  registration.blob = blob;
+  api_.register_artifact(lease_.job.id, registration);
+  log(stage + ": uploaded " + name + " (" + std::to_string(fs::file_size(file)) + " bytes)");
+}
+
+void LeasedJob::upload_report(const std::string& stage) {
+  pipeline::ReportInput input;
+  const proto::Job& job = lease_.job;
+  input.job = {{"id", job.id}, {"mission_id", job.mission_id}, {"stages", job.stages},
+               {"options", job.options}, {"attempts", job.attempts}};
+  input.mission = lease_.mission.to_json();
+  input.stage_order = job.stages;
+  input.stages = reports_;
+  input.stage_seconds = stage_seconds_;
+  pipeline::write_json_atomically(work_dir_ / pipeline::kReportFileName,
+                                  pipeline::build_report(input));
+  upload_artifact(stage, pipeline::kReportFileName);
+  report_uploaded_ = true;
+}
+
+JobEnd LeasedJob::finish(const pipeline::JobResult& result) {
+  switch (result.outcome) {
+    case pipeline::JobOutcome::kCanceled:
+      if (heartbeat_->lease_lost()) return abandon("lease lost");
+      if (heartbeat_->canceled()) return JobEnd::kCanceled;  // the server knows; say nothing more
+      return abandon("worker stopping");
+    case pipeline::JobOutcome::kFailed:
+      return fail(result.error);
+    case pipeline::JobOutcome::kSucceeded:
+      break;
+  }
+  // Every stage was completed by earlier attempts: report.json may not have been uploaded.
+  if (!report_uploaded_) upload_report(lease_.job.stages.back());
+  if (!heartbeat_->flush(api_) && heartbeat_->lease_lost()) return abandon("lease lost");
+  proto::JobFinish finish;
+  finish.lease_id = lease_.lease_id;
+  api_.finish_job(lease_.job.id, finish, /*succeeded=*/true);
+  return JobEnd::kSucceeded;
+}
+
+JobEnd LeasedJob::fail(const std::string& error) {
+  spdlog::error("job {}: failed: {}", lease_.job.id, error);
+  if (heartbeat_) heartbeat_->flush(api_);
+  proto::JobFinish finish;
+  finish.lease_id = lease_.lease_id;
+  finish.error = error;
+  try {
+    api_.finish_job(lease_.job.id, finish, /*succeeded=*/false);
+  } catch (const std::exception& e) {
+    // The lease will expire and the job be retried; nothing else to do from here.
+    spdlog::error("job {}: could not post the failure: {}", lease_.job.id, e.what());
+    return JobEnd::kAbandoned;
+  }
+  return JobEnd::kFailed;
+}
+
+JobEnd LeasedJob::abandon(const std::string& why) {
+  spdlog::warn("job {}: abandoned ({}); its lease will expire", lease_.job.id, why);
+  return JobEnd::kAbandoned;
+}
+
+}  // namespace keel::worker

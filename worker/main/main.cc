@@ -1,0 +1,48 @@
+// keel-worker: leases jobs from a Keel server and runs their stages (`serve`, the default),
+// or runs stages locally on a mission folder (`run`).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "worker/main/commands.h"
+
+namespace {
+
+// Without a subcommand name, the arguments are those of `serve`.
+std::vector<std::string> with_default_subcommand(int argc, char** argv,
+                                                 const std::vector<keel::worker::Subcommand>& commands) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (!args.empty() && (args[0] == "-h" || args[0] == "--help" || args[0] == "--version"))
+    return args;
+  for (const auto& command : commands)
+    if (!args.empty() && args[0] == command.app->get_name()) return args;
+  args.insert(args.begin(), "serve");
+  return args;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"keel-worker: runs Keel pipeline stages, leased from a server or locally"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "keel-worker 0.1.0");
+  const std::vector<keel::worker::Subcommand> commands = {
+      keel::worker::add_serve_command(app),
+      keel::worker::add_run_command(app),
+  };
+
+  std::vector<std::string> args = with_default_subcommand(argc, argv, commands);
+  std::reverse(args.begin(), args.end());  // CLI11 takes the arguments reversed
+  try {
+    app.parse(args);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? keel::worker::kExitOk : keel::worker::kExitUsage;
+  }
+  for (const auto& command : commands)
+    if (command.app->parsed()) return command.main();
+  return keel::worker::kExitUsage;
+}

@@ -1,0 +1,184 @@
+#include "worker/pipeline/job_runner.h"
+
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <set>
+#include <sstream>
+#include <utility>
+
+namespace keel::pipeline {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string format_seconds(double seconds) {
+  std::ostringstream out;
+  out.precision(3);
+  out << std::fixed << seconds;
+  return out.str();
+}
+
+// An artifact name must be a plain file name in work_dir: no folders, no "..".
+bool is_plain_file_name(const std::string& name) {
+  return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
+         name.find('\\') == std::string::npos && name.find('\0') == std::string::npos;
+}
+
+// Checks what a stage returned: every artifact it names exists in work_dir.
+void check_artifacts(const StageResult& result, const std::filesystem::path& work_dir) {
+  if (!result.report.is_object()) throw std::runtime_error("report section is not a JSON object");
+  for (const auto& name : result.artifacts) {
+    if (!is_plain_file_name(name))
+      throw std::runtime_error("artifact name '" + name + "' is not a plain file name");
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(work_dir / name, ec))
+      throw std::runtime_error("artifact '" + name + "' was not written to " + work_dir.string());
+  }
+}
+
+// Forwards a stage's progress clamped to [0, 1] and never decreasing, so observers see a
+// monotone figure even when a stage's estimate wobbles.
+class ProgressForwarder {
+ public:
+  ProgressForwarder(const JobHooks& hooks, std::string stage)
+      : hooks_(hooks), stage_(std::move(stage)) {}
+  void operator()(double value) {
+    if (std::isnan(value)) return;
+    value = std::min(1.0, std::max(0.0, value));
+    if (reported_ && value <= last_) return;
+    last_ = value;
+    reported_ = true;
+    if (hooks_.progress) hooks_.progress(stage_, value);
+  }
+
+ private:
+  const JobHooks& hooks_;
+  std::string stage_;
+  double last_ = 0.0;
+  bool reported_ = false;
+};
+
+}  // namespace
+
+std::string to_string(JobOutcome outcome) {
+  switch (outcome) {
+    case JobOutcome::kSucceeded:
+      return "succeeded";
+    case JobOutcome::kFailed:
+      return "failed";
+    case JobOutcome::kCanceled:
+      return "canceled";
+  }
+  return "unknown";
+}
+
+JobRunner::JobRunner(StageFactory factory) : factory_(std::move(factory)) {
+  if (!factory_) factory_ = [](const std::string& name) { return make_stage(name); };
+}
+
+JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
+  JobResult result;
+  auto log = [&](const std::string& line) {
+    if (hooks.log) hooks.log(line);
+  };
+  auto canceled = [&] { return hooks.canceled && hooks.canceled(); };
+  auto fail = [&](const std::string& stage, const std::string& message) {
+    result.outcome = JobOutcome::kFailed;
+    result.failed_stage = stage;
+    result.error = stage + ": " + message;
+    log("failed: " + result.error);
+    return result;
+  };
+
+  std::set<std::string> done;
+  for (const auto& completed : spec.completed) {
+    result.reports[completed.stage] = completed.report;
+    result.stage_seconds[completed.stage] = completed.seconds;
+    done.insert(completed.stage);
+  }
+
+  // 1. Build every pending stage before running any.
+  std::vector<std::unique_ptr<Stage>> stages(spec.stages.size());
+  for (size_t i = 0; i < spec.stages.size(); ++i) {
+    if (done.count(spec.stages[i])) continue;
+    try {
+      stages[i] = factory_(spec.stages[i]);
+    } catch (const std::exception& e) {
+      return fail(spec.stages[i], e.what());
+    }
+    if (!stages[i]) return fail(spec.stages[i], "no such stage in this worker");
+  }
+
+  std::error_code ec;
+  std::filesystem::create_directories(spec.work_dir, ec);
+  if (ec)
+    return fail(spec.stages.empty() ? "job" : spec.stages.front(),
+                "cannot create work folder " + spec.work_dir.string() + ": " + ec.message());
+
+  for (size_t i = 0; i < stages.size(); ++i) {
+    const std::string& name = spec.stages[i];
+    // 2. Skip what an earlier attempt finished.
+    if (done.count(name)) {
+      log(name + ": completed earlier, skipped");
+      continue;
+    }
+    if (canceled()) {
+      result.outcome = JobOutcome::kCanceled;
+      result.failed_stage = name;
+      log(name + ": canceled before start");
+      return result;
+    }
+
+    // 3. Run it.
+    StageContext context;
+    context.mission_dir = spec.mission_dir;
+    context.cad_path = spec.cad_path;
+    context.work_dir = spec.work_dir;
+    if (spec.options.is_object() && spec.options.contains(name))
+      context.options = spec.options.at(name);
+    context.reports = result.reports;
+    ProgressForwarder progress(hooks, name);
+    context.progress = [&progress](double value) { progress(value); };
+    context.log = [&log, &name](const std::string& line) { log(name + ": " + line); };
+    context.canceled = canceled;
+
+    if (hooks.on_stage_start) hooks.on_stage_start(name);
+    log(name + ": started");
+    progress(0.0);
+    const auto start = Clock::now();
+    StageResult stage_result;
+    try {
+      stage_result = stages[i]->run(context);
+      check_artifacts(stage_result, spec.work_dir);
+    } catch (const Canceled&) {
+      result.outcome = JobOutcome::kCanceled;
+      result.failed_stage = name;
+      log(name + ": canceled");
+      return result;
+    } catch (const std::exception& e) {
+      // 4. The stage's own message, verbatim, after its name.
+      return fail(name, e.what());
+    } catch (...) {
+      return fail(name, "unknown error (not a std::exception)");
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    // A cancel that arrived while the stage finished: report nothing more.
+    if (canceled()) {
+      result.outcome = JobOutcome::kCanceled;
+      result.failed_stage = name;
+      log(name + ": canceled");
+      return result;
+    }
+    progress(1.0);
+    result.reports[name] = stage_result.report;
+    result.stage_seconds[name] = seconds;
+    result.ran.push_back(name);
+    log(name + ": done in " + format_seconds(seconds) + " s");
+    if (hooks.on_stage_done) hooks.on_stage_done(name, stage_result, seconds);
+  }
+  return result;
+}
+
+}  // namespace keel::pipeline

@@ -1,0 +1,40 @@
+// report.json: every figure the stages measured, in one document.
+//
+//   {"keel_report": 1,
+//    "job": {...}, "mission": {...},
+//    "stages": {"ingest": {...}, "refine": {...}},   // in pipeline order
+//    "stage_seconds": {"ingest": 0.41, ...}}
+//
+// Keys keep this order in the file (ordered_json) so people can read it top to bottom.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace keel::pipeline {
+
+inline constexpr int kReportVersion = 1;
+inline constexpr const char* kReportFileName = "report.json";
+
+struct ReportInput {
+  nlohmann::json job = nlohmann::json::object();      // id, stages, options, ...
+  nlohmann::json mission = nlohmann::json::object();  // id, name, blobs or local paths
+  std::vector<std::string> stage_order;               // the job's stages, in order
+  nlohmann::json stages = nlohmann::json::object();   // stage name -> its report section
+  std::map<std::string, double> stage_seconds;
+};
+
+// Fails (std::invalid_argument naming the stage) when a stage of stage_order has no section,
+// a section is not an object, or a section/duration belongs to no stage of stage_order.
+nlohmann::ordered_json build_report(const ReportInput& input);
+
+// Writes `document` (pretty-printed) to `path` atomically: a temporary file in the same
+// folder, flushed, then renamed over `path`. Throws std::runtime_error naming the file.
+void write_json_atomically(const std::filesystem::path& path,
+                           const nlohmann::ordered_json& document);
+
+}  // namespace keel::pipeline

@@ -1,0 +1,48 @@
+// The stages built into this worker. Adding a stage is one line in `entries` below (in
+// pipeline order) plus its source file in CMakeLists.txt.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "worker/pipeline/stage.h"
+#ifdef KEEL_HAVE_INGEST_STAGE
+#include "worker/pipeline/ingest_stage.h"
+#endif
+
+namespace keel::pipeline {
+
+namespace {
+
+struct StageEntry {
+  const char* name;
+  std::unique_ptr<Stage> (*make)();
+};
+
+const std::vector<StageEntry>& entries() {
+  static const std::vector<StageEntry> table = {
+#ifdef KEEL_HAVE_INGEST_STAGE
+      {"ingest", make_ingest_stage},
+#endif
+  };
+  return table;
+}
+
+}  // namespace
+
+std::unique_ptr<Stage> make_stage(const std::string& name) {
+  for (const auto& entry : entries())
+    if (name == entry.name) return entry.make();
+  std::string known;
+  for (const auto& entry : entries())
+    known += (known.empty() ? "" : ", ") + std::string(entry.name);
+  throw std::invalid_argument("unknown stage '" + name +
+                              "' (this worker has: " + (known.empty() ? "none" : known) + ")");
+}
+
+std::vector<std::string> available_stages() {
+  std::vector<std::string> names;
+  for (const auto& entry : entries()) names.emplace_back(entry.name);
+  return names;
+}
+
+}  // namespace keel::pipeline

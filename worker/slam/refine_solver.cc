@@ -1,0 +1,565 @@
+#include "worker/slam/refine_solver.h"
+
+#include <ceres/ceres.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "worker/slam/dvl_factor.h"
+#include "worker/slam/imu_factor.h"
+#include "worker/slam/information.h"
+#include "worker/slam/manifolds.h"
+#include "worker/slam/prior_factors.h"
+#include "worker/slam/relative_pose_factor.h"
+#include "worker/slam/so3.h"
+
+namespace keel::slam {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Vec3Block = std::array<double, 3>;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The estimated states, in the IMU frame B (Eq. (2) plus b^v, s_d and R_B,Bo).
+struct States {
+  std::vector<std::array<double, 7>> pose;  // T_world_imu, manifolds.h layout
+  std::vector<Vec3Block> vel, bg, ba, bv;
+  double scale = 1.0;
+  std::array<double, 4> q_imu_dvl{0, 0, 0, 1};
+};
+
+// A relative-pose constraint between keyframe indices, in the IMU frame.
+struct Edge {
+  int i = 0, j = 0;
+  Pose3 T_i_j = Pose3::Identity();
+  Matrix6d sqrt_info = Matrix6d::Zero();
+};
+
+struct Interval {
+  std::shared_ptr<const ImuPreintegration> imu;  // null: no I_ij
+  std::shared_ptr<const DvlPreintegration> dvl;  // null: no D_ij
+};
+
+// ---- Step 1: inputs -------------------------------------------------------------------------
+
+void validate_keyframes(const Trajectory& keyframes) {
+  if (keyframes.size() < 2) {
+    throw std::invalid_argument("keyframes: expected at least 2, got " +
+                                std::to_string(keyframes.size()));
+  }
+  for (size_t k = 0; k < keyframes.size(); ++k) {
+    const Pose3& T = keyframes[k].T_world_body;
+    if (!T.matrix().allFinite()) {
+      throw std::invalid_argument("keyframes[" + std::to_string(k) + "]: pose is not finite");
+    }
+    if (k > 0 && keyframes[k].t_ns <= keyframes[k - 1].t_ns) {
+      throw std::invalid_argument("keyframes[" + std::to_string(k) +
+                                  "]: timestamp not after the previous keyframe's");
+    }
+  }
+}
+
+int keyframe_index(const std::vector<TimeNs>& t_ns, TimeNs query, TimeNs tolerance_ns,
+                   const std::string& what) {
+  auto it = std::lower_bound(t_ns.begin(), t_ns.end(), query);
+  int best = -1;
+  TimeNs best_diff = 0;
+  for (auto c : {it, it == t_ns.begin() ? it : it - 1}) {
+    if (c == t_ns.end()) continue;
+    const TimeNs diff = std::abs(*c - query);
+    if (best < 0 || diff < best_diff) {
+      best = static_cast<int>(c - t_ns.begin());
+      best_diff = diff;
+    }
+  }
+  if (best < 0 || best_diff > tolerance_ns) {
+    throw std::invalid_argument(what + ": stamp " + format_seconds(query) +
+                                " s matches no keyframe within the tolerance");
+  }
+  return best;
+}
+
+// Information of a body-frame relative pose expressed for the IMU-frame relative pose
+// X^-1 T X (X = T_body_imu), to first order: delta_imu = J delta_body with
+// J = [R_X^T, -R_X^T R_ij (t_X)^; 0, R_X^T].
+Matrix6d information_in_imu_frame(const Matrix6d& info_body, const Pose3& T_i_j_body,
+                                  const Pose3& T_body_imu) {
+  const Eigen::Matrix3d RXt = T_body_imu.linear().transpose();
+  Matrix6d J = Matrix6d::Zero();
+  J.block<3, 3>(0, 0) = RXt;
+  J.block<3, 3>(0, 3) = -RXt * T_i_j_body.linear() * hat(T_body_imu.translation());
+  J.block<3, 3>(3, 3) = RXt;
+  const Matrix6d J_inv = J.inverse();
+  return J_inv.transpose() * info_body * J_inv;
+}
+
+Edge make_edge(const RelativePoseMeasurement& m, const Matrix6d& info_body, int i, int j,
+               const Pose3& T_body_imu) {
+  Edge e;
+  e.i = i;
+  e.j = j;
+  e.T_i_j = T_body_imu.inverse() * m.T_i_j * T_body_imu;
+  e.sqrt_info = sqrt_information(information_in_imu_frame(info_body, m.T_i_j, T_body_imu));
+  return e;
+}
+
+void check_measurement(const RelativePoseMeasurement& m, const std::string& what) {
+  if (!m.T_i_j.matrix().allFinite() || !m.information.allFinite()) {
+    throw std::invalid_argument(what + ": pose or information is not finite");
+  }
+}
+
+// Step 2: odometry edges and per-keyframe degeneracy (Sec. IV-B).
+std::vector<Edge> odometry_edges(const RefineInput& in, const RefineOptions& opt,
+                                 const std::vector<TimeNs>& t_ns,
+                                 std::vector<KeyframeEstimate>* kf) {
+  std::vector<Edge> edges;
+  if (!opt.use_odometry) return edges;
+  const TimeNs tol = seconds_to_ns(opt.measurement_time_tolerance_s);
+  for (size_t n = 0; n < in.odometry.size(); ++n) {
+    const RelativePoseMeasurement& m = in.odometry[n];
+    const std::string what = "odometry[" + std::to_string(n) + "]";
+    check_measurement(m, what);
+    const int i = keyframe_index(t_ns, m.t_i_ns, tol, what + ".t_i");
+    const int j = keyframe_index(t_ns, m.t_j_ns, tol, what + ".t_j");
+    if (i == j) throw std::invalid_argument(what + ": both stamps match keyframe " +
+                                            std::to_string(i));
+    const DegeneracyReport report = analyze_degeneracy(m.information, opt.degeneracy);
+    KeyframeEstimate& target = (*kf)[std::max(i, j)];
+    target.odometry_degeneracy = report;
+    target.degenerate = target.degenerate || report.degenerate;
+    Matrix6d info = m.information;
+    if (report.degenerate) {
+      if (opt.degeneracy_handling == DegeneracyHandling::kDropFactor) continue;
+      if (opt.degeneracy_handling == DegeneracyHandling::kKeepWellConditioned) {
+        info = report.well_conditioned_information;
+      }
+    }
+    edges.push_back(make_edge(m, info, i, j, in.T_body_imu));
+    target.has_odometry_factor = true;
+  }
+  return edges;
+}
+
+std::vector<Edge> loop_edges(const RefineInput& in, const RefineOptions& opt,
+                             const std::vector<TimeNs>& t_ns) {
+  std::vector<Edge> edges;
+  if (!opt.use_loop_closures) return edges;
+  const TimeNs tol = seconds_to_ns(opt.measurement_time_tolerance_s);
+  for (size_t n = 0; n < in.loop_closures.size(); ++n) {
+    const RelativePoseMeasurement& m = in.loop_closures[n];
+    const std::string what = "loop_closures[" + std::to_string(n) + "]";
+    check_measurement(m, what);
+    const int i = keyframe_index(t_ns, m.t_i_ns, tol, what + ".t_i");
+    const int j = keyframe_index(t_ns, m.t_j_ns, tol, what + ".t_j");
+    if (i == j) throw std::invalid_argument(what + ": both stamps match keyframe " +
+                                            std::to_string(i));
+    edges.push_back(make_edge(m, m.information, i, j, in.T_body_imu));
+  }
+  return edges;
+}
+
+// ---- Step 4: initial states -----------------------------------------------------------------
+
+const PseudoSample* nearest_pseudo(const std::vector<PseudoSample>& pseudo, TimeNs t_ns,
+                                   TimeNs max_diff_ns) {
+  auto it = std::lower_bound(pseudo.begin(), pseudo.end(), t_ns,
+                             [](const PseudoSample& p, TimeNs t) { return p.t_ns < t; });
+  const PseudoSample* best = nullptr;
+  if (it != pseudo.end()) best = &*it;
+  if (it != pseudo.begin() && (best == nullptr || t_ns - (it - 1)->t_ns < best->t_ns - t_ns)) {
+    best = &*(it - 1);
+  }
+  if (best == nullptr || std::abs(best->t_ns - t_ns) > max_diff_ns) return nullptr;
+  return best;
+}
+
+States initial_states(const std::vector<Pose3>& T_world_imu, const std::vector<TimeNs>& t_ns,
+                      const std::vector<PseudoSample>& pseudo, const Pose3& T_imu_dvl,
+                      const RefineOptions& opt) {
+  const size_t n = T_world_imu.size();
+  States s;
+  s.pose.resize(n);
+  s.vel.assign(n, Vec3Block{0, 0, 0});
+  s.bg = s.ba = s.bv = s.vel;
+  s.scale = opt.dvl_scale_initial;
+  set_rotation_block(T_imu_dvl.linear(), s.q_imu_dvl.data());
+  for (size_t k = 0; k < n; ++k) {
+    set_pose_block(T_world_imu[k], s.pose[k].data());
+    // Velocity: the DVL's (Eq. (8) inverted, lever arm neglected) where there is one, else the
+    // central difference of the initial keyframe positions.
+    Eigen::Vector3d v;
+    const PseudoSample* p = nearest_pseudo(pseudo, t_ns[k], seconds_to_ns(0.1));
+    if (p != nullptr) {
+      v = T_world_imu[k].linear() * T_imu_dvl.linear() * p->velocity_dvl_mps / s.scale;
+    } else {
+      const size_t a = k == 0 ? 0 : k - 1, b = k + 1 == n ? k : k + 1;
+      v = (T_world_imu[b].translation() - T_world_imu[a].translation()) /
+          ns_to_seconds(t_ns[b] - t_ns[a]);
+    }
+    s.vel[k] = {v.x(), v.y(), v.z()};
+  }
+  return s;
+}
+
+Eigen::Vector3d vec(const Vec3Block& b) { return Eigen::Vector3d(b[0], b[1], b[2]); }
+
+// ---- Step 5: preintegration and graph -------------------------------------------------------
+
+std::vector<Interval> preintegrate(const RefineInput& in, const std::vector<PseudoSample>& pseudo,
+                                   const std::vector<TimeNs>& t_ns, const States& s,
+                                   const RefineOptions& opt, RefineSummary* summary) {
+  std::vector<Interval> out(t_ns.size() - 1);
+  summary->num_imu_intervals_skipped = summary->num_dvl_intervals_skipped = 0;
+  const TimeNs imu_gap = seconds_to_ns(opt.max_imu_gap_s);
+  const TimeNs pseudo_gap =
+      seconds_to_ns(std::min(opt.max_imu_gap_s, opt.reconcile.max_dvl_gap_s));
+  const Eigen::Matrix3d R_imu_dvl = block_rotation(s.q_imu_dvl.data());
+  for (size_t k = 0; k + 1 < t_ns.size(); ++k) {
+    if (opt.use_imu) {
+      auto pre = std::make_shared<ImuPreintegration>(vec(s.bg[k]), vec(s.ba[k]), opt.imu_noise);
+      const bool ok = for_each_hold_segment(
+          in.imu, t_ns[k], t_ns[k + 1], imu_gap,
+          [&](const ImuSample& m, double dt) { pre->integrate(m.gyro_radps, m.accel_mps2, dt); });
+      if (ok) out[k].imu = pre;
+      else ++summary->num_imu_intervals_skipped;
+    }
+    if (opt.use_dvl && !in.dvl.empty()) {
+      auto pre = std::make_shared<DvlPreintegration>(vec(s.bg[k]), vec(s.bv[k]), s.scale,
+                                                     R_imu_dvl, opt.dvl_noise,
+                                                     opt.imu_noise.gyro_noise_density);
+      const bool ok = for_each_hold_segment(pseudo, t_ns[k], t_ns[k + 1], pseudo_gap,
+                                            [&](const PseudoSample& m, double dt) {
+                                              pre->integrate(m.gyro_radps, m.velocity_dvl_mps,
+                                                             dt, m.dvl_period_s);
+                                            });
+      if (ok) out[k].dvl = pre;
+      else ++summary->num_dvl_intervals_skipped;
+    }
+  }
+  return out;
+}
+
+class GraphBuilder {
+ public:
+  GraphBuilder(States* s, const RefineOptions& opt) : s_(s), opt_(opt) {
+    ceres::Problem::Options po;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.enable_fast_removal = false;
+    problem_ = std::make_unique<ceres::Problem>(po);
+  }
+
+  ceres::Problem& problem() { return *problem_; }
+
+  void add_blocks() {
+    for (size_t k = 0; k < s_->pose.size(); ++k) {
+      problem_->AddParameterBlock(s_->pose[k].data(), 7, &pose_manifold_);
+      for (auto* b : {&s_->vel[k], &s_->bg[k], &s_->ba[k], &s_->bv[k]}) {
+        problem_->AddParameterBlock(b->data(), 3);
+      }
+    }
+    problem_->AddParameterBlock(&s_->scale, 1);
+    problem_->AddParameterBlock(s_->q_imu_dvl.data(), 4, &rotation_manifold_);
+  }
+
+  // r_0 of Eq. (3): the first keyframe's pose (the gauge), velocity and biases.
+  void add_prior(const Pose3& T0) {
+    Matrix6d S = Matrix6d::Zero();
+    S.diagonal().head<3>().setConstant(1.0 / opt_.prior_sigma_position_m);
+    S.diagonal().tail<3>().setConstant(1.0 / opt_.prior_sigma_rotation_rad);
+    problem_->AddResidualBlock(new PosePriorFactor(T0, S), nullptr, s_->pose[0].data());
+    add_vector_prior(&s_->vel[0], opt_.prior_sigma_velocity_mps);
+    add_vector_prior(&s_->bg[0], opt_.prior_sigma_gyro_bias_radps);
+    add_vector_prior(&s_->ba[0], opt_.prior_sigma_accel_bias_mps2);
+    add_vector_prior(&s_->bv[0], opt_.prior_sigma_dvl_bias_mps);
+  }
+
+  // Loop closures are robustified (a wrong one must not wreck the map); odometry is not.
+  void add_edges(const std::vector<Edge>& edges, bool robust) {
+    for (const Edge& e : edges) {
+      ceres::LossFunction* loss = nullptr;
+      if (robust && opt_.loop_closure_cauchy_scale > 0) {
+        loss = new ceres::CauchyLoss(opt_.loop_closure_cauchy_scale);
+      }
+      problem_->AddResidualBlock(new RelativePoseFactor(e.T_i_j, e.sqrt_info), loss,
+                                 s_->pose[e.i].data(), s_->pose[e.j].data());
+    }
+  }
+
+  // I_ij, D_ij and the random walks of Eq. (6)-(7) for every interval.
+  void add_interval(size_t k, const Interval& iv, const Eigen::Vector3d& g, double dt_s) {
+    const size_t j = k + 1;
+    if (iv.imu) {
+      const bool with_position = !(iv.dvl && opt_.drop_imu_position_residual_with_dvl);
+      problem_->AddResidualBlock(
+          new ImuFactor(iv.imu, g, imu_sqrt_information(*iv.imu, with_position)), nullptr,
+          s_->pose[k].data(), s_->vel[k].data(), s_->bg[k].data(), s_->ba[k].data(),
+          s_->pose[j].data(), s_->vel[j].data());
+      vel_used_[k] = vel_used_[j] = true;
+    }
+    if (iv.dvl) {
+      problem_->AddResidualBlock(
+          new DvlFactor(iv.dvl, t_imu_dvl_,
+                        sqrt_information_from_covariance(iv.dvl->position_covariance())),
+          nullptr, s_->pose[k].data(), s_->bg[k].data(), s_->bv[k].data(), s_->pose[j].data(),
+          &s_->scale, s_->q_imu_dvl.data());
+      ++num_dvl_;
+    }
+    problem_->AddResidualBlock(new BiasRandomWalkFactor(opt_.imu_noise.gyro_random_walk, dt_s),
+                               nullptr, s_->bg[k].data(), s_->bg[j].data());
+    problem_->AddResidualBlock(new BiasRandomWalkFactor(opt_.imu_noise.accel_random_walk, dt_s),
+                               nullptr, s_->ba[k].data(), s_->ba[j].data());
+    const double speed = iv.dvl ? iv.dvl->mean_speed_mps() : 0.0;
+    problem_->AddResidualBlock(
+        new BiasRandomWalkFactor(opt_.dvl_noise.bias_random_walk(speed), dt_s), nullptr,
+        s_->bv[k].data(), s_->bv[j].data());
+  }
+
+  // Calibration priors (beyond the paper) and the blocks held constant.
+  void finish(const std::vector<KeyframeEstimate>& kf, const Eigen::Matrix3d& R_imu_dvl_prior) {
+    ceres::Problem& p = *problem_;
+    Eigen::Matrix<double, 1, 1> A;
+    A(0, 0) = 1.0 / opt_.dvl_scale_prior_sigma;
+    Eigen::VectorXd b(1);
+    b(0) = opt_.dvl_scale_initial;
+    p.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, &s_->scale);
+    p.AddResidualBlock(new RotationPriorFactor(
+                           R_imu_dvl_prior, Eigen::Matrix3d::Identity() /
+                                                opt_.dvl_rotation_prior_sigma_rad),
+                       nullptr, s_->q_imu_dvl.data());
+    if (!opt_.estimate_dvl_scale || num_dvl_ == 0) p.SetParameterBlockConstant(&s_->scale);
+    else p.SetParameterLowerBound(&s_->scale, 0, 0.5);
+    if (!opt_.estimate_dvl_rotation || num_dvl_ == 0) {
+      p.SetParameterBlockConstant(s_->q_imu_dvl.data());
+    }
+    for (size_t k = 0; k < kf.size(); ++k) {
+      if (!vel_used_[k]) p.SetParameterBlockConstant(s_->vel[k].data());
+      if (!opt_.use_imu) p.SetParameterBlockConstant(s_->ba[k].data());
+      if (!opt_.use_imu && num_dvl_ == 0) p.SetParameterBlockConstant(s_->bg[k].data());
+      if (num_dvl_ == 0) p.SetParameterBlockConstant(s_->bv[k].data());
+      if (kf[k].biases_zeroed) {  // Sec. IV-B: unobservable during degeneracy, set to zero
+        for (auto* b : {&s_->bg[k], &s_->ba[k], &s_->bv[k]}) p.SetParameterBlockConstant(b->data());
+      }
+    }
+  }
+
+  void set_lever_arm(const Eigen::Vector3d& t_imu_dvl) { t_imu_dvl_ = t_imu_dvl; }
+  void reset_usage(size_t n) { vel_used_.assign(n, false); num_dvl_ = 0; }
+  int num_dvl() const { return num_dvl_; }
+
+ private:
+  void add_vector_prior(Vec3Block* b, double sigma) {
+    const Eigen::Matrix3d A = Eigen::Matrix3d::Identity() / sigma;
+    const Eigen::VectorXd mean = vec(*b);
+    problem_->AddResidualBlock(new ceres::NormalPrior(A, mean), nullptr, b->data());
+  }
+
+  States* s_;
+  const RefineOptions& opt_;
+  std::unique_ptr<ceres::Problem> problem_;
+  PoseManifold pose_manifold_;
+  RotationManifold rotation_manifold_;
+  Eigen::Vector3d t_imu_dvl_ = Eigen::Vector3d::Zero();
+  std::vector<bool> vel_used_;
+  int num_dvl_ = 0;
+};
+
+// ---- Step 6: covariances --------------------------------------------------------------------
+
+struct Covariances {
+  std::vector<Matrix6d> pose;
+  std::vector<Eigen::Matrix3d> bg, ba, bv;
+  double scale_var = 0.0;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();
+};
+
+bool compute_covariances(ceres::Problem& problem, States& s, int num_threads, Covariances* out) {
+  const size_t n = s.pose.size();
+  out->pose.assign(n, Matrix6d::Zero());
+  out->bg.assign(n, Eigen::Matrix3d::Zero());
+  out->ba = out->bv = out->bg;
+  std::vector<std::pair<const double*, const double*>> blocks;
+  auto want = [&](const double* b) {
+    if (!problem.IsParameterBlockConstant(const_cast<double*>(b))) blocks.emplace_back(b, b);
+  };
+  for (size_t k = 0; k < n; ++k) {
+    want(s.pose[k].data());
+    want(s.bg[k].data());
+    want(s.ba[k].data());
+    want(s.bv[k].data());
+  }
+  want(&s.scale);
+  want(s.q_imu_dvl.data());
+  ceres::Covariance::Options co;
+  co.num_threads = num_threads;
+  co.algorithm_type = ceres::SPARSE_QR;
+  ceres::Covariance cov(co);
+  if (!cov.Compute(blocks, &problem)) return false;
+  auto get3 = [&](const double* b, Eigen::Matrix3d* m) {
+    if (problem.IsParameterBlockConstant(const_cast<double*>(b))) return;
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> r;
+    cov.GetCovarianceBlockInTangentSpace(b, b, r.data());
+    *m = r;
+  };
+  for (size_t k = 0; k < n; ++k) {
+    if (!problem.IsParameterBlockConstant(s.pose[k].data())) {
+      Eigen::Matrix<double, 6, 6, Eigen::RowMajor> r;
+      cov.GetCovarianceBlockInTangentSpace(s.pose[k].data(), s.pose[k].data(), r.data());
+      out->pose[k] = r;
+    }
+    get3(s.bg[k].data(), &out->bg[k]);
+    get3(s.ba[k].data(), &out->ba[k]);
+    get3(s.bv[k].data(), &out->bv[k]);
+  }
+  if (!problem.IsParameterBlockConstant(&s.scale)) {
+    cov.GetCovarianceBlockInTangentSpace(&s.scale, &s.scale, &out->scale_var);
+  }
+  get3(s.q_imu_dvl.data(), &out->rotation);
+  return true;
+}
+
+// Covariance of T_world_body = T_world_imu T_imu_body from that of T_world_imu (both in the
+// [delta p world, delta phi body] tangent): dphi_b = R_ib^T dphi, dp_b = dp - R_wi (t_ib)^ dphi.
+Matrix6d body_pose_covariance(const Matrix6d& cov_imu, const Pose3& T_world_imu,
+                              const Pose3& T_imu_body) {
+  Matrix6d J = Matrix6d::Identity();
+  J.block<3, 3>(0, 3) = -T_world_imu.linear() * hat(T_imu_body.translation());
+  J.block<3, 3>(3, 3) = T_imu_body.linear().transpose();
+  return J * cov_imu * J.transpose();
+}
+
+}  // namespace
+
+Trajectory RefineResult::trajectory() const {
+  Trajectory out;
+  out.reserve(keyframes.size());
+  for (const KeyframeEstimate& k : keyframes) out.push_back({k.t_ns, k.T_world_body});
+  return out;
+}
+
+RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) {
+  const Clock::time_point t_start = Clock::now();
+  RefineResult result;
+  RefineSummary& summary = result.summary;
+
+  // 1. Inputs, converted to the IMU frame B.
+  validate_keyframes(in.keyframes);
+  validate_imu_samples(in.imu);
+  validate_dvl_samples(in.dvl);
+  if (!in.T_body_imu.matrix().allFinite() || !in.T_body_dvl.matrix().allFinite()) {
+    throw std::invalid_argument("T_body_imu / T_body_dvl: not finite");
+  }
+  const size_t n = in.keyframes.size();
+  std::vector<TimeNs> t_ns(n);
+  std::vector<Pose3> T_world_imu(n);
+  std::vector<KeyframeEstimate>& kf = result.keyframes;
+  kf.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    t_ns[k] = kf[k].t_ns = in.keyframes[k].t_ns;
+    T_world_imu[k] = in.keyframes[k].T_world_body * in.T_body_imu;
+  }
+  const Pose3 T_imu_dvl = in.T_body_imu.inverse() * in.T_body_dvl;
+
+  // 2. Odometry edges with per-keyframe degeneracy, and loop closures.
+  const std::vector<Edge> odometry = odometry_edges(in, opt, t_ns, &kf);
+  const std::vector<Edge> loops = loop_edges(in, opt, t_ns);
+  for (KeyframeEstimate& k : kf) {
+    k.biases_zeroed = k.degenerate && opt.zero_biases_when_degenerate;
+    summary.num_degenerate_keyframes += k.degenerate ? 1 : 0;
+  }
+
+  // 3. Algorithm 1: pseudosensor measurements.
+  std::vector<PseudoSample> pseudo;
+  if (opt.use_dvl && !in.dvl.empty()) {
+    pseudo = reconcile_dvl_imu(in.dvl, in.imu, T_imu_dvl.linear(), opt.reconcile);
+  }
+  summary.num_pseudo_samples = pseudo.size();
+
+  // 4. Initial states.
+  States s = initial_states(T_world_imu, t_ns, pseudo, T_imu_dvl, opt);
+  const Eigen::Vector3d g(0.0, 0.0, -opt.gravity_mps2);
+
+  // 5. Preintegrate at the current estimates, build Eq. (3) extended, solve; repeat.
+  std::unique_ptr<GraphBuilder> graph;
+  const int passes = std::max(1, opt.relinearization_passes);
+  for (int pass = 0; pass < passes; ++pass) {
+    for (size_t k = 0; k < n; ++k) {
+      if (kf[k].biases_zeroed) s.bg[k] = s.ba[k] = s.bv[k] = Vec3Block{0, 0, 0};
+    }
+    const std::vector<Interval> intervals = preintegrate(in, pseudo, t_ns, s, opt, &summary);
+    graph = std::make_unique<GraphBuilder>(&s, opt);
+    graph->reset_usage(n);
+    graph->set_lever_arm(T_imu_dvl.translation());
+    graph->add_blocks();
+    graph->add_prior(T_world_imu[0]);
+    graph->add_edges(odometry, /*robust=*/false);
+    graph->add_edges(loops, /*robust=*/true);
+    summary.num_imu_factors = summary.num_dvl_factors = 0;
+    for (size_t k = 0; k + 1 < n; ++k) {
+      graph->add_interval(k, intervals[k], g, ns_to_seconds(t_ns[k + 1] - t_ns[k]));
+      kf[k + 1].has_imu_factor = intervals[k].imu != nullptr;
+      kf[k + 1].has_dvl_factor = intervals[k].dvl != nullptr;
+      summary.num_imu_factors += intervals[k].imu ? 1 : 0;
+      summary.num_dvl_factors += intervals[k].dvl ? 1 : 0;
+    }
+    graph->finish(kf, T_imu_dvl.linear());
+
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so.max_num_iterations = opt.max_iterations;
+    so.num_threads = opt.num_threads;
+    so.logging_type = ceres::SILENT;
+    ceres::Solver::Summary ceres_summary;
+    const Clock::time_point t_solve = Clock::now();
+    ceres::Solve(so, &graph->problem(), &ceres_summary);
+    summary.solve_time_s += seconds_since(t_solve);
+    if (pass == 0) summary.initial_cost = ceres_summary.initial_cost;
+    summary.final_cost = ceres_summary.final_cost;
+    summary.iterations += static_cast<int>(ceres_summary.iterations.size());
+    summary.converged = ceres_summary.termination_type == ceres::CONVERGENCE;
+    summary.ceres_report = ceres_summary.BriefReport();
+  }
+  summary.num_keyframes = static_cast<int>(n);
+  summary.num_odometry_factors = static_cast<int>(odometry.size());
+  summary.num_loop_closures = static_cast<int>(loops.size());
+
+  // 6. Covariances of the last pass's problem.
+  Covariances cov;
+  if (opt.compute_covariances) {
+    const Clock::time_point t_cov = Clock::now();
+    summary.covariance_ok = compute_covariances(graph->problem(), s, opt.num_threads, &cov);
+    summary.covariance_time_s = seconds_since(t_cov);
+  }
+
+  // 7. Back to the body frame.
+  const Pose3 T_imu_body = in.T_body_imu.inverse();
+  for (size_t k = 0; k < n; ++k) {
+    const Pose3 T_wi = get_pose_block(s.pose[k].data());
+    kf[k].T_world_body = T_wi * T_imu_body;
+    kf[k].velocity_imu_world_mps = vec(s.vel[k]);
+    kf[k].bias_gyro_radps = vec(s.bg[k]);
+    kf[k].bias_accel_mps2 = vec(s.ba[k]);
+    kf[k].bias_dvl_mps = vec(s.bv[k]);
+    if (summary.covariance_ok) {
+      kf[k].pose_covariance = body_pose_covariance(cov.pose[k], T_wi, T_imu_body);
+      kf[k].bias_gyro_covariance = cov.bg[k];
+      kf[k].bias_accel_covariance = cov.ba[k];
+      kf[k].bias_dvl_covariance = cov.bv[k];
+    }
+  }
+  result.dvl_scale = s.scale;
+  result.dvl_scale_sigma = std::sqrt(std::max(0.0, cov.scale_var));
+  result.q_body_dvl = Eigen::Quaterniond(in.T_body_imu.linear() * block_rotation(s.q_imu_dvl.data()));
+  result.dvl_rotation_covariance = cov.rotation;  // R_body_imu R Exp(d) = R_body_dvl Exp(d)
+  summary.total_time_s = seconds_since(t_start);
+  return result;
+}
+
+}  // namespace keel::slam

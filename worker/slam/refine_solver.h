@@ -1,0 +1,167 @@
+// The `refine` stage's batch solver: a factor graph over keyframes that tightly couples DVL/IMU
+// preintegration with recorded odometry, seed 000 Sec. III-IV (Fig. 1(b), Eq. (3) extended by
+// D_ij and b^v), solved with Ceres. A pure function of in-memory inputs; no I/O.
+//
+// Graph (per consecutive keyframes i, j):
+//   - prior r_0 on the first keyframe's pose, velocity and biases;
+//   - odometry L_ij: relative pose from the recorded odometry (relative_poses_from_trajectory)
+//     or from GICP scan matching (gicp_odometry.h) when a mission has none;
+//   - IMU preintegration I_ij ([27]) and bias random walks for b^w, b^a (Eq. (6)-(7));
+//   - DVL preintegration D_ij (Eq. (11)-(16), Algorithm 1) and the b^v random walk;
+//   - loop closures L_pq between non-consecutive keyframes (Cauchy-robustified);
+//   - beyond the paper (Sec. VII): the DVL scale factor s_d and the DVL-IMU extrinsic rotation
+//     as states with weak priors; DVL dropouts leave the intervals they touch without a D_ij.
+// Degeneracy (Sec. IV-B): an odometry edge whose information has a small eigenvalue marks its
+// keyframe degenerate; its odometry factor is dropped so the keyframe relies on the IMU and DVL
+// factors, and that keyframe's biases are set to zero and held (they are unobservable then).
+// Where D_ij exists, I_ij's position residual is given zero weight (Sec. IV-B).
+//
+// Frames: inputs and outputs use the body frame of the mission (T_world_body, world z up,
+// gravity -z). Internally states live in the IMU frame B, as in the paper.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <string>
+#include <vector>
+
+#include "worker/core/pose.h"
+#include "worker/slam/degeneracy.h"
+#include "worker/slam/dvl_imu_reconciliation.h"
+#include "worker/slam/dvl_preintegration.h"
+#include "worker/slam/imu_preintegration.h"
+#include "worker/slam/relative_pose.h"
+#include "worker/slam/sensor_samples.h"
+
+namespace keel::slam {
+
+enum class DegeneracyHandling {
+  kDropFactor,            // seed 000: rely on IMU and DVL factors (default)
+  kKeepWellConditioned,   // keep the odometry's well-observed directions only
+  kIgnore,                // flag, but keep the factor as it is
+};
+
+struct RefineOptions {
+  // Sensor models (seed 000 Table I).
+  ImuNoise imu_noise;
+  DvlNoise dvl_noise;
+  ReconcileOptions reconcile;  // Algorithm 1 and its gap rule
+  double gravity_mps2 = 9.81;
+  // An interval with an IMU gap longer than this gets no IMU factor (and no DVL factor,
+  // which needs the gyro).
+  double max_imu_gap_s = 0.1;
+
+  // Which factors enter the graph.
+  bool use_imu = true;
+  bool use_dvl = true;
+  bool use_odometry = true;
+  bool use_loop_closures = true;
+  bool drop_imu_position_residual_with_dvl = true;  // Sec. IV-B
+
+  // Degeneracy (Sec. IV-B).
+  DegeneracyOptions degeneracy;
+  DegeneracyHandling degeneracy_handling = DegeneracyHandling::kDropFactor;
+  bool zero_biases_when_degenerate = true;
+
+  // Beyond the paper (Sec. VII). With estimate_* = false the value is held at its initial
+  // value (the paper's Sec. V assumptions 1 and 2).
+  bool estimate_dvl_scale = true;
+  double dvl_scale_initial = 1.0;
+  double dvl_scale_prior_sigma = 0.1;
+  bool estimate_dvl_rotation = true;
+  double dvl_rotation_prior_sigma_rad = 0.05;
+
+  // Prior r_0 on the first keyframe (Eq. (3)).
+  double prior_sigma_position_m = 1e-3;
+  double prior_sigma_rotation_rad = 1e-3;
+  double prior_sigma_velocity_mps = 0.5;
+  double prior_sigma_gyro_bias_radps = 1e-2;
+  double prior_sigma_accel_bias_mps2 = 0.1;
+  double prior_sigma_dvl_bias_mps = 0.05;
+
+  // Loop closures: Cauchy loss scale in whitened units (<= 0: plain least squares), and how
+  // far a loop's stamps may be from a keyframe stamp.
+  double loop_closure_cauchy_scale = 1.0;
+  double measurement_time_tolerance_s = 0.05;
+
+  // Solver.
+  int max_iterations = 50;
+  int num_threads = 2;
+  // Solve, re-preintegrate at the new biases / s_d / extrinsic, solve again: keeps the
+  // first-order corrections of Eq. (27) and [27] Eq. (44) small.
+  int relinearization_passes = 2;
+  bool compute_covariances = true;
+};
+
+struct RefineInput {
+  Trajectory keyframes;  // keyframe stamps and initial T_world_body (e.g. the online map poses)
+  std::vector<ImuSample> imu;  // in the IMU frame
+  std::vector<DvlSample> dvl;  // in the DVL frame; empty: no DVL factors
+  Pose3 T_body_imu = Pose3::Identity();
+  Pose3 T_body_dvl = Pose3::Identity();
+  // Body-frame relative poses; stamps must match keyframe stamps within the tolerance.
+  std::vector<RelativePoseMeasurement> odometry;       // usually consecutive keyframes
+  std::vector<RelativePoseMeasurement> loop_closures;  // non-consecutive keyframes
+};
+
+struct KeyframeEstimate {
+  TimeNs t_ns = 0;
+  Pose3 T_world_body = Pose3::Identity();
+  // Tangent [delta p (world, m), delta phi (body, rad)], T = (p + dp, R Exp(dphi)).
+  Matrix6d pose_covariance = Matrix6d::Zero();
+  Eigen::Vector3d velocity_imu_world_mps = Eigen::Vector3d::Zero();  // of the IMU origin
+  Eigen::Vector3d bias_gyro_radps = Eigen::Vector3d::Zero();   // b^w, IMU frame
+  Eigen::Vector3d bias_accel_mps2 = Eigen::Vector3d::Zero();   // b^a, IMU frame
+  Eigen::Vector3d bias_dvl_mps = Eigen::Vector3d::Zero();      // b^v, IMU frame (Eq. (11))
+  Eigen::Matrix3d bias_gyro_covariance = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d bias_accel_covariance = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d bias_dvl_covariance = Eigen::Matrix3d::Zero();
+  bool degenerate = false;   // its incoming odometry edge was degenerate
+  bool biases_zeroed = false;
+  // Factors over the interval from the previous keyframe to this one.
+  bool has_odometry_factor = false;
+  bool has_imu_factor = false;
+  bool has_dvl_factor = false;
+  DegeneracyReport odometry_degeneracy;  // of the incoming odometry edge, if any
+};
+
+struct RefineSummary {
+  int iterations = 0;  // over all passes
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  double solve_time_s = 0.0;       // Ceres solves
+  double covariance_time_s = 0.0;  // Ceres covariance
+  double total_time_s = 0.0;
+  bool converged = false;
+  std::string ceres_report;  // BriefReport of the last pass
+  int num_keyframes = 0;
+  int num_odometry_factors = 0;
+  int num_degenerate_keyframes = 0;
+  int num_imu_factors = 0;
+  int num_dvl_factors = 0;
+  int num_loop_closures = 0;
+  int num_imu_intervals_skipped = 0;  // IMU gaps
+  int num_dvl_intervals_skipped = 0;  // DVL dropouts / no coverage
+  size_t num_pseudo_samples = 0;      // Algorithm 1 output
+  bool covariance_ok = false;
+};
+
+struct RefineResult {
+  std::vector<KeyframeEstimate> keyframes;
+  double dvl_scale = 1.0;  // s_d of Eq. (8)
+  double dvl_scale_sigma = 0.0;
+  Eigen::Quaterniond q_body_dvl = Eigen::Quaterniond::Identity();  // refined T_body_dvl rotation
+  // Tangent delta theta of R_body_dvl <- R_body_dvl Exp(delta theta), rad^2.
+  Eigen::Matrix3d dvl_rotation_covariance = Eigen::Matrix3d::Zero();
+  RefineSummary summary;
+
+  Trajectory trajectory() const;  // refined T_world_body at the keyframe stamps
+};
+
+// Runs the batch refinement. Throws std::invalid_argument naming the field and the problem for
+// bad input (fewer than 2 keyframes, unsorted or duplicate stamps, non-finite values, a
+// measurement whose stamps match no keyframe, an odometry edge between the same keyframe).
+RefineResult refine_trajectory(const RefineInput& input, const RefineOptions& options = {});
+
+}  // namespace keel::slam
