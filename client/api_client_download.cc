@@ -51,7 +51,7 @@ bool ApiClient::download_once(const std::string& target, const fs::path& part,
 
   connection_->ensure_open(what);
   http::response_parser<http::buffer_body> parser;
-  parser.body_limit(boost::none);
+  parser.body_limit(kNoBodyLimit);
   boost::beast::error_code ec = connection_->write(req);
   if (!ec) ec = connection_->read_header(parser);
   if (ec) {

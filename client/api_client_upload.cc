@@ -193,7 +193,12 @@ std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_d
       }
       if (result.status != 409 && result.status < 500) throw error;
       fail_once(error.what());
-      offset = upload_offset(upload_id).value_or(0);
+      const auto named = result.headers.find("upload-offset");  // a 409 names the offset
+      if (result.status == 409 && named != result.headers.end()) {
+        offset = header_int(result, "upload-offset", "PUT /v1/uploads/" + upload_id);
+      } else {
+        offset = upload_offset(upload_id).value_or(0);
+      }
     } catch (const ApiCallError& e) {
       if (!is_transport(e)) throw;
       fail_once(e.what());

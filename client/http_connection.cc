@@ -71,4 +71,9 @@ bool is_stale_connection_error(const beast::error_code& ec) {
          ec == net::error::connection_aborted;
 }
 
+bool is_idempotent(http::verb verb) {
+  return verb == http::verb::get || verb == http::verb::head || verb == http::verb::put ||
+         verb == http::verb::delete_ || verb == http::verb::options;
+}
+
 }  // namespace keel::client

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include "client/api_client.h"
@@ -19,6 +20,11 @@
 namespace keel::client {
 
 namespace http = boost::beast::http;
+
+// "No body limit". Beast 1.74's parser compares Content-Length against an empty optional
+// as if the limit were below every length, so body_limit(boost::none) rejects every body
+// with a Content-Length; the largest value is the working spelling of "none".
+inline constexpr std::uint64_t kNoBodyLimit = std::numeric_limits<std::uint64_t>::max();
 
 class HttpConnection {
  public:
@@ -29,8 +35,9 @@ class HttpConnection {
   std::string describe(const std::string& method, const std::string& target) const;
 
   // Writes `request` and reads the whole answer. A kept-alive connection that the server
-  // closed while idle is detected (before sending, or by an immediate EOF/reset) and
-  // replaced transparently, once. Throws ApiCallError(0, "transport", ...) otherwise.
+  // closed while idle is replaced transparently: noticed before sending (any method), or
+  // by an immediate EOF/reset on the answer (idempotent methods are then sent once more).
+  // Throws ApiCallError(0, "transport", ...) otherwise.
   template <class Body>
   http::response<http::string_body> exchange(http::request<Body>& request);
 
@@ -65,6 +72,8 @@ class HttpConnection {
 
 // True for the errors a server's idle close produces on the next request.
 bool is_stale_connection_error(const boost::beast::error_code& ec);
+// GET, HEAD, PUT, DELETE, OPTIONS (RFC 9110 section 9.2.2).
+bool is_idempotent(http::verb verb);
 
 template <class Start>
 boost::beast::error_code HttpConnection::run(Start&& start) {
@@ -109,7 +118,7 @@ http::response<http::string_body> HttpConnection::exchange(http::request<Body>& 
   for (int attempt = 0;; ++attempt) {
     const bool reused = ensure_open(what);
     http::response_parser<http::string_body> parser;
-    parser.body_limit(boost::none);
+    parser.body_limit(kNoBodyLimit);
     parser.skip(request.method() == http::verb::head);
     boost::beast::error_code ec = write(request);
     if (!ec) ec = read(parser);
@@ -119,7 +128,10 @@ http::response<http::string_body> HttpConnection::exchange(http::request<Body>& 
       return response;
     }
     close();
-    if (reused && attempt == 0 && is_stale_connection_error(ec)) continue;
+    // Only idempotent requests are sent twice: a POST may have been processed already.
+    // (An idle close noticed before sending is handled by ensure_open for every method.)
+    if (reused && attempt == 0 && is_stale_connection_error(ec) && is_idempotent(request.method()))
+      continue;
     throw ApiCallError(0, "transport", what + ": " + ec.message());
   }
 }

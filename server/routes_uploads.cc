@@ -65,9 +65,9 @@ Response put_upload_chunk(const Call& call) {
   try {
     upload = call.store.append_upload(id, range->first, call.request.body.data(),
                                       call.request.body.size());
-  } catch (const storage::Conflict& e) {
+  } catch (const storage::OffsetMismatch& e) {
     // Another chunk of the same upload won the race; tell where it ended.
-    throw offset_mismatch(call.store.get_upload(id).offset, e.what());
+    throw offset_mismatch(e.committed_offset, e.what());
   }
   Response response = json_response(200, upload.to_json());
   response.headers.set("Upload-Offset", std::to_string(upload.offset));
@@ -84,12 +84,13 @@ Response complete_upload(const Call& call) {
   if (!proto::is_sha256_hex(sha256))
     throw ApiException(400, "invalid_field", "sha256: expected 64 lowercase hex digits");
   proto::Upload upload = call.store.get_upload(call.params[0]);
-  const std::string code = upload.offset != upload.size ? "size_mismatch" : "sha256_mismatch";
   std::string blob;
   try {
     blob = call.store.complete_upload(upload.id, sha256);
-  } catch (const storage::Invalid& e) {
-    throw ApiException(422, code, e.what());
+  } catch (const storage::SizeMismatch& e) {
+    throw ApiException(422, "size_mismatch", e.what());
+  } catch (const storage::Sha256Mismatch& e) {
+    throw ApiException(422, "sha256_mismatch", e.what());
   }
   return json_response(200, {{"blob", blob}, {"size", upload.size}});
 }

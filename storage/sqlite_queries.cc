@@ -124,9 +124,11 @@ std::optional<int64_t> find_blob_size(Database& db, const std::string& sha256) {
 std::vector<proto::Job> query_jobs(Database& db, const std::optional<proto::JobState>& state,
                                    const std::string& mission_id, int limit) {
   // ?1 / ?2 are NULL for "any"; the planner still uses jobs_by_state or jobs_by_mission.
-  auto statement = db.cached(std::string(kJobSelect) +
-                             " WHERE (?1 IS NULL OR j.state = ?1) AND (?2 IS NULL OR "
-                             "j.mission_id = ?2) ORDER BY j.seq DESC LIMIT ?3");
+  static const std::string sql =
+      std::string(kJobSelect) +
+      " WHERE (?1 IS NULL OR j.state = ?1) AND (?2 IS NULL OR j.mission_id = ?2) "
+      "ORDER BY j.seq DESC LIMIT ?3";
+  auto statement = db.cached(sql);
   if (state)
     statement->bind_text(1, proto::to_string(*state));
   else
@@ -138,9 +140,9 @@ std::vector<proto::Job> query_jobs(Database& db, const std::optional<proto::JobS
 }
 
 std::vector<proto::Mission> query_missions(Database& db, const std::string& name_prefix) {
-  auto statement = db.cached(std::string(kMissionSelect) +
-                             " WHERE (?1 = '' OR instr(name, ?1) = 1) "
-                             "ORDER BY seq DESC");
+  static const std::string sql =
+      std::string(kMissionSelect) + " WHERE (?1 = '' OR instr(name, ?1) = 1) ORDER BY seq DESC";
+  auto statement = db.cached(sql);
   statement->bind_text(1, name_prefix);
   std::vector<proto::Mission> missions;
   while (statement->step()) missions.push_back(read_mission(*statement));
@@ -148,7 +150,8 @@ std::vector<proto::Mission> query_missions(Database& db, const std::string& name
 }
 
 std::vector<proto::Artifact> job_artifacts(Database& db, const std::string& job_id) {
-  auto statement = db.cached(std::string(kArtifactSelect) + " WHERE job_id = ?1 ORDER BY seq");
+  static const std::string sql = std::string(kArtifactSelect) + " WHERE job_id = ?1 ORDER BY seq";
+  auto statement = db.cached(sql);
   statement->bind_text(1, job_id);
   std::vector<proto::Artifact> artifacts;
   while (statement->step()) artifacts.push_back(read_artifact(*statement));

@@ -134,6 +134,19 @@ proto::Upload SqliteStore::append_upload(const std::string& upload_id, int64_t o
     throw Invalid("upload " + upload_id + ": chunk of " + std::to_string(size) + " bytes at byte " +
                   std::to_string(offset) + " ends beyond the announced size of " +
                   std::to_string(upload.size) + " bytes");
+  const int64_t kept = uploads_.truncate_to(upload_id, offset);
+  if (kept < offset) {
+    // Committed bytes vanished from the part file (damaged or removed by hand): move the
+    // offset back so the client resumes from what is really there.
+    write([&](Database& db) {
+      auto statement = db.cached("UPDATE uploads SET committed = ?2 WHERE id = ?1");
+      statement->bind_text(1, upload_id).bind_int64(2, kept).run();
+    });
+    throw OffsetMismatch("upload " + upload_id + ": the part file holds only " +
+                             std::to_string(kept) + " of " + std::to_string(offset) +
+                             " committed bytes; resume from byte " + std::to_string(kept),
+                         kept);
+  }
   // Durable bytes first, then the offset: a crash in between leaves extra bytes in the file
   // that the next append or open cuts, never a committed offset without its bytes.
   uploads_.write_chunk(upload_id, offset, data, size);

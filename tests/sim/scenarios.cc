@@ -57,7 +57,7 @@ std::unique_ptr<AnalyticScene> bridge_scene() {
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   // Partially submerged cinder-block walls along both banks (seed 000 Fig. 3(a)).
   ReliefWallGeometry north;
-  north.center = {0, 20, 0}, north.yaw_rad = M_PI, north.length_m = 140, north.z_min = -6, north.z_max = 2.5;
+  north.center = {0, 20, 0}, north.yaw_rad = M_PI, north.length_m = 200, north.z_min = -6, north.z_max = 2.5;
   scene->add(make_relief_wall(north, kCinder, "north_wall"));
   ReliefWallGeometry south = north;
   south.center = {0, -20, 0}, south.yaw_rad = 0.0;
@@ -85,10 +85,11 @@ std::vector<Eigen::Vector3d> bridge_waypoints() {
   // Approach along the channel, figure-eight around both piers (loop closures), back along
   // the south wall to the start. Scaled so the path is ~265 m (seed 000 Sec. V-C).
   const double xy[][2] = {
-      {-60, 1.5}, {-48, 1.5}, {-36, 1.5}, {-24, 1.0}, {-14, 0.5}, {-7, 0.0}, {0, 0.0},
-      {5, 1.5}, {8.5, 6.5}, {6.5, 12.5}, {0, 15.5}, {-6.5, 12.5}, {-8.5, 7.0}, {-5, 1.5},
-      {0, -0.5}, {5, -2.0}, {8.5, -7.0}, {6.5, -12.5}, {0, -15.5}, {-6.5, -12.5},
-      {-10, -14.5}, {-20, -15.5}, {-32, -15.0}, {-44, -12.5}, {-53, -8.0}, {-58, -3.0}, {-60, 1.0}};
+      {-78, 1.5}, {-66, 1.5}, {-54, 1.5}, {-42, 1.5}, {-30, 1.2}, {-20, 0.8}, {-11, 0.3}, {-5, 0.0},
+      {0, 0.0}, {5.5, 1.5}, {9.5, 6.5}, {7.5, 13.0}, {0, 16.5}, {-7.5, 13.0}, {-9.5, 7.0}, {-5.5, 1.5},
+      {0, -0.5}, {5.5, -2.0}, {9.5, -7.0}, {7.5, -13.0}, {0, -16.0}, {-7.5, -14.0},
+      {-12, -15.0}, {-22, -15.5}, {-34, -15.5}, {-46, -15.0}, {-58, -13.0}, {-68, -9.0},
+      {-75, -4.5}, {-78, 0.0}};
   std::vector<Eigen::Vector3d> out;
   for (const auto& p : xy) out.emplace_back(p[0], p[1], 0.0);
   return out;

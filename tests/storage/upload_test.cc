@@ -160,6 +160,21 @@ TEST_F(UploadTest, LeftoverBytesAreCutOnAppendToo) {
   EXPECT_EQ(store_->complete_upload(upload.id, sha256_bytes(bytes)), sha256_bytes(bytes));
 }
 
+TEST_F(UploadTest, LostCommittedBytesMoveTheOffsetBack) {
+  const proto::Upload upload = store_->create_upload({"m", 8});
+  append(upload.id, 0, "0123");
+  testing::write_file(part_file(upload.id), "01");  // damaged: two committed bytes gone
+  try {
+    append(upload.id, 4, "4567");
+    FAIL() << "expected OffsetMismatch";
+  } catch (const OffsetMismatch& error) {
+    EXPECT_EQ(error.committed_offset, 2);
+  }
+  EXPECT_EQ(store_->get_upload(upload.id).offset, 2);
+  append(upload.id, 2, "234567");
+  EXPECT_EQ(store_->complete_upload(upload.id, sha256_bytes("01234567")), sha256_bytes("01234567"));
+}
+
 TEST_F(UploadTest, ReopenRemovesOrphanPartsAndTempFiles) {
   testing::write_file(dir_.path() / "uploads" / "u_00000000deadbeef.part", "orphan");
   testing::write_file(dir_.path() / "tmp" / "abc.tmp", "half a blob");

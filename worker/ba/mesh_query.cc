@@ -143,7 +143,9 @@ void MeshQuery::Impl::compute_pseudonormals() {
       const Eigen::Vector3d e2 = vertices[face[(c + 2) % 3]] - p;
       const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
       vertex_normals[face[c]] += angle * face_normals[f];
-      edge_normals[edge_key(face[c], face[(c + 1) % 3])] += face_normals[f];
+      // Eigen vectors are not zero-initialized: insert an explicit zero first.
+      const uint64_t key = edge_key(face[c], face[(c + 1) % 3]);
+      edge_normals.try_emplace(key, Eigen::Vector3d::Zero()).first->second += face_normals[f];
     }
   }
   for (auto& n : vertex_normals) {
@@ -163,7 +165,7 @@ Eigen::Vector3d MeshQuery::Impl::feature_normal(int f, const TrianglePoint& on_t
     normal = edge_normals.at(edge_key(face[on_triangle.index], face[(on_triangle.index + 1) % 3]));
   }
   // Opposite faces (a sheet folded onto itself) cancel; fall back to the face's own normal.
-  return normal.squaredNorm() > 0.5 ? normal : face_normals[f];
+  return face_normals[f];
 }
 
 ClosestPoint MeshQuery::Impl::closest_point(const Eigen::Vector3d& query) const {

@@ -9,7 +9,21 @@ namespace keel::io {
 using proto::SensorType;
 
 MissionReader::MissionReader(Mission mission) : mission_(std::move(mission)) {
-  if (!mission_.bag_path.empty()) bag_ = std::make_unique<BagReader>(mission_.bag_path);
+  if (mission_.bag_path.empty()) return;
+  bag_ = std::make_unique<BagReader>(mission_.bag_path);
+  // Every topic mission.yaml names must be in the bag: fail now, naming the field.
+  auto check = [&](const std::string& topic, const std::string& field) {
+    if (topic.empty()) return;
+    try {
+      bag_->topic(topic);
+    } catch (const IoError& e) {
+      throw IoError(mission_.manifest_path.string() + ": " + field + ": " + e.what());
+    }
+  };
+  const auto& m = mission_.manifest;
+  for (size_t i = 0; i < m.sensors.size(); ++i)
+    check(m.sensors[i].topic, "sensors[" + std::to_string(i) + "].topic");
+  for (const auto& [name, t] : m.trajectories) check(t.topic, "trajectories." + name + ".topic");
 }
 
 MissionReader::~MissionReader() = default;

@@ -71,6 +71,14 @@ PcdHeader read_header(const fs::path& path) {
   const std::string file = path.string();
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw IoError(file + ": not found");
+  // PCL accepts a header cut before its DATA line as an empty cloud: require the line.
+  {
+    std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
+    std::string head(1 << 16, '\0');
+    head.resize(f ? std::fread(head.data(), 1, head.size(), f.get()) : 0);
+    if (head.rfind("DATA ", 0) != 0 && head.find("\nDATA ") == std::string::npos)
+      throw IoError(file + ": malformed PCD header: no DATA line (truncated header?)");
+  }
   PcdHeader h;
   Eigen::Vector4f origin;
   Eigen::Quaternionf orientation;

@@ -3,9 +3,9 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <spdlog/spdlog.h>
 #include <cerrno>
 #include <cstdlib>
-#include <spdlog/spdlog.h>
 #include <stdexcept>
 #include <string>
 
@@ -31,7 +31,8 @@ BlobCache::BlobCache(fs::path folder) : folder_(std::move(folder)) {
     const std::string name = item.path().filename().string();
     const size_t marker = name.find(kPartialMarker);
     if (marker == std::string::npos) continue;
-    const long pid = std::atol(name.c_str() + marker + std::char_traits<char>::length(kPartialMarker));
+    const long pid =
+        std::atol(name.c_str() + marker + std::char_traits<char>::length(kPartialMarker));
     if (!process_alive(pid)) fs::remove(item.path(), ec);
   }
 }

@@ -16,11 +16,11 @@ struct LeaseLoopOptions {
   std::string worker_name;          // "host:pid" by default
   std::filesystem::path cache_dir;  // blobs/, jobs/, uploads/ live here
   int lease_seconds = 30;
-  double poll_seconds = 1.0;         // pause when no job is queued
-  double heartbeat_seconds = 1.0;    // cancel is honoured within ~2 heartbeats
+  double poll_seconds = 1.0;          // pause when no job is queued
+  double heartbeat_seconds = 1.0;     // cancel is honoured within ~2 heartbeats
   double max_backoff_seconds = 30.0;  // longest pause between retries on server trouble
-  bool once = false;                 // handle one job (waiting for it), then return
-  bool keep_work = false;            // keep each job's folder (debugging)
+  bool once = false;                  // handle one job (waiting for it), then return
+  bool keep_work = false;             // keep each job's folder (debugging)
 };
 
 // "hostname:pid".

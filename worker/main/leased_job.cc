@@ -39,10 +39,14 @@ struct Abandon {
 
 std::string to_string(JobEnd end) {
   switch (end) {
-    case JobEnd::kSucceeded: return "succeeded";
-    case JobEnd::kFailed: return "failed";
-    case JobEnd::kCanceled: return "canceled";
-    case JobEnd::kAbandoned: return "abandoned";
+    case JobEnd::kSucceeded:
+      return "succeeded";
+    case JobEnd::kFailed:
+      return "failed";
+    case JobEnd::kCanceled:
+      return "canceled";
+    case JobEnd::kAbandoned:
+      return "abandoned";
   }
   return "unknown";
 }
@@ -214,8 +218,11 @@ void LeasedJob::upload_artifact(const std::string& stage, const std::string& nam
 void LeasedJob::upload_report(const std::string& stage) {
   pipeline::ReportInput input;
   const proto::Job& job = lease_.job;
-  input.job = {{"id", job.id}, {"mission_id", job.mission_id}, {"stages", job.stages},
-               {"options", job.options}, {"attempts", job.attempts}};
+  input.job = {{"id", job.id},
+               {"mission_id", job.mission_id},
+               {"stages", job.stages},
+               {"options", job.options},
+               {"attempts", job.attempts}};
   input.mission = lease_.mission.to_json();
   input.stage_order = job.stages;
   input.stages = reports_;

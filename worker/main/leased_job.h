@@ -47,8 +47,7 @@ class LeasedJob {
  private:
   pipeline::JobSpec prepare();
   void download_completed_artifacts(const std::filesystem::path& work_dir);
-  void on_stage_done(const std::string& stage, const pipeline::StageResult& result,
-                     double seconds);
+  void on_stage_done(const std::string& stage, const pipeline::StageResult& result, double seconds);
   void upload_artifact(const std::string& stage, const std::string& name);
   void upload_report(const std::string& stage);
   JobEnd finish(const pipeline::JobResult& result);

@@ -1,7 +1,7 @@
 // keel-worker: leases jobs from a Keel server and runs their stages (`serve`, the default),
 // or runs stages locally on a mission folder (`run`).
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <string>
@@ -12,8 +12,8 @@
 namespace {
 
 // Without a subcommand name, the arguments are those of `serve`.
-std::vector<std::string> with_default_subcommand(int argc, char** argv,
-                                                 const std::vector<keel::worker::Subcommand>& commands) {
+std::vector<std::string> with_default_subcommand(
+    int argc, char** argv, const std::vector<keel::worker::Subcommand>& commands) {
   std::vector<std::string> args(argv + 1, argv + argc);
   if (!args.empty() && (args[0] == "-h" || args[0] == "--help" || args[0] == "--version"))
     return args;

@@ -43,8 +43,8 @@ std::vector<std::string> select_stages(const std::string& text) {
     if (std::find(available.begin(), available.end(), stage) != available.end()) continue;
     std::string list;
     for (const auto& a : available) list += (list.empty() ? "" : ", ") + a;
-    throw proto::ContractError("stage '" + stage + "' is not built into this worker (available: " +
-                               list + ")");
+    throw proto::ContractError("stage '" + stage +
+                               "' is not built into this worker (available: " + list + ")");
   }
   return stages;
 }
@@ -70,7 +70,8 @@ int run_local(const RunArgs& args) {
   pipeline::JobSpec spec;
   try {
     spec.stages = select_stages(args.stages);
-    for (const auto& assignment : args.sets) proto::apply_option_assignment(spec.options, assignment);
+    for (const auto& assignment : args.sets)
+      proto::apply_option_assignment(spec.options, assignment);
   } catch (const std::exception& e) {
     return usage_error(e.what());
   }
@@ -83,7 +84,8 @@ int run_local(const RunArgs& args) {
   std::error_code ec;
   if (!args.cad.empty() && !fs::is_regular_file(args.cad, ec))
     return usage_error("--cad " + args.cad + ": no such file");
-  if (!fs::exists(args.mission, ec)) return usage_error("--mission " + args.mission + ": not found");
+  if (!fs::exists(args.mission, ec))
+    return usage_error("--mission " + args.mission + ": not found");
   spec.work_dir = fs::absolute(args.out);
   fs::create_directories(spec.work_dir, ec);
   if (ec) return usage_error("--out " + args.out + ": " + ec.message());

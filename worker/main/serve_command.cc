@@ -60,7 +60,8 @@ int serve(const ServeArgs& args) {
     return kExitUsage;
   }
   LeaseLoopOptions options = args.loop;
-  options.cache_dir = args.cache_dir.empty() ? default_cache_dir() : args.cache_dir;
+  options.cache_dir =
+      args.cache_dir.empty() ? default_cache_dir() : std::filesystem::path(args.cache_dir);
   install_stop_signals();
   try {
     LeaseLoop loop(config, options);

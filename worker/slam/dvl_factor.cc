@@ -38,10 +38,12 @@ bool DvlFactor::Evaluate(double const* const* parameters, double* residuals,
     set_lifted_jacobian<3, 6, 7>(sqrt_info_ * J, jacobians[0]);
   }
   if (jacobians[1] != nullptr) {  // b^w_i: Eq. (27)-(28)
-    Eigen::Map<RowMat33>(jacobians[1]) = sqrt_info_ * (-ratio * pre_->dp_dbg());
+    Eigen::Map<RowMat33> j1_out(jacobians[1]);
+    j1_out = sqrt_info_ * (-ratio * pre_->dp_dbg());
   }
   if (jacobians[2] != nullptr) {  // b^v_i: Eq. (27), (29)
-    Eigen::Map<RowMat33>(jacobians[2]) = sqrt_info_ * (-ratio * pre_->dp_dbv());
+    Eigen::Map<RowMat33> j2_out(jacobians[2]);
+    j2_out = sqrt_info_ * (-ratio * pre_->dp_dbv());
   }
   if (jacobians[3] != nullptr) {  // pose_j
     Mat36 J;
@@ -50,7 +52,8 @@ bool DvlFactor::Evaluate(double const* const* parameters, double* residuals,
     set_lifted_jacobian<3, 6, 7>(sqrt_info_ * J, jacobians[3]);
   }
   if (jacobians[4] != nullptr) {  // s_d: d/ds (s_lin / s) x = -(1/s) (s_lin / s) x
-    Eigen::Map<Eigen::Vector3d>(jacobians[4]) = sqrt_info_ * (dp_pred / s);
+    Eigen::Map<Eigen::Vector3d> j4_out(jacobians[4]);
+    j4_out = sqrt_info_ * (dp_pred / s);
   }
   if (jacobians[5] != nullptr) {  // R_B,Bo <- R_B,Bo Exp(theta)
     const Eigen::Vector3d d_theta = so3_log(pre_->R_imu_dvl_lin().transpose() * R_imu_dvl);

@@ -53,7 +53,8 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals,
     Mat93 J = Mat93::Zero();
     J.block<3, 3>(3, 0) = -Rt;
     J.block<3, 3>(6, 0) = -Rt * dt;
-    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>>(jacobians[1]) = sqrt_info_ * J;
+    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>> j1_out(jacobians[1]);
+    j1_out = sqrt_info_ * J;
   }
   if (jacobians[2] != nullptr) {  // b^w_i
     Mat93 J = Mat93::Zero();
@@ -61,13 +62,15 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals,
         -Jr_inv * so3_exp(r_R).transpose() * right_jacobian(phi_bg) * pre_->dR_dbg();
     J.block<3, 3>(3, 0) = -pre_->dv_dbg();
     J.block<3, 3>(6, 0) = -pre_->dp_dbg();
-    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>>(jacobians[2]) = sqrt_info_ * J;
+    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>> j2_out(jacobians[2]);
+    j2_out = sqrt_info_ * J;
   }
   if (jacobians[3] != nullptr) {  // b^a_i
     Mat93 J = Mat93::Zero();
     J.block<3, 3>(3, 0) = -pre_->dv_dba();
     J.block<3, 3>(6, 0) = -pre_->dp_dba();
-    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>>(jacobians[3]) = sqrt_info_ * J;
+    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>> j3_out(jacobians[3]);
+    j3_out = sqrt_info_ * J;
   }
   if (jacobians[4] != nullptr) {  // pose_j
     Mat96 J = Mat96::Zero();
@@ -78,7 +81,8 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals,
   if (jacobians[5] != nullptr) {  // v_j
     Mat93 J = Mat93::Zero();
     J.block<3, 3>(3, 0) = Rt;
-    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>>(jacobians[5]) = sqrt_info_ * J;
+    Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>> j5_out(jacobians[5]);
+    j5_out = sqrt_info_ * J;
   }
   return true;
 }

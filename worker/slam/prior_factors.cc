@@ -52,10 +52,12 @@ bool BiasRandomWalkFactor::Evaluate(double const* const* parameters, double* res
   if (jacobians == nullptr) return true;
   using RowMat33 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
   if (jacobians[0] != nullptr) {
-    Eigen::Map<RowMat33>(jacobians[0]) = -weight_ * Eigen::Matrix3d::Identity();
+    Eigen::Map<RowMat33> j0_out(jacobians[0]);
+    j0_out = -weight_ * Eigen::Matrix3d::Identity();
   }
   if (jacobians[1] != nullptr) {
-    Eigen::Map<RowMat33>(jacobians[1]) = weight_ * Eigen::Matrix3d::Identity();
+    Eigen::Map<RowMat33> j1_out(jacobians[1]);
+    j1_out = weight_ * Eigen::Matrix3d::Identity();
   }
   return true;
 }

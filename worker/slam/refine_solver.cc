@@ -1,6 +1,7 @@
 #include "worker/slam/refine_solver.h"
 
 #include <ceres/ceres.h>
+#include <ceres/normal_prior.h>
 
 #include <array>
 #include <chrono>

@@ -1,0 +1,172 @@
+#include "tests/sim/hull_model.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <unistd.h>
+
+#include "tests/sim/mesh_bvh.h"
+#include "tests/sim/scenarios.h"
+#include "tests/sim/simulator.h"
+#include "worker/core/time.h"
+
+namespace keel::sim {
+namespace {
+namespace fs = std::filesystem;
+
+std::vector<std::vector<std::string>> read_csv(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+TEST(Hull, CadMeshIsClosedOutwardAndShipSized) {
+  const HullOptions options;
+  const TriangleMesh mesh = make_hull_mesh(options);
+  EXPECT_GT(mesh.num_faces(), 3000u);
+  std::map<std::pair<int, int>, int> directed;
+  for (const auto& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1) << "edge used twice in the same direction";
+    EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << "open edge";
+  }
+  // Positive volume (outward faces), below the bounding box and above half of it.
+  const double box = options.length_m * options.beam_m * (options.draft_m + options.freeboard_m);
+  const double volume = mesh_signed_volume(mesh);
+  EXPECT_GT(volume, 0.5 * box);
+  EXPECT_LT(volume, box);
+}
+
+TEST(Hull, ForeignObjectsStandOnTheRealHullNotOnTheCad) {
+  const Scenario s = make_scenario("hauv-hull", 21);
+  ASSERT_EQ(s.foreign_objects.size(), 4u);
+  const TriangleMesh real_hull = transform_mesh(s.cad_mesh, s.T_world_cad);
+  const TriangleMesh cad_at_identity = s.cad_mesh;
+  for (const auto& o : s.foreign_objects) {
+    MeshHit hit;
+    // The base centre is on the real hull ...
+    ASSERT_TRUE(raycast_brute_force(real_hull, o.center + 0.05 * o.axis, -o.axis, 0.0, 1.0, &hit));
+    EXPECT_NEAR(hit.t, 0.05, 0.003);
+    // ... and the top stands `height` above it: the CAD surface does not have the object.
+    const Eigen::Vector3d top = o.center + o.height_m * o.axis;
+    ASSERT_TRUE(raycast_brute_force(real_hull, top, -o.axis, 0.0, 1.0, &hit));
+    EXPECT_NEAR(hit.t, o.height_m, 0.003);
+    // In world, the object is detected against the real hull only: the real hull as seen by
+    // the sensors (with objects) is hit at the top.
+    ASSERT_TRUE(raycast_brute_force(s.real_mesh_world, top + 0.5 * o.axis, -o.axis, 0.0, 1.0, &hit));
+    EXPECT_NEAR(hit.t, 0.5, 0.01) << o.kind_name();
+    if (o.kind == ForeignObject::Kind::kCylinder) EXPECT_DOUBLE_EQ(o.height_m, 0.11);
+    if (o.kind == ForeignObject::Kind::kPatch) {
+      EXPECT_GE(o.height_m, 0.06);
+      EXPECT_LE(o.height_m, 0.18);
+    }
+  }
+  // The misalignment is a few cm and ~1 degree.
+  EXPECT_LT(s.T_world_cad.translation().norm(), 0.2);
+  const double angle = Eigen::AngleAxisd(s.T_world_cad.linear()).angle() * 180.0 / M_PI;
+  EXPECT_GT(angle, 0.6);
+  EXPECT_LT(angle, 1.4);
+}
+
+class HullMission : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("keel_sim_hull_" + std::to_string(::getpid()));
+    SimOptions options;
+    options.scenario = "hauv-hull";
+    options.seed = 4;
+    options.out_dir = dir_.string();
+    options.duration_s = 8.0;
+    options.sensors = {"dvl", "camera"};
+    options.t0_ns = 0;
+    run_simulation(options);
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static fs::path dir_;
+};
+fs::path HullMission::dir_;
+
+// DVL beam ranges equal casts against the real hull (brute force) within 5 sigma (3 mm).
+TEST_F(HullMission, DvlRangesMatchRaycastsAgainstTheRealHull) {
+  const Scenario s = make_scenario("hauv-hull", 4);
+  const auto beams = janus_beams(30.0);
+  const auto rows = read_csv(dir_ / "dvl_ranges.csv");
+  ASSERT_GT(rows.size(), 100u);
+  int checked = 0, close = 0;
+  for (size_t i = 0; i < rows.size(); i += 7) {
+    const double t = parse_seconds_exact(rows[i][0]) * 1e-9;
+    const KinematicState st = s.motion->state(t);
+    Pose3 T_world_body = Pose3::Identity();
+    T_world_body.linear() = st.q_world_body.toRotationMatrix();
+    T_world_body.translation() = st.p_world;
+    const Pose3 T_world_dvl = T_world_body * s.T_body_sensor_at("dvl_ranges", t);
+    for (int b = 0; b < 4; ++b) {
+      MeshHit hit;
+      const bool found = raycast_brute_force(s.real_mesh_world, T_world_dvl.translation(),
+                                             T_world_dvl.linear() * beams[b], 0.05, 50.0, &hit);
+      const double measured = std::stod(rows[i][1 + b]);
+      ASSERT_EQ(found, !std::isnan(measured));
+      if (!found) continue;
+      ++checked;
+      close += std::abs(measured - hit.t) < 5 * 0.003;
+      EXPECT_GT(hit.t, 1.0);  // 1-2 m standoff with 30 degree beams
+      EXPECT_LT(hit.t, 2.5);
+    }
+  }
+  ASSERT_GT(checked, 40);
+  EXPECT_GE(close, checked - 1);
+}
+
+TEST_F(HullMission, ImagesAreTexturedPngsAndTracksHitTheBlobs) {
+  const auto index = read_csv(dir_ / "cam0" / "index.csv");
+  ASSERT_EQ(index.size(), 17u);  // 2 Hz over 8 s
+  const cv::Mat image = cv::imread((dir_ / "cam0" / index[8][1]).string(), cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(image.empty());
+  EXPECT_EQ(image.type(), CV_8UC1);
+  EXPECT_EQ(image.cols, 640);
+  EXPECT_EQ(image.rows, 480);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(image, mean, stddev);
+  EXPECT_GT(stddev[0], 15.0);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::SIFT::create()->detect(image, keypoints);
+  EXPECT_GT(keypoints.size(), 50u);
+
+  // Ground-truth tracks: the pixel under a dark landmark is darker than under a bright one.
+  const Scenario s = make_scenario("hauv-hull", 4);
+  std::map<int64_t, double> albedo;
+  for (const auto& l : s.hull_world->landmarks()) albedo[l.id] = l.albedo;
+  const auto tracks = read_csv(dir_ / "ground_truth" / "cam0_tracks.csv");
+  ASSERT_GT(tracks.size(), 200u);
+  double dark = 0, bright = 0;
+  int n_dark = 0, n_bright = 0;
+  for (const auto& row : tracks) {
+    if (row[1] != index[8][0]) continue;
+    const int u = static_cast<int>(std::lround(std::stod(row[2])));
+    const int v = static_cast<int>(std::lround(std::stod(row[3])));
+    const double value = image.at<uint8_t>(v, u);
+    if (albedo.at(std::stoll(row[0])) < 0.5) dark += value, ++n_dark;
+    else bright += value, ++n_bright;
+  }
+  ASSERT_GT(n_dark, 10);
+  ASSERT_GT(n_bright, 10);
+  EXPECT_LT(dark / n_dark + 40.0, bright / n_bright);
+}
+
+}  // namespace
+}  // namespace keel::sim

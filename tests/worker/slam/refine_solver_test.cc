@@ -1,0 +1,172 @@
+// The refine solver on a synthetic mission generated here (synthetic_mission.h): a figure-eight
+// USV run whose odometry drifts and degenerates along the body x axis for 20 s.
+#include "worker/slam/refine_solver.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "tests/worker/slam/synthetic_mission.h"
+#include "worker/slam/so3.h"
+#include "worker/slam/trajectory_metrics.h"
+
+namespace keel::slam {
+namespace {
+
+using testing::make_synthetic_mission;
+using testing::SyntheticMission;
+using testing::SyntheticMissionOptions;
+
+double ate_rmse(const Trajectory& truth, const Trajectory& estimate) {
+  return absolute_trajectory_error(truth, estimate, Alignment::kSE3).translation_m.rmse;
+}
+
+Pose3 with_yaw(const Pose3& T, double yaw_rad) {
+  Pose3 out = T;
+  out.linear() = T.linear() * so3_exp(Eigen::Vector3d(0, 0, yaw_rad));
+  return out;
+}
+
+TEST(RefineSolver, LowersAteBelowOdometryAndFurtherWithDvl) {
+  SyntheticMissionOptions o;
+  const SyntheticMission m = make_synthetic_mission(o);
+  RefineOptions with_dvl;
+  RefineOptions without_dvl;
+  without_dvl.use_dvl = false;
+  const RefineResult a = refine_trajectory(m.input, with_dvl);
+  const RefineResult b = refine_trajectory(m.input, without_dvl);
+  const double ate_odom = ate_rmse(m.ground_truth, m.odometry);
+  const double ate_dvl = ate_rmse(m.ground_truth, a.trajectory());
+  const double ate_imu = ate_rmse(m.ground_truth, b.trajectory());
+  std::printf("ATE rmse: odometry %.3f m, refined without DVL %.3f m, with DVL %.3f m\n",
+              ate_odom, ate_imu, ate_dvl);
+  EXPECT_LT(ate_dvl, ate_odom);
+  EXPECT_LT(ate_dvl, ate_imu);
+  EXPECT_GT(a.summary.num_dvl_factors, 100);
+  EXPECT_EQ(b.summary.num_dvl_factors, 0);
+  EXPECT_TRUE(a.summary.covariance_ok);
+}
+
+TEST(RefineSolver, FlagsDegenerateKeyframesAndZeroesTheirBiases) {
+  const SyntheticMission m = make_synthetic_mission(SyntheticMissionOptions{});
+  const RefineResult r = refine_trajectory(m.input, RefineOptions{});
+  int flagged = 0;
+  for (size_t k = 0; k < r.keyframes.size(); ++k) {
+    const KeyframeEstimate& e = r.keyframes[k];
+    EXPECT_EQ(e.degenerate, static_cast<bool>(m.degenerate_truth[k])) << k;
+    if (!e.degenerate) continue;
+    ++flagged;
+    EXPECT_FALSE(e.has_odometry_factor) << k;  // Sec. IV-B: rely on IMU and DVL
+    EXPECT_TRUE(e.has_dvl_factor) << k;
+    EXPECT_TRUE(e.biases_zeroed);
+    EXPECT_EQ(e.bias_gyro_radps, Eigen::Vector3d::Zero());
+    EXPECT_EQ(e.bias_dvl_mps, Eigen::Vector3d::Zero());
+  }
+  EXPECT_EQ(flagged, 20);
+  EXPECT_EQ(r.summary.num_degenerate_keyframes, 20);
+}
+
+TEST(RefineSolver, RecoversAnInjectedDvlScaleWithinThreeSigma) {
+  SyntheticMissionOptions o;
+  o.dvl_scale = 1.02;
+  const SyntheticMission m = make_synthetic_mission(o);
+  const RefineResult r = refine_trajectory(m.input, RefineOptions{});
+  ASSERT_TRUE(r.summary.covariance_ok);
+  std::printf("s_d = %.5f +- %.5f (true 1.02)\n", r.dvl_scale, r.dvl_scale_sigma);
+  EXPECT_GT(r.dvl_scale_sigma, 0.0);
+  EXPECT_LT(r.dvl_scale_sigma, 0.005);
+  EXPECT_LT(std::abs(r.dvl_scale - 1.02), 3.0 * r.dvl_scale_sigma);
+}
+
+TEST(RefineSolver, EstimatesTheDvlExtrinsicRotation) {
+  SyntheticMissionOptions o;
+  const double yaw_error = 1.5 * M_PI / 180.0;
+  o.T_body_dvl_true = with_yaw(Pose3::Identity(), yaw_error);
+  o.T_body_dvl_true.translation() = Eigen::Vector3d(0.3, 0.0, -0.5);
+  o.T_body_dvl_nominal = o.T_body_dvl_true;
+  o.T_body_dvl_nominal.linear() = Eigen::Matrix3d::Identity();  // told: aligned
+  const SyntheticMission m = make_synthetic_mission(o);
+  const RefineResult r = refine_trajectory(m.input, RefineOptions{});
+  ASSERT_TRUE(r.summary.covariance_ok);
+  const Eigen::Vector3d err =
+      so3_log(o.T_body_dvl_true.linear().transpose() * r.q_body_dvl.toRotationMatrix());
+  const double sigma_yaw = std::sqrt(r.dvl_rotation_covariance(2, 2));
+  std::printf("DVL yaw error after refinement %.4f deg (sigma %.4f deg), before %.2f deg\n",
+              err.z() * 180 / M_PI, sigma_yaw * 180 / M_PI, yaw_error * 180 / M_PI);
+  EXPECT_LT(std::abs(err.z()), 3.0 * sigma_yaw);
+  EXPECT_LT(std::abs(err.z()), 0.2 * yaw_error);
+}
+
+TEST(RefineSolver, DvlDropoutLeavesItsIntervalsWithoutDvlFactors) {
+  SyntheticMissionOptions o;
+  o.dvl_dropout_start_s = 20.5;
+  o.dvl_dropout_duration_s = 4.0;  // samples 20.50 .. 24.45 s invalid
+  const SyntheticMission m = make_synthetic_mission(o);
+  const RefineResult r = refine_trajectory(m.input, RefineOptions{});
+  // Intervals ending at keyframes 21 .. 25 overlap the unbridged gap (20.45 s .. 24.5 s).
+  for (int k = 21; k <= 25; ++k) EXPECT_FALSE(r.keyframes[k].has_dvl_factor) << k;
+  EXPECT_TRUE(r.keyframes[20].has_dvl_factor);
+  EXPECT_TRUE(r.keyframes[26].has_dvl_factor);
+  EXPECT_EQ(r.summary.num_dvl_intervals_skipped, 5);
+  EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()), ate_rmse(m.ground_truth, m.odometry));
+}
+
+TEST(RefineSolver, HandlesABodyFrameDifferentFromTheImuFrame) {
+  SyntheticMissionOptions o;
+  o.T_body_imu = make_pose(Eigen::Quaterniond(so3_exp(Eigen::Vector3d(0, 0, M_PI / 2))),
+                           Eigen::Vector3d(0.2, -0.1, 0.3));
+  o.duration_s = 60.0;
+  o.degenerate_start_s = -1.0;
+  const SyntheticMission m = make_synthetic_mission(o);
+  const RefineResult r = refine_trajectory(m.input, RefineOptions{});
+  EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()), 0.5 * ate_rmse(m.ground_truth, m.odometry));
+  // The gyro bias is reported in the IMU frame.
+  const Eigen::Vector3d bg = r.keyframes.back().bias_gyro_radps;
+  EXPECT_LT((bg - o.gyro_bias_radps).norm(), 1e-4) << bg.transpose();
+}
+
+TEST(RefineSolver, LoopClosuresAloneCorrectDrift) {
+  SyntheticMissionOptions o;
+  o.duration_s = 200.0;  // more than one figure-eight period (180 s)
+  o.degenerate_start_s = -1.0;
+  o.loop_closures = true;
+  const SyntheticMission m = make_synthetic_mission(o);
+  ASSERT_GT(m.input.loop_closures.size(), 5u);
+  RefineOptions pose_graph;
+  pose_graph.use_imu = pose_graph.use_dvl = false;
+  const RefineResult r = refine_trajectory(m.input, pose_graph);
+  EXPECT_EQ(r.summary.num_imu_factors, 0);
+  EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()),
+            0.7 * ate_rmse(m.ground_truth, m.odometry));
+}
+
+TEST(RefineSolver, RejectsBadInputWithClearErrors) {
+  SyntheticMissionOptions o;
+  o.duration_s = 5.0;
+  o.degenerate_start_s = -1.0;
+  const SyntheticMission m = make_synthetic_mission(o);
+  auto expect_error = [](const RefineInput& in, const std::string& fragment) {
+    try {
+      refine_trajectory(in, RefineOptions{});
+      ADD_FAILURE() << "expected std::invalid_argument mentioning " << fragment;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  RefineInput one = m.input;
+  one.keyframes.resize(1);
+  expect_error(one, "keyframes");
+  RefineInput stray = m.input;
+  stray.odometry[1].t_j_ns += 500'000'000;
+  expect_error(stray, "odometry[1].t_j");
+  RefineInput unsorted = m.input;
+  std::swap(unsorted.imu[10], unsorted.imu[11]);
+  expect_error(unsorted, "imu sample 11");
+  RefineInput nan_pose = m.input;
+  nan_pose.keyframes[2].T_world_body.translation().x() = std::nan("");
+  expect_error(nan_pose, "keyframes[2]");
+}
+
+}  // namespace
+}  // namespace keel::slam
