@@ -75,7 +75,7 @@ ApiCallError error_from_answer(const HttpResult& result, const std::string& what
   nlohmann::json body = nlohmann::json::parse(result.body, nullptr, /*allow_exceptions=*/false);
   if (!body.is_discarded() && body.is_object() && body.contains("error")) {
     try {
-      const proto::ApiError error = proto::ApiError::from_json(body["error"], "error");
+      const proto::ApiError error = proto::ApiError::from_json(body);
       return ApiCallError(result.status, error.code, error.message);
     } catch (const proto::ContractError&) {
       // Falls through to the generic message below.

@@ -69,11 +69,12 @@ bool ApiClient::download_once(const std::string& target, const fs::path& part,
       parser.get().body().size = buffer.size();
       ec = connection_->read(parser);
       if (ec == http::error::need_buffer) ec = {};
+      // Bytes that arrived before a cut are kept: the next attempt resumes after them.
+      sink(buffer.data(), buffer.size() - parser.get().body().size);
       if (ec) {
         connection_->close();
         throw ApiCallError(0, "transport", what + ": " + ec.message());
       }
-      sink(buffer.data(), buffer.size() - parser.get().body().size);
     }
     if (!parser.get().keep_alive()) connection_->close();
   };

@@ -11,10 +11,14 @@ namespace keel::proto {
 namespace {
 
 constexpr std::pair<SensorType, const char*> kSensorTypeNames[] = {
-    {SensorType::kImu, "imu"},     {SensorType::kDvl, "dvl"},
-    {SensorType::kDvlRanges, "dvl_ranges"}, {SensorType::kLidar, "lidar"},
-    {SensorType::kSonar, "sonar"}, {SensorType::kCamera, "camera"},
-    {SensorType::kDepth, "depth"}, {SensorType::kServo, "servo"}};
+    {SensorType::kImu, "imu"},
+    {SensorType::kDvl, "dvl"},
+    {SensorType::kDvlRanges, "dvl_ranges"},
+    {SensorType::kLidar, "lidar"},
+    {SensorType::kSonar, "sonar"},
+    {SensorType::kCamera, "camera"},
+    {SensorType::kDepth, "depth"},
+    {SensorType::kServo, "servo"}};
 
 constexpr std::pair<TimeUnit, const char*> kUnitNames[] = {{TimeUnit::kSeconds, "s"},
                                                            {TimeUnit::kMilliseconds, "ms"},
@@ -64,7 +68,8 @@ double finite_number(const nlohmann::json& value, const std::string& path) {
 
 double positive_number(const FieldReader& r, const char* field) {
   const double x = finite_number(r.at(field), r.child(field));
-  if (!(x > 0.0)) throw ContractError(r.child(field) + ": expected a positive number, got " + std::to_string(x));
+  if (!(x > 0.0))
+    throw ContractError(r.child(field) + ": expected a positive number, got " + std::to_string(x));
   return x;
 }
 
@@ -75,16 +80,19 @@ double optional_positive(const FieldReader& r, const char* field, double fallbac
 template <size_t N>
 std::array<double, N> fixed_numbers(const nlohmann::json& value, const std::string& path) {
   const std::string expected = "expected " + std::to_string(N) + " numbers";
-  if (!value.is_array()) throw ContractError(path + ": " + expected + ", got " + json_type_name(value));
+  if (!value.is_array())
+    throw ContractError(path + ": " + expected + ", got " + json_type_name(value));
   if (value.size() != N)
     throw ContractError(path + ": " + expected + ", got " + std::to_string(value.size()));
   std::array<double, N> out{};
-  for (size_t i = 0; i < N; ++i) out[i] = finite_number(value[i], path + "[" + std::to_string(i) + "]");
+  for (size_t i = 0; i < N; ++i)
+    out[i] = finite_number(value[i], path + "[" + std::to_string(i) + "]");
   return out;
 }
 
 std::vector<double> numbers(const nlohmann::json& value, const std::string& path) {
-  if (!value.is_array()) throw ContractError(path + ": expected array of numbers, got " + json_type_name(value));
+  if (!value.is_array())
+    throw ContractError(path + ": expected array of numbers, got " + json_type_name(value));
   std::vector<double> out;
   for (size_t i = 0; i < value.size(); ++i)
     out.push_back(finite_number(value[i], path + "[" + std::to_string(i) + "]"));
@@ -108,17 +116,21 @@ void read_noise(const FieldReader& sensor, SensorSpec& spec) {
   SensorNoise& n = spec.noise;
   switch (spec.type) {
     case SensorType::kImu:
-      r.reject_unknown({"gyro_noise_density", "accel_noise_density", "gyro_random_walk",
-                        "accel_random_walk"});
-      n.imu.gyro_noise_density = optional_positive(r, "gyro_noise_density", n.imu.gyro_noise_density);
-      n.imu.accel_noise_density = optional_positive(r, "accel_noise_density", n.imu.accel_noise_density);
+      r.reject_unknown(
+          {"gyro_noise_density", "accel_noise_density", "gyro_random_walk", "accel_random_walk"});
+      n.imu.gyro_noise_density =
+          optional_positive(r, "gyro_noise_density", n.imu.gyro_noise_density);
+      n.imu.accel_noise_density =
+          optional_positive(r, "accel_noise_density", n.imu.accel_noise_density);
       n.imu.gyro_random_walk = optional_positive(r, "gyro_random_walk", n.imu.gyro_random_walk);
       n.imu.accel_random_walk = optional_positive(r, "accel_random_walk", n.imu.accel_random_walk);
       break;
     case SensorType::kDvl:
       r.reject_unknown({"velocity_sigma_rel", "bias_random_walk_rel"});
-      n.dvl.velocity_sigma_rel = optional_positive(r, "velocity_sigma_rel", n.dvl.velocity_sigma_rel);
-      n.dvl.bias_random_walk_rel = optional_positive(r, "bias_random_walk_rel", n.dvl.bias_random_walk_rel);
+      n.dvl.velocity_sigma_rel =
+          optional_positive(r, "velocity_sigma_rel", n.dvl.velocity_sigma_rel);
+      n.dvl.bias_random_walk_rel =
+          optional_positive(r, "bias_random_walk_rel", n.dvl.bias_random_walk_rel);
       break;
     case SensorType::kDvlRanges:
       r.reject_unknown({"range_sigma"});
@@ -206,10 +218,14 @@ std::string to_string(Platform platform) { return name_of(kPlatformNames, platfo
 
 double seconds_per_unit(TimeUnit unit) {
   switch (unit) {
-    case TimeUnit::kSeconds: return 1.0;
-    case TimeUnit::kMilliseconds: return 1e-3;
-    case TimeUnit::kMicroseconds: return 1e-6;
-    case TimeUnit::kNanoseconds: return 1e-9;
+    case TimeUnit::kSeconds:
+      return 1.0;
+    case TimeUnit::kMilliseconds:
+      return 1e-3;
+    case TimeUnit::kMicroseconds:
+      return 1e-6;
+    case TimeUnit::kNanoseconds:
+      return 1e-9;
   }
   return 1.0;
 }
@@ -227,8 +243,8 @@ Extrinsic Extrinsic::from_json(const nlohmann::json& value, const std::string& p
   const auto& q = e.rotation_xyzw;
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   if (std::abs(norm - 1.0) > 1e-3)
-    throw ContractError(r.child("rotation_xyzw") + ": expected a unit quaternion, |q| = " +
-                        std::to_string(norm));
+    throw ContractError(r.child("rotation_xyzw") +
+                        ": expected a unit quaternion, |q| = " + std::to_string(norm));
   for (double& c : e.rotation_xyzw) c /= norm;
   return e;
 }
@@ -245,7 +261,8 @@ PointTimeSpec PointTimeSpec::from_json(const nlohmann::json& value, const std::s
   if (p.field.empty()) throw ContractError(r.child("field") + ": expected a field name");
   p.unit = parse_enum(kUnitNames, r.at("unit"), r.child("unit"), "time unit");
   if (r.has("reference"))
-    p.reference = parse_enum(kReferenceNames, r.at("reference"), r.child("reference"), "time reference");
+    p.reference =
+        parse_enum(kReferenceNames, r.at("reference"), r.child("reference"), "time reference");
   return p;
 }
 
@@ -325,10 +342,12 @@ SensorSpec SensorSpec::from_json(const nlohmann::json& value, const std::string&
   s.frame_id = r.optional<std::string>("frame_id", "");
   check_source(s, r);
   s.rate_hz = positive_number(r, "rate_hz");
-  if (r.has("T_body_sensor")) s.T_body_sensor = Extrinsic::from_json(r.at("T_body_sensor"), r.child("T_body_sensor"));
+  if (r.has("T_body_sensor"))
+    s.T_body_sensor = Extrinsic::from_json(r.at("T_body_sensor"), r.child("T_body_sensor"));
   read_noise(r, s);
   if (r.has("point_time")) {
-    if (!s.is_scans()) throw ContractError(r.child("point_time") + ": only scan sensors have per-point time");
+    if (!s.is_scans())
+      throw ContractError(r.child("point_time") + ": only scan sensors have per-point time");
     s.point_time = PointTimeSpec::from_json(r.at("point_time"), r.child("point_time"));
   }
   if (r.has("range_m")) {
@@ -375,7 +394,8 @@ TrajectorySpec TrajectorySpec::from_json(const nlohmann::json& value, const std:
     return t;
   }
   if (!value.is_object())
-    throw ContractError(path + ": expected a TUM file name or {topic: ...}, got " + json_type_name(value));
+    throw ContractError(path + ": expected a TUM file name or {topic: ...}, got " +
+                        json_type_name(value));
   FieldReader r(value, path);
   r.reject_unknown({"topic"});
   t.topic = r.required<std::string>("topic");
@@ -398,8 +418,10 @@ const SensorSpec& MissionManifest::sensor(std::string_view sensor_name) const {
 }
 
 nlohmann::json MissionManifest::to_json() const {
-  nlohmann::json j = {{"keel_mission", keel_mission}, {"name", name},
-                      {"platform", to_string(platform)}, {"body_frame", body_frame},
+  nlohmann::json j = {{"keel_mission", keel_mission},
+                      {"name", name},
+                      {"platform", to_string(platform)},
+                      {"body_frame", body_frame},
                       {"world_frame", world_frame}};
   if (!bag.empty()) j["bag"] = bag;
   j["sensors"] = nlohmann::json::array();
@@ -426,7 +448,8 @@ MissionManifest MissionManifest::from_json(const nlohmann::json& value, const st
                         std::to_string(m.keel_mission) + " (known: 1)");
   m.name = r.required<std::string>("name");
   check_name(m.name, r.child("name"), "[A-Za-z0-9._-]+", kMissionName);
-  if (r.has("platform")) m.platform = parse_enum(kPlatformNames, r.at("platform"), r.child("platform"), "platform");
+  if (r.has("platform"))
+    m.platform = parse_enum(kPlatformNames, r.at("platform"), r.child("platform"), "platform");
   m.body_frame = r.optional<std::string>("body_frame", m.body_frame);
   m.world_frame = r.optional<std::string>("world_frame", m.world_frame);
   m.bag = r.optional<std::string>("bag", "");
@@ -437,7 +460,8 @@ MissionManifest MissionManifest::from_json(const nlohmann::json& value, const st
   for (size_t i = 0; i < sensors.size(); ++i) {
     const std::string item = r.child("sensors") + "[" + std::to_string(i) + "]";
     SensorSpec s = SensorSpec::from_json(sensors[i], item);
-    if (m.find_sensor(s.name)) throw ContractError(item + ".name: sensor '" + s.name + "' repeated");
+    if (m.find_sensor(s.name))
+      throw ContractError(item + ".name: sensor '" + s.name + "' repeated");
     if (!s.topic.empty() && m.bag.empty())
       throw ContractError(item + ".topic: a topic needs `bag:` at the top level");
     m.sensors.push_back(std::move(s));

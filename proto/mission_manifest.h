@@ -28,8 +28,9 @@ std::string known_sensor_types();
 
 // T_body_sensor: maps points in the sensor frame into the body frame.
 struct Extrinsic {
-  std::array<double, 3> translation = {0.0, 0.0, 0.0};        // m
-  std::array<double, 4> rotation_xyzw = {0.0, 0.0, 0.0, 1.0};  // unit quaternion (normalised on read)
+  std::array<double, 3> translation = {0.0, 0.0, 0.0};  // m
+  std::array<double, 4> rotation_xyzw = {0.0, 0.0, 0.0,
+                                         1.0};  // unit quaternion (normalised on read)
 
   nlohmann::json to_json() const;
   // Fails when |q| differs from 1 by more than 1e-3, or on non-finite numbers.
@@ -113,14 +114,14 @@ struct SensorSpec {
   std::string scans;
   std::string images;
   std::string topic;
-  std::string frame_id;  // frame in the bag's /tf_static; empty = the sensor name
-  double rate_hz = 0.0;  // nominal
+  std::string frame_id;                    // frame in the bag's /tf_static; empty = the sensor name
+  double rate_hz = 0.0;                    // nominal
   std::optional<Extrinsic> T_body_sensor;  // absent: take it from /tf_static (bags) or unknown
   SensorNoise noise;                       // only the entry of this type is read/written
-  std::optional<PointTimeSpec> point_time;            // scan sensors
-  std::optional<std::array<double, 2>> range_m;       // scan sensors and dvl_ranges: [min, max]
-  std::vector<std::array<double, 3>> beams;           // dvl_ranges: 4 unit vectors (DVL frame)
-  std::optional<CameraSpec> camera;                   // cameras (required for them)
+  std::optional<PointTimeSpec> point_time;       // scan sensors
+  std::optional<std::array<double, 2>> range_m;  // scan sensors and dvl_ranges: [min, max]
+  std::vector<std::array<double, 3>> beams;      // dvl_ranges: 4 unit vectors (DVL frame)
+  std::optional<CameraSpec> camera;              // cameras (required for them)
 
   bool is_stream() const { return !file.empty(); }
   bool is_scans() const;   // scans folder, or a scan-type sensor on a bag topic

@@ -23,7 +23,8 @@ Response empty_response(int status) {
 }
 
 nlohmann::json parse_json_body(const Request& request) {
-  if (request.body.empty()) throw ApiException(400, "bad_json", "request body: expected a JSON object, got nothing");
+  if (request.body.empty())
+    throw ApiException(400, "bad_json", "request body: expected a JSON object, got nothing");
   nlohmann::json body;
   try {
     body = nlohmann::json::parse(request.body);
@@ -31,7 +32,8 @@ nlohmann::json parse_json_body(const Request& request) {
     // e.byte names the position; the message of nlohmann says what was expected there.
     throw ApiException(400, "bad_json", std::string("request body: not valid JSON: ") + e.what());
   }
-  if (!body.is_object()) throw ApiException(400, "bad_json", "request body: expected a JSON object");
+  if (!body.is_object())
+    throw ApiException(400, "bad_json", "request body: expected a JSON object");
   return body;
 }
 

@@ -39,7 +39,8 @@ std::vector<std::string> safe_components(const std::string& name, const std::str
     throw BundleError("unsafe_path", what + " '" + name + "' is an absolute path");
   std::vector<std::string> parts = split_components(name);
   for (const auto& part : parts)
-    if (part == "..") throw BundleError("unsafe_path", what + " '" + name + "' has a '..' component");
+    if (part == "..")
+      throw BundleError("unsafe_path", what + " '" + name + "' has a '..' component");
   return parts;
 }
 
@@ -95,7 +96,9 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
     ++summary.members;
     const char* raw_name = archive_entry_pathname(entry);
     std::string name = raw_name ? raw_name : "";
-    if (name.empty()) throw BundleError("bad_bundle", "member #" + std::to_string(summary.members) + " has no name");
+    if (name.empty())
+      throw BundleError("bad_bundle",
+                        "member #" + std::to_string(summary.members) + " has no name");
     std::vector<std::string> parts = safe_components(name, "member");
     const mode_t type = archive_entry_filetype(entry);
     const char* hardlink = archive_entry_hardlink(entry);
@@ -109,8 +112,8 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
     } else if (type == AE_IFREG) {
       summary.file_bytes += archive_entry_size(entry);
     } else if (type != AE_IFDIR) {
-      throw BundleError("bad_bundle", "member '" + name +
-                                          "': only files, folders and links are allowed");
+      throw BundleError("bad_bundle",
+                        "member '" + name + "': only files, folders and links are allowed");
     }
     if (parts.size() == 1 && parts[0] == "mission.yaml") {
       if (type != AE_IFREG || hardlink)
@@ -126,8 +129,8 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
     // Reading the data (rather than trusting the header) catches a truncated tar here.
     if (archive_read_data_skip(reader.get()) != ARCHIVE_OK) {
       const char* error = archive_error_string(reader.get());
-      throw BundleError("bad_bundle", "member '" + name + "' is truncated: " +
-                                          (error ? error : "unknown error"));
+      throw BundleError("bad_bundle",
+                        "member '" + name + "' is truncated: " + (error ? error : "unknown error"));
     }
   }
 

@@ -29,8 +29,8 @@ class BundleError : public std::runtime_error {
 };
 
 struct BundleSummary {
-  int members = 0;        // entries in the tar
-  int64_t file_bytes = 0; // sum of regular file sizes
+  int members = 0;         // entries in the tar
+  int64_t file_bytes = 0;  // sum of regular file sizes
 };
 
 // Throws BundleError naming the offending member (or the tar itself).

@@ -82,8 +82,8 @@ RangeResult parse_range(std::string_view value, uint64_t size) {
 }
 
 std::string content_range_header(const ByteSpan& span, uint64_t size) {
-  return "bytes " + std::to_string(span.offset) + "-" + std::to_string(span.offset + span.length - 1) +
-         "/" + std::to_string(size);
+  return "bytes " + std::to_string(span.offset) + "-" +
+         std::to_string(span.offset + span.length - 1) + "/" + std::to_string(size);
 }
 
 std::string unsatisfied_range_header(uint64_t size) { return "bytes */" + std::to_string(size); }

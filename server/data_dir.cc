@@ -19,7 +19,8 @@ std::runtime_error io_error(const std::string& what, const std::filesystem::path
 
 }  // namespace
 
-void write_file_atomically(const std::filesystem::path& path, const std::string& content, mode_t mode) {
+void write_file_atomically(const std::filesystem::path& path, const std::string& content,
+                           mode_t mode) {
   const std::filesystem::path temp = path.string() + ".tmp." + std::to_string(getpid());
   int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, mode);
   if (fd < 0) throw io_error("cannot create", temp);
@@ -75,12 +76,14 @@ ListenAddress parse_listen_address(const std::string& text) {
   } else {
     size_t colon = text.rfind(':');
     if (colon == std::string::npos || colon == 0)
-      throw std::invalid_argument("--listen '" + text + "': expected host:port, e.g. 127.0.0.1:8080");
+      throw std::invalid_argument("--listen '" + text +
+                                  "': expected host:port, e.g. 127.0.0.1:8080");
     out.host = text.substr(0, colon);
     port_text = text.substr(colon + 1);
   }
   if (port_text.empty() || port_text.size() > 5 ||
-      port_text.find_first_not_of("0123456789") != std::string::npos || std::stoi(port_text) > 65535)
+      port_text.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoi(port_text) > 65535)
     throw std::invalid_argument("--listen '" + text + "': port must be 0..65535");
   out.port = static_cast<uint16_t>(std::stoi(port_text));
   return out;

@@ -85,7 +85,8 @@ struct FileRegionBody {
         ec = {};
         return boost::none;
       }
-      size_t amount = remaining_ < sizeof(buffer_) ? static_cast<size_t>(remaining_) : sizeof(buffer_);
+      size_t amount =
+          remaining_ < sizeof(buffer_) ? static_cast<size_t>(remaining_) : sizeof(buffer_);
       ssize_t got;
       do {
         got = ::pread(body_.fd_, buffer_, amount, static_cast<off_t>(position_));

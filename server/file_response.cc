@@ -54,8 +54,9 @@ Response file_response(const Request& request, const StoredFile& file) {
       const bool malformed = parsed.status == RangeStatus::kMalformed;
       Response error = error_response(
           416, "bad_range",
-          malformed ? "Range '" + *range + "': expected one range bytes=a-b, bytes=a- or bytes=-n"
-                    : "Range '" + *range + "' is outside the " + std::to_string(file.size) + " bytes");
+          malformed
+              ? "Range '" + *range + "': expected one range bytes=a-b, bytes=a- or bytes=-n"
+              : "Range '" + *range + "' is outside the " + std::to_string(file.size) + " bytes");
       error.headers.set("Content-Range", unsatisfied_range_header(file.size));
       error.headers.set("ETag", etag);
       error.headers.set("Accept-Ranges", "bytes");
@@ -67,7 +68,8 @@ Response file_response(const Request& request, const StoredFile& file) {
   }
   response.headers.set("Content-Type", file.content_type);
   if (is_token_safe(file.download_name))
-    response.headers.set("Content-Disposition", "attachment; filename=\"" + file.download_name + "\"");
+    response.headers.set("Content-Disposition",
+                         "attachment; filename=\"" + file.download_name + "\"");
   response.file = FileRegion{file.path, span.offset, span.length};
   return response;
 }

@@ -114,7 +114,8 @@ Response HttpHandler::handle(const Request& request) {
 Response HttpHandler::dispatch(const Request& request) {
   std::optional<Target> target = parse_target(request.target);
   if (!target)
-    throw ApiException(400, "bad_request", "request target '" + request.target + "' is not a valid path");
+    throw ApiException(400, "bad_request",
+                       "request target '" + request.target + "' is not a valid path");
   if (starts_with_v1(target->segments) && !authorized(request)) {
     Headers challenge;
     challenge.set("WWW-Authenticate", "Bearer");
@@ -134,7 +135,8 @@ Response HttpHandler::dispatch(const Request& request) {
     Headers headers;
     headers.set("Allow", allowed);
     throw ApiException(405, "method_not_allowed",
-                       request.method + " " + target->path + ": allowed methods are " + allowed, headers);
+                       request.method + " " + target->path + ": allowed methods are " + allowed,
+                       headers);
   }
   throw ApiException(404, "not_found", "no route " + request.method + " " + target->path);
 }
@@ -144,7 +146,8 @@ bool HttpHandler::authorized(const Request& request) {
   if (!header) return false;
   std::string_view value(*header);
   constexpr std::string_view kScheme = "Bearer ";
-  if (value.size() <= kScheme.size() || !iequals(value.substr(0, kScheme.size()), kScheme)) return false;
+  if (value.size() <= kScheme.size() || !iequals(value.substr(0, kScheme.size()), kScheme))
+    return false;
   std::string token(value.substr(kScheme.size()));
   while (!token.empty() && token.back() == ' ') token.pop_back();
   if (token.empty()) return false;

@@ -1,5 +1,6 @@
 #include "server/http_server.h"
 
+#include <spdlog/spdlog.h>
 #include <boost/asio/bind_executor.hpp>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/io_context.hpp>
@@ -9,7 +10,6 @@
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
-#include <spdlog/spdlog.h>
 
 #include <array>
 #include <atomic>
@@ -88,15 +88,17 @@ class Session : public std::enable_shared_from_this<Session> {
     parser_->body_limit(kUnlimitedUntilHeader);
     idle_ = true;
     stream_.expires_after(core_.options.read_timeout);
-    http::async_read_header(stream_, buffer_, *parser_,
-                            [self = shared_from_this()](error_code ec, size_t) { self->on_header(ec); });
+    http::async_read_header(
+        stream_, buffer_, *parser_,
+        [self = shared_from_this()](error_code ec, size_t) { self->on_header(ec); });
   }
 
   void on_header(error_code ec) {
     idle_ = false;
     if (ec == http::error::header_limit)
-      return send_error(431, "too_large",
-                        "request header over " + std::to_string(core_.options.header_limit_bytes) + " bytes");
+      return send_error(
+          431, "too_large",
+          "request header over " + std::to_string(core_.options.header_limit_bytes) + " bytes");
     if (ec == http::error::end_of_stream || ec == net::error::eof || ec == beast::error::timeout ||
         ec == net::error::operation_aborted || ec == net::error::connection_reset)
       return close();
@@ -109,8 +111,8 @@ class Session : public std::enable_shared_from_this<Session> {
         core_.handler.body_limit(std::string(header.method_string()), std::string(header.target()));
     if (auto length = parser_->content_length(); length && *length > limit)
       return send_error(413, "too_large",
-                        "body of " + std::to_string(*length) + " bytes is over this route's limit of " +
-                            std::to_string(limit));
+                        "body of " + std::to_string(*length) +
+                            " bytes is over this route's limit of " + std::to_string(limit));
     parser_->body_limit(limit);
     if (parser_->is_done()) return handle_request();
     if (beast::iequals(header[http::field::expect], "100-continue")) return send_continue();
@@ -131,8 +133,9 @@ class Session : public std::enable_shared_from_this<Session> {
   // so a partial chunk commits nothing.
   void read_body() {
     stream_.expires_after(core_.options.read_timeout);
-    http::async_read_some(stream_, buffer_, *parser_,
-                          [self = shared_from_this()](error_code ec, size_t) { self->on_body(ec); });
+    http::async_read_some(
+        stream_, buffer_, *parser_,
+        [self = shared_from_this()](error_code ec, size_t) { self->on_body(ec); });
   }
 
   void on_body(error_code ec) {
@@ -219,7 +222,8 @@ class Session : public std::enable_shared_from_this<Session> {
                   std::shared_ptr<http::response_serializer<Body>> serializer, bool close_after,
                   bool head) {
     stream_.expires_after(core_.options.write_timeout);
-    auto next = [self = shared_from_this(), held, serializer, close_after, head](error_code ec, size_t) {
+    auto next = [self = shared_from_this(), held, serializer, close_after, head](error_code ec,
+                                                                                 size_t) {
       if (ec) return self->close();
       const bool done = head ? serializer->is_header_done() : serializer->is_done();
       if (!done) return self->write_some(held, serializer, close_after, head);
@@ -244,7 +248,8 @@ class Session : public std::enable_shared_from_this<Session> {
 
   void drain_some() {
     constexpr size_t kMaxDrainBytes = 256ull << 20;
-    if (drained_ > kMaxDrainBytes || std::chrono::steady_clock::now() >= drain_deadline_) return close();
+    if (drained_ > kMaxDrainBytes || std::chrono::steady_clock::now() >= drain_deadline_)
+      return close();
     stream_.expires_at(drain_deadline_);
     stream_.async_read_some(net::buffer(drain_buffer_),
                             [self = shared_from_this()](error_code ec, size_t n) {

@@ -16,12 +16,12 @@ namespace keel::server {
 
 struct ServerOptions {
   std::string address = "127.0.0.1";
-  uint16_t port = 8080;                // 0 = an ephemeral port (see port())
-  int threads = 2;                     // io threads
-  uint32_t header_limit_bytes = 16 * 1024;              // larger headers -> 431
-  std::chrono::milliseconds read_timeout{30'000};       // per read: header, each body piece
-  std::chrono::milliseconds write_timeout{60'000};      // per write of a response piece
-  std::chrono::milliseconds shutdown_grace{5'000};      // in-flight requests may finish
+  uint16_t port = 8080;                             // 0 = an ephemeral port (see port())
+  int threads = 2;                                  // io threads
+  uint32_t header_limit_bytes = 16 * 1024;          // larger headers -> 431
+  std::chrono::milliseconds read_timeout{30'000};   // per read: header, each body piece
+  std::chrono::milliseconds write_timeout{60'000};  // per write of a response piece
+  std::chrono::milliseconds shutdown_grace{5'000};  // in-flight requests may finish
 };
 
 class HttpServer {

@@ -47,7 +47,7 @@ struct FileRegion {
 struct Response {
   int status = 200;
   Headers headers;
-  std::string body;                 // used when `file` is empty
+  std::string body;                // used when `file` is empty
   std::optional<FileRegion> file;  // a file region to stream instead of `body`
 };
 

@@ -7,10 +7,10 @@
 // connections. SIGTERM/SIGINT: workers are stopped first (they may still report to the
 // server while they wind down), then the server stops accepting, lets requests in flight
 // finish, and exits 0.
-#include <CLI/CLI.hpp>
 #include <signal.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -60,9 +60,9 @@ int run(const Settings& settings) {
 
   ks::SupervisorOptions supervisor_options;
   supervisor_options.workers = settings.workers;
-  supervisor_options.worker_binary =
-      settings.worker_binary.empty() ? default_worker_binary()
-                                     : std::filesystem::path(settings.worker_binary);
+  supervisor_options.worker_binary = settings.worker_binary.empty()
+                                         ? default_worker_binary()
+                                         : std::filesystem::path(settings.worker_binary);
   supervisor_options.log_dir = settings.data_dir / "logs";
   ks::WorkerSupervisor supervisor(supervisor_options);
 
@@ -75,7 +75,8 @@ int run(const Settings& settings) {
   server_options.address = listen.host;
   server_options.port = listen.port;
   server_options.threads = settings.threads;
-  server_options.read_timeout = std::chrono::milliseconds(static_cast<int64_t>(settings.read_timeout_s * 1000));
+  server_options.read_timeout =
+      std::chrono::milliseconds(static_cast<int64_t>(settings.read_timeout_s * 1000));
   ks::HttpServer server(handler, server_options);
   server.start();
   const std::string url = server.url();
@@ -86,7 +87,8 @@ int run(const Settings& settings) {
       listen.host == "0.0.0.0" || listen.host == "127.0.0.1" || listen.host == "localhost"
           ? "http://127.0.0.1:" + std::to_string(server.port())
           : url;
-  supervisor.start({"--server", worker_url, "--token-file", (settings.data_dir / "token").string()});
+  supervisor.start(
+      {"--server", worker_url, "--token-file", (settings.data_dir / "token").string()});
 
   std::cout << url << std::endl;
   spdlog::info("keel-server listening on {} with {} io threads, {} workers, data in {}", url,
@@ -106,7 +108,8 @@ int run(const Settings& settings) {
 int main(int argc, char** argv) {
   CLI::App app{"keel-server: Keel's HTTP API, job queue and artifact store"};
   Settings settings;
-  app.add_option("--data-dir", settings.data_dir, "folder for keel.db, blobs, uploads, token, logs")->required();
+  app.add_option("--data-dir", settings.data_dir, "folder for keel.db, blobs, uploads, token, logs")
+      ->required();
   app.add_option("--listen", settings.listen, "address:port to listen on (port 0 = any free port)")
       ->capture_default_str();
   app.add_option("--workers", settings.workers, "local keel-worker processes to run (0 = none)")
@@ -117,11 +120,15 @@ int main(int argc, char** argv) {
   app.add_option("--max-chunk-bytes", settings.max_chunk_bytes, "largest upload chunk (PUT body)")
       ->check(CLI::Range(uint64_t{1}, uint64_t{1} << 34))
       ->capture_default_str();
-  app.add_option("--threads", settings.threads, "io threads")->check(CLI::Range(1, 256))->capture_default_str();
-  app.add_option("--read-timeout", settings.read_timeout_s, "seconds a read may stall before the connection is dropped")
+  app.add_option("--threads", settings.threads, "io threads")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  app.add_option("--read-timeout", settings.read_timeout_s,
+                 "seconds a read may stall before the connection is dropped")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
-  app.add_option("--log-level", settings.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  app.add_option("--log-level", settings.log_level, "trace, debug, info, warn, error")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   spdlog::set_level(spdlog::level::from_str(settings.log_level));

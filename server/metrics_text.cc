@@ -31,8 +31,10 @@ std::string render_metrics(const storage::Metrics& m, const RequestCounters& cou
   out << "keel_uploads_open " << m.uploads_open << '\n';
   family(out, "keel_http_requests_total", "counter", "HTTP requests answered, by status class.");
   for (int digit = 1; digit <= 5; ++digit)
-    out << "keel_http_requests_total{code=\"" << digit << "xx\"} " << counters.by_class(digit) << '\n';
-  family(out, "keel_workers_alive", "gauge", "Local keel-worker processes the server supervises that are running.");
+    out << "keel_http_requests_total{code=\"" << digit << "xx\"} " << counters.by_class(digit)
+        << '\n';
+  family(out, "keel_workers_alive", "gauge",
+         "Local keel-worker processes the server supervises that are running.");
   out << "keel_workers_alive " << workers_alive << '\n';
   return out.str();
 }

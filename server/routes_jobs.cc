@@ -14,11 +14,13 @@ constexpr size_t kMaxIdempotencyKey = 200;
 std::string idempotency_key(const Request& request) {
   std::string key = request.headers.get("Idempotency-Key").value_or("");
   if (key.size() > kMaxIdempotencyKey)
-    throw ApiException(400, "invalid_field",
-                       "Idempotency-Key: longer than " + std::to_string(kMaxIdempotencyKey) + " characters");
+    throw ApiException(
+        400, "invalid_field",
+        "Idempotency-Key: longer than " + std::to_string(kMaxIdempotencyKey) + " characters");
   for (char c : key)
     if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e)
-      throw ApiException(400, "invalid_field", "Idempotency-Key: only visible ASCII characters are allowed");
+      throw ApiException(400, "invalid_field",
+                         "Idempotency-Key: only visible ASCII characters are allowed");
   return key;
 }
 
@@ -35,7 +37,8 @@ std::string content_type_for(const std::string& name) {
   };
   if (ends_with(".json")) return "application/json";
   if (ends_with(".html")) return "text/html; charset=utf-8";
-  if (ends_with(".tum") || ends_with(".txt") || ends_with(".csv")) return "text/plain; charset=utf-8";
+  if (ends_with(".tum") || ends_with(".txt") || ends_with(".csv"))
+    return "text/plain; charset=utf-8";
   if (ends_with(".png")) return "image/png";
   return "application/octet-stream";
 }
@@ -81,7 +84,8 @@ Response retry_job(const Call& call) {
 
 // One new job per matching stored mission; every listed id is checked before any job is made.
 Response reprocess(const Call& call) {
-  proto::ReprocessRequest request = proto::ReprocessRequest::from_json(parse_json_body(call.request));
+  proto::ReprocessRequest request =
+      proto::ReprocessRequest::from_json(parse_json_body(call.request));
   if (!request.mission_ids.empty() && !request.name_prefix.empty())
     throw ApiException(400, "invalid_field", "give mission_ids or name_prefix, not both");
   std::vector<proto::Mission> missions;
@@ -90,8 +94,9 @@ Response reprocess(const Call& call) {
       try {
         missions.push_back(call.store.get_mission(request.mission_ids[i]));
       } catch (const storage::NotFound&) {
-        throw ApiException(404, "not_found", "mission_ids[" + std::to_string(i) + "]: no mission '" +
-                                                 request.mission_ids[i] + "'");
+        throw ApiException(
+            404, "not_found",
+            "mission_ids[" + std::to_string(i) + "]: no mission '" + request.mission_ids[i] + "'");
       }
     }
   } else {
@@ -109,7 +114,8 @@ Response list_job_artifacts(const Call& call) {
   const std::string& id = call.params[0];
   call.store.get_job(id);  // 404 for an unknown job rather than an empty list
   nlohmann::json artifacts = nlohmann::json::array();
-  for (const auto& artifact : call.store.list_artifacts(id)) artifacts.push_back(artifact.to_json());
+  for (const auto& artifact : call.store.list_artifacts(id))
+    artifacts.push_back(artifact.to_json());
   return json_response(200, {{"artifacts", artifacts}});
 }
 

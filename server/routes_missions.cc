@@ -1,4 +1,5 @@
-// POST /v1/missions (checks the bundle tar first), GET /v1/missions[?prefix=], GET /v1/missions/{id}.
+// POST /v1/missions (checks the bundle tar first), GET /v1/missions[?prefix=], GET
+// /v1/missions/{id}.
 #include "proto/resources.h"
 #include "server/api_response.h"
 #include "server/bundle_check.h"

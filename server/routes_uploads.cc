@@ -25,7 +25,8 @@ ApiException bad_range(const std::string& message) {
 
 Response create_upload(const Call& call) {
   proto::UploadRequest request = proto::UploadRequest::from_json(parse_json_body(call.request));
-  if (request.size < 0) throw ApiException(400, "invalid_field", "size: expected a byte count >= 0");
+  if (request.size < 0)
+    throw ApiException(400, "invalid_field", "size: expected a byte count >= 0");
   return json_response(201, call.store.create_upload(request).to_json());
 }
 
@@ -49,7 +50,8 @@ Response put_upload_chunk(const Call& call) {
   auto header = call.request.headers.get("Content-Range");
   if (!header) throw bad_range("Content-Range: missing (expected 'bytes a-b/N')");
   std::optional<ContentRange> range = parse_content_range(*header);
-  if (!range) throw bad_range("Content-Range '" + *header + "': expected 'bytes a-b/N' with a <= b < N");
+  if (!range)
+    throw bad_range("Content-Range '" + *header + "': expected 'bytes a-b/N' with a <= b < N");
   const int64_t body_size = static_cast<int64_t>(call.request.body.size());
   if (range->length() != body_size)
     throw bad_range("Content-Range '" + *header + "' announces " + std::to_string(range->length()) +
@@ -103,7 +105,8 @@ Response delete_upload(const Call& call) {
 Response get_blob(const Call& call) {
   const std::string& sha256 = call.params[0];
   if (!proto::is_sha256_hex(sha256))
-    throw ApiException(404, "not_found", "blob '" + sha256 + "': not a SHA-256 (64 lowercase hex digits)");
+    throw ApiException(404, "not_found",
+                       "blob '" + sha256 + "': not a SHA-256 (64 lowercase hex digits)");
   StoredFile file;
   file.path = call.store.blob_path(sha256);
   file.size = static_cast<uint64_t>(call.store.blob_size(sha256));

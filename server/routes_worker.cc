@@ -23,10 +23,12 @@ auto with_lease(Fn&& fn) -> decltype(fn()) {
 
 Response worker_lease(const Call& call) {
   proto::LeaseRequest request = proto::LeaseRequest::from_json(parse_json_body(call.request));
-  if (request.worker.empty()) throw ApiException(400, "invalid_field", "worker: expected a non-empty name");
+  if (request.worker.empty())
+    throw ApiException(400, "invalid_field", "worker: expected a non-empty name");
   if (request.lease_seconds < 1 || request.lease_seconds > 3600)
-    throw ApiException(400, "invalid_field", "lease_seconds: expected 1..3600, got " +
-                                                 std::to_string(request.lease_seconds));
+    throw ApiException(
+        400, "invalid_field",
+        "lease_seconds: expected 1..3600, got " + std::to_string(request.lease_seconds));
   std::optional<proto::Lease> lease = call.store.lease_job(request);
   if (!lease) return empty_response(204);
   return json_response(200, lease->to_json());
@@ -36,7 +38,8 @@ Response worker_heartbeat(const Call& call) {
   proto::Heartbeat beat = proto::Heartbeat::from_json(parse_json_body(call.request));
   if (!(beat.progress >= 0.0 && beat.progress <= 1.0))
     throw ApiException(400, "invalid_field", "progress: expected a number in [0, 1]");
-  return with_lease([&] { return json_response(200, call.store.heartbeat(call.params[0], beat).to_json()); });
+  return with_lease(
+      [&] { return json_response(200, call.store.heartbeat(call.params[0], beat).to_json()); });
 }
 
 Response worker_add_artifact(const Call& call) {
@@ -47,7 +50,8 @@ Response worker_add_artifact(const Call& call) {
   if (!proto::is_sha256_hex(registration.blob))
     throw ApiException(400, "invalid_field", "blob: expected 64 lowercase hex digits");
   if (!call.store.has_blob(registration.blob))
-    throw ApiException(404, "not_found", "blob: no blob " + registration.blob + " (upload it first)");
+    throw ApiException(404, "not_found",
+                       "blob: no blob " + registration.blob + " (upload it first)");
   return with_lease([&] {
     return json_response(201, call.store.add_artifact(call.params[0], registration).to_json());
   });
@@ -57,7 +61,8 @@ Response worker_complete_stage(const Call& call) {
   const std::string& stage = call.params[1];
   if (!proto::is_known_stage(stage))
     throw ApiException(400, "invalid_field", "stage in path: unknown stage '" + stage + "'");
-  proto::StageCompletion completion = proto::StageCompletion::from_json(parse_json_body(call.request));
+  proto::StageCompletion completion =
+      proto::StageCompletion::from_json(parse_json_body(call.request));
   if (!(completion.seconds >= 0.0))
     throw ApiException(400, "invalid_field", "seconds: expected a duration >= 0");
   with_lease([&] {
@@ -69,13 +74,18 @@ Response worker_complete_stage(const Call& call) {
 
 Response worker_complete_job(const Call& call) {
   proto::JobFinish finish = proto::JobFinish::from_json(parse_json_body(call.request));
-  return with_lease([&] { return json_response(200, call.store.finish_job(call.params[0], finish, true).to_json()); });
+  return with_lease([&] {
+    return json_response(200, call.store.finish_job(call.params[0], finish, true).to_json());
+  });
 }
 
 Response worker_fail_job(const Call& call) {
   proto::JobFinish finish = proto::JobFinish::from_json(parse_json_body(call.request));
-  if (finish.error.empty()) throw ApiException(400, "invalid_field", "error: expected a message saying why the job failed");
-  return with_lease([&] { return json_response(200, call.store.finish_job(call.params[0], finish, false).to_json()); });
+  if (finish.error.empty())
+    throw ApiException(400, "invalid_field", "error: expected a message saying why the job failed");
+  return with_lease([&] {
+    return json_response(200, call.store.finish_job(call.params[0], finish, false).to_json());
+  });
 }
 
 }  // namespace keel::server::routes

@@ -10,9 +10,9 @@
 namespace keel::server {
 
 struct Target {
-  std::string path;                           // decoded path, "/v1/jobs/abc"
-  std::vector<std::string> segments;          // {"v1", "jobs", "abc"}
-  std::map<std::string, std::string> query;   // last value wins
+  std::string path;                          // decoded path, "/v1/jobs/abc"
+  std::vector<std::string> segments;         // {"v1", "jobs", "abc"}
+  std::map<std::string, std::string> query;  // last value wins
 };
 
 // Nullopt for a target that is not origin-form ("/..."), or has a bad %-escape.

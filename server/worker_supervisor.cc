@@ -32,7 +32,8 @@ struct Slot {
 
 std::string describe_exit(int status) {
   if (WIFEXITED(status)) return "exited with code " + std::to_string(WEXITSTATUS(status));
-  if (WIFSIGNALED(status)) return std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+  if (WIFSIGNALED(status))
+    return std::string("was killed by signal ") + strsignal(WTERMSIG(status));
   return "stopped (status " + std::to_string(status) + ")";
 }
 
@@ -75,8 +76,8 @@ struct WorkerSupervisor::Impl {
     posix_spawnattr_setsigmask(&attributes, &empty);  // the server blocks SIGTERM/SIGINT
     posix_spawnattr_setsigdefault(&attributes, &defaults);
     posix_spawnattr_setpgroup(&attributes, 0);
-    posix_spawnattr_setflags(&attributes,
-                             POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setflags(
+        &attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETPGROUP);
 
     std::vector<std::string> args;
     args.push_back(options.worker_binary.string());
@@ -106,14 +107,15 @@ struct WorkerSupervisor::Impl {
         int status = 0;
         pid_t done = waitpid(slot.pid, &status, WNOHANG);
         if (done == 0) continue;
-        const auto lived = std::chrono::duration_cast<std::chrono::milliseconds>(now - slot.started_at);
+        const auto lived =
+            std::chrono::duration_cast<std::chrono::milliseconds>(now - slot.started_at);
         if (lived >= options.stable_after) slot.backoff = std::chrono::milliseconds(0);
-        slot.backoff = slot.backoff.count() == 0
-                           ? options.initial_backoff
-                           : std::min(options.max_backoff, slot.backoff * 2);
+        slot.backoff = slot.backoff.count() == 0 ? options.initial_backoff
+                                                 : std::min(options.max_backoff, slot.backoff * 2);
         ++restarts;
         spdlog::warn("worker {}: pid {} {} after {} ms; restarting in {} ms", i, slot.pid,
-                     done < 0 ? "vanished" : describe_exit(status), lived.count(), slot.backoff.count());
+                     done < 0 ? "vanished" : describe_exit(status), lived.count(),
+                     slot.backoff.count());
         slot.pid = 0;
         slot.restart_at = now + slot.backoff;
       }
@@ -121,8 +123,9 @@ struct WorkerSupervisor::Impl {
         slot.pid = spawn(i);
         slot.started_at = now;
         if (slot.pid == 0) {  // could not even start: retry later with the same backoff rule
-          slot.backoff = slot.backoff.count() == 0 ? options.initial_backoff
-                                                   : std::min(options.max_backoff, slot.backoff * 2);
+          slot.backoff = slot.backoff.count() == 0
+                             ? options.initial_backoff
+                             : std::min(options.max_backoff, slot.backoff * 2);
           slot.restart_at = now + slot.backoff;
         }
       }
@@ -183,7 +186,9 @@ void WorkerSupervisor::start(std::vector<std::string> worker_args) {
                              " is not an executable file (set --worker-binary)");
   std::error_code ec;
   std::filesystem::create_directories(impl.options.log_dir, ec);
-  if (ec) throw std::runtime_error("cannot create " + impl.options.log_dir.string() + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot create " + impl.options.log_dir.string() + ": " +
+                             ec.message());
   std::lock_guard<std::mutex> lock(impl.mutex);
   if (impl.running) return;
   impl.worker_args = std::move(worker_args);

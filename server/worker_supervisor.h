@@ -43,9 +43,9 @@ class WorkerSupervisor {
   void start(std::vector<std::string> worker_args);
   void stop();  // idempotent
 
-  int alive() const;              // workers running now
+  int alive() const;                // workers running now
   std::vector<pid_t> pids() const;  // 0 for a slot waiting to restart
-  int restarts() const;           // unexpected exits seen so far
+  int restarts() const;             // unexpected exits seen so far
 
  private:
   struct Impl;

@@ -25,12 +25,13 @@ constexpr int kScans = 20;
 constexpr int kPointsPerScan = 115200;  // a 64-beam lidar at 1800 columns
 constexpr TimeNs kT0 = 1700000000LL * 1000000000LL;
 
-const PointTimeEncoding kVelodyneTime{{"time", proto::TimeUnit::kSeconds, proto::TimeReference::kScanStart},
-                                      FieldType::kFloat32};
+const PointTimeEncoding kVelodyneTime{
+    {"time", proto::TimeUnit::kSeconds, proto::TimeReference::kScanStart}, FieldType::kFloat32};
 
 fs::path bench_dir() {
   static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("keel-io-bench-" + std::to_string(std::random_device{}()));
+    fs::path d =
+        fs::temp_directory_path() / ("keel-io-bench-" + std::to_string(std::random_device{}()));
     fs::create_directories(d);
     return d;
   }();
@@ -119,7 +120,8 @@ void stream_folder(benchmark::State& state, const fs::path& folder) {
     ScanFolderReader reader(folder, read_options());
     count_points(state, reader, points);
   }
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
+  state.counters["points/s"] =
+      benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
 }
 
 void BM_StreamPcdBinary(benchmark::State& state) {
@@ -143,7 +145,8 @@ void BM_StreamBagPointCloud2(benchmark::State& state) {
     auto source = reader.open_scans("/lidar/points", read_options());
     count_points(state, *source, points);
   }
-  state.counters["points/s"] = benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
+  state.counters["points/s"] =
+      benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
 }
 
 void BM_ReadImuCsv(benchmark::State& state) {
@@ -151,20 +154,23 @@ void BM_ReadImuCsv(benchmark::State& state) {
   if (!fs::exists(path)) {
     ImuSeries imu;
     for (int i = 0; i < 720000; ++i)  // one hour at 200 Hz
-      imu.push_back({kT0 + i * 5000000LL, {1e-3 * std::sin(i), 2e-3, -1e-3}, {0.01 * i / 720000.0, 0.2, 9.81}});
+      imu.push_back({kT0 + i * 5000000LL,
+                     {1e-3 * std::sin(i), 2e-3, -1e-3},
+                     {0.01 * i / 720000.0, 0.2, 9.81}});
     write_imu_csv(path, imu);
   }
   size_t rows = 0;
   for (auto _ : state) rows += read_imu_csv(path).size();
-  state.counters["rows/s"] = benchmark::Counter(static_cast<double>(rows), benchmark::Counter::kIsRate);
+  state.counters["rows/s"] =
+      benchmark::Counter(static_cast<double>(rows), benchmark::Counter::kIsRate);
 }
 
-BENCHMARK(BM_StreamPcdBinary)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_StreamPcdCompressed)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_StreamPlyBinary)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_StreamPcdAscii)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_StreamBagPointCloud2)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ReadImuCsv)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StreamPcdBinary)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamPcdCompressed)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamPlyBinary)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamPcdAscii)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_StreamBagPointCloud2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ReadImuCsv)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

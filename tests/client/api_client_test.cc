@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "fake_http_server.h"
+#include "temp_dir.h"
 #include "storage/sha256.h"
 
 namespace keel::client {
@@ -21,38 +22,15 @@ using testing::FakeHttpServer;
 using testing::FakeReply;
 using testing::FakeRequest;
 using testing::http_reply;
-
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("keel-client-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
-};
+using testing::read_file;
+using testing::TempDir;
+using testing::write_file;
 
 std::string random_bytes(size_t n, uint32_t seed) {
   std::mt19937 rng(seed);
   std::string out(n, '\0');
   for (auto& c : out) c = static_cast<char>(rng() & 0xff);
   return out;
-}
-
-void write_file(const fs::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out << bytes;
-}
-
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 ClientConfig config_for(const FakeHttpServer& server) {

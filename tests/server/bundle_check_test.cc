@@ -48,17 +48,20 @@ class BundleCheckTest : public ::testing::Test {
 };
 
 TEST_F(BundleCheckTest, AcceptsManifestAtRootWithFoldersAndInsideLinks) {
-  write(build_tar({tar_file("mission.yaml", minimal_manifest()), tar_dir("data"),
-                   tar_file("data/imu.csv", "t\n1\n"), tar_symlink("data/manifest", "../mission.yaml"),
-                   tar_symlink("latest", "data/imu.csv"), tar_hardlink("copy.csv", "data/imu.csv")}));
+  write(build_tar(
+      {tar_file("mission.yaml", minimal_manifest()), tar_dir("data"),
+       tar_file("data/imu.csv", "t\n1\n"), tar_symlink("data/manifest", "../mission.yaml"),
+       tar_symlink("latest", "data/imu.csv"), tar_hardlink("copy.csv", "data/imu.csv")}));
   BundleSummary summary = check_mission_bundle(path_);
   EXPECT_EQ(summary.members, 6);
   EXPECT_EQ(summary.file_bytes, static_cast<int64_t>(minimal_manifest().size() + 4));
 }
 
 TEST_F(BundleCheckTest, AcceptsDotSlashNamesOfEveryTarFlavour) {
-  for (int format : {ARCHIVE_FORMAT_TAR_USTAR, ARCHIVE_FORMAT_TAR_GNUTAR, ARCHIVE_FORMAT_TAR_PAX_RESTRICTED}) {
-    write(build_tar({tar_dir("./"), tar_file("./mission.yaml", minimal_manifest())}, false, format));
+  for (int format :
+       {ARCHIVE_FORMAT_TAR_USTAR, ARCHIVE_FORMAT_TAR_GNUTAR, ARCHIVE_FORMAT_TAR_PAX_RESTRICTED}) {
+    write(
+        build_tar({tar_dir("./"), tar_file("./mission.yaml", minimal_manifest())}, false, format));
     EXPECT_NO_THROW(check_mission_bundle(path_)) << "format " << format;
   }
 }
@@ -68,7 +71,8 @@ TEST_F(BundleCheckTest, RejectsDotDotMembersNamingThem) {
   EXPECT_EQ(code, "unsafe_path");
   EXPECT_NE(message.find("'../x'"), std::string::npos) << message;
 
-  std::tie(code, message) = reject({tar_file("mission.yaml", "x"), tar_file("data/../../x", "evil")});
+  std::tie(code, message) =
+      reject({tar_file("mission.yaml", "x"), tar_file("data/../../x", "evil")});
   EXPECT_EQ(code, "unsafe_path");
   EXPECT_NE(message.find("data/../../x"), std::string::npos) << message;
 }
@@ -80,11 +84,14 @@ TEST_F(BundleCheckTest, RejectsAbsoluteMembers) {
 }
 
 TEST_F(BundleCheckTest, RejectsSymlinksLeavingTheBundle) {
-  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("etc", "/etc")}).first, "unsafe_path");
-  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("a/up", "../../x")}).first, "unsafe_path");
+  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("etc", "/etc")}).first,
+            "unsafe_path");
+  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("a/up", "../../x")}).first,
+            "unsafe_path");
   EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("up", "..")}).first, "unsafe_path");
   // 'l/..' climbs out when l is itself a symlink, so '..' after a name is refused.
-  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("a/b", "l/../../x")}).first, "unsafe_path");
+  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_symlink("a/b", "l/../../x")}).first,
+            "unsafe_path");
 }
 
 TEST_F(BundleCheckTest, RejectsMembersBelowASymlink) {
@@ -97,7 +104,8 @@ TEST_F(BundleCheckTest, RejectsMembersBelowASymlink) {
 TEST_F(BundleCheckTest, RejectsHardlinksToOutside) {
   EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_hardlink("h", "../../etc/shadow")}).first,
             "unsafe_path");
-  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_hardlink("h", "/etc/shadow")}).first, "unsafe_path");
+  EXPECT_EQ(reject({tar_file("mission.yaml", "x"), tar_hardlink("h", "/etc/shadow")}).first,
+            "unsafe_path");
 }
 
 TEST_F(BundleCheckTest, RejectsDeviceNodes) {
@@ -124,8 +132,8 @@ TEST_F(BundleCheckTest, RejectsNonTarAndCompressedAndTruncated) {
     EXPECT_EQ(e.code(), "bad_bundle");
   }
 
-  std::string tar = build_tar({tar_file("mission.yaml", minimal_manifest()),
-                               tar_file("big.bin", std::string(10000, 'z'))});
+  std::string tar = build_tar(
+      {tar_file("mission.yaml", minimal_manifest()), tar_file("big.bin", std::string(10000, 'z'))});
   write(tar.substr(0, 1024 + 512 + 3000));  // cut inside big.bin's data
   try {
     check_mission_bundle(path_);

@@ -17,8 +17,9 @@ TEST(ContentRangeTest, ParsesTheStrictForm) {
   auto big = parse_content_range("bytes 1073741824-2147483647/4294967296");
   ASSERT_TRUE(big);
   EXPECT_EQ(big->length(), 1073741824);
-  for (const char* bad : {"", "bytes", "bytes 0-4", "bytes 0-4/", "bytes 5-4/10", "bytes 0-10/10",
-                          "bytes -1-4/10", "bytes 0-4/10x", "bytes 0 -4/10", "bytes 0-4/1000000000000000000000"})
+  for (const char* bad :
+       {"", "bytes", "bytes 0-4", "bytes 0-4/", "bytes 5-4/10", "bytes 0-10/10", "bytes -1-4/10",
+        "bytes 0-4/10x", "bytes 0 -4/10", "bytes 0-4/1000000000000000000000"})
     EXPECT_FALSE(parse_content_range(bad)) << bad;
 }
 

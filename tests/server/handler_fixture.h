@@ -91,7 +91,8 @@ class HandlerTest : public ::testing::Test {
   }
 
   // Uploads `bytes` through the API in chunks of `chunk` bytes; returns the blob id.
-  std::string upload(const std::string& bytes, size_t chunk = 4096, const std::string& name = "f.bin") {
+  std::string upload(const std::string& bytes, size_t chunk = 4096,
+                     const std::string& name = "f.bin") {
     Response created = post("/v1/uploads", {{"name", name}, {"size", bytes.size()}});
     EXPECT_EQ(created.status, 201) << created.body;
     const std::string id = json_of(created)["id"];
@@ -103,7 +104,8 @@ class HandlerTest : public ::testing::Test {
                                                  std::to_string(bytes.size())}});
       EXPECT_EQ(put.status, 200) << put.body;
     }
-    Response done = post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
+    Response done =
+        post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
     EXPECT_EQ(done.status, 200) << done.body;
     return json_of(done)["blob"];
   }

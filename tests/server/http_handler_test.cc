@@ -14,9 +14,12 @@ TEST_F(HandlerTest, HealthAndMetricsNeedNoToken) {
 }
 
 TEST_F(HandlerTest, V1NeedsAKnownBearerToken) {
-  for (const auto& header : std::vector<std::map<std::string, std::string>>{
-           {}, {{"Authorization", "Bearer wrong"}}, {{"Authorization", "Basic " + token_}},
-           {{"Authorization", "Bearer "}}, {{"Authorization", token_}}}) {
+  for (const auto& header :
+       std::vector<std::map<std::string, std::string>>{{},
+                                                       {{"Authorization", "Bearer wrong"}},
+                                                       {{"Authorization", "Basic " + token_}},
+                                                       {{"Authorization", "Bearer "}},
+                                                       {{"Authorization", token_}}}) {
     Response response = call("GET", "/v1/jobs", "", header, false);
     EXPECT_EQ(response.status, 401);
     EXPECT_EQ(error_code_of(response), "unauthorized");
@@ -24,7 +27,8 @@ TEST_F(HandlerTest, V1NeedsAKnownBearerToken) {
   }
   // Unknown /v1 routes do not reveal themselves before auth.
   EXPECT_EQ(call("GET", "/v1/nothing", "", {}, false).status, 401);
-  EXPECT_EQ(call("GET", "/v1/jobs", "", {{"Authorization", "bearer " + token_}}, false).status, 200);
+  EXPECT_EQ(call("GET", "/v1/jobs", "", {{"Authorization", "bearer " + token_}}, false).status,
+            200);
 }
 
 TEST_F(HandlerTest, UnknownRoutesAndMethods) {
@@ -39,8 +43,9 @@ TEST_F(HandlerTest, UnknownRoutesAndMethods) {
 }
 
 TEST_F(HandlerTest, EveryErrorHasTheErrorBody) {
-  for (const Response& response : {call("GET", "/v1/jobs/x"), call("POST", "/v1/jobs", "[1,2]"),
-                                   call("POST", "/v1/jobs", ""), call("GET", "/v1/jobs", "", {}, false)}) {
+  for (const Response& response :
+       {call("GET", "/v1/jobs/x"), call("POST", "/v1/jobs", "[1,2]"), call("POST", "/v1/jobs", ""),
+        call("GET", "/v1/jobs", "", {}, false)}) {
     EXPECT_GE(response.status, 400);
     auto body = json_of(response);
     EXPECT_TRUE(body["error"]["code"].is_string());
@@ -50,7 +55,8 @@ TEST_F(HandlerTest, EveryErrorHasTheErrorBody) {
 }
 
 TEST_F(HandlerTest, BodyLimitsDependOnTheRoute) {
-  EXPECT_EQ(handler_->body_limit("PUT", "/v1/uploads/u_1"), 1u << 20);  // max_chunk_bytes in the fixture
+  EXPECT_EQ(handler_->body_limit("PUT", "/v1/uploads/u_1"),
+            1u << 20);  // max_chunk_bytes in the fixture
   EXPECT_EQ(handler_->body_limit("POST", "/v1/jobs"), 1u << 20);
   HandlerOptions options;
   options.max_chunk_bytes = 5000;
@@ -97,7 +103,9 @@ class ThrowingStore : public storage::Store {
   }
   bool check_token(const std::string& token) override { return inner_.check_token(token); }
   // Everything else is not reached by this test.
-  proto::Upload create_upload(const proto::UploadRequest& r) override { return inner_.create_upload(r); }
+  proto::Upload create_upload(const proto::UploadRequest& r) override {
+    return inner_.create_upload(r);
+  }
   proto::Upload get_upload(const std::string& id) override { return inner_.get_upload(id); }
   proto::Upload append_upload(const std::string& id, int64_t o, const char* d, size_t s) override {
     return inner_.append_upload(id, o, d, s);
@@ -110,31 +118,45 @@ class ThrowingStore : public storage::Store {
   int64_t blob_size(const std::string& sha) override { return inner_.blob_size(sha); }
   std::filesystem::path blob_path(const std::string& sha) override { return inner_.blob_path(sha); }
   std::string put_blob(const std::string& bytes) override { return inner_.put_blob(bytes); }
-  proto::Mission create_mission(const proto::MissionRequest& r) override { return inner_.create_mission(r); }
+  proto::Mission create_mission(const proto::MissionRequest& r) override {
+    return inner_.create_mission(r);
+  }
   proto::Mission get_mission(const std::string& id) override { return inner_.get_mission(id); }
-  std::vector<proto::Mission> list_missions(const std::string& p) override { return inner_.list_missions(p); }
+  std::vector<proto::Mission> list_missions(const std::string& p) override {
+    return inner_.list_missions(p);
+  }
   proto::Job create_job(const proto::JobRequest& r, const std::string& k, bool* c) override {
     return inner_.create_job(r, k, c);
   }
-  std::vector<proto::Job> list_jobs(const storage::JobFilter& f) override { return inner_.list_jobs(f); }
+  std::vector<proto::Job> list_jobs(const storage::JobFilter& f) override {
+    return inner_.list_jobs(f);
+  }
   proto::Job cancel_job(const std::string& id) override { return inner_.cancel_job(id); }
   proto::Job retry_job(const std::string& id) override { return inner_.retry_job(id); }
-  std::optional<proto::Lease> lease_job(const proto::LeaseRequest& r) override { return inner_.lease_job(r); }
+  std::optional<proto::Lease> lease_job(const proto::LeaseRequest& r) override {
+    return inner_.lease_job(r);
+  }
   proto::HeartbeatReply heartbeat(const std::string& id, const proto::Heartbeat& b) override {
     return inner_.heartbeat(id, b);
   }
-  proto::Artifact add_artifact(const std::string& id, const proto::ArtifactRegistration& r) override {
+  proto::Artifact add_artifact(const std::string& id,
+                               const proto::ArtifactRegistration& r) override {
     return inner_.add_artifact(id, r);
   }
-  void complete_stage(const std::string& id, const std::string& s, const proto::StageCompletion& c) override {
+  void complete_stage(const std::string& id, const std::string& s,
+                      const proto::StageCompletion& c) override {
     inner_.complete_stage(id, s, c);
   }
   proto::Job finish_job(const std::string& id, const proto::JobFinish& f, bool ok) override {
     return inner_.finish_job(id, f, ok);
   }
-  std::vector<proto::Artifact> list_artifacts(const std::string& id) override { return inner_.list_artifacts(id); }
+  std::vector<proto::Artifact> list_artifacts(const std::string& id) override {
+    return inner_.list_artifacts(id);
+  }
   proto::Artifact get_artifact(const std::string& id) override { return inner_.get_artifact(id); }
-  void append_log(const std::string& id, const std::vector<std::string>& l) override { inner_.append_log(id, l); }
+  void append_log(const std::string& id, const std::vector<std::string>& l) override {
+    inner_.append_log(id, l);
+  }
   proto::LogPage read_log(const std::string& id, int64_t from, int limit) override {
     return inner_.read_log(id, from, limit);
   }

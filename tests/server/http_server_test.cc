@@ -43,7 +43,8 @@ class HttpServerTest : public ::testing::Test {
 
   std::unique_ptr<RawClient> client() { return std::make_unique<RawClient>(server_->port()); }
 
-  std::string request(const std::string& method, const std::string& target, const std::string& body = "",
+  std::string request(const std::string& method, const std::string& target,
+                      const std::string& body = "",
                       const std::map<std::string, std::string>& headers = {}) {
     return http_request(method, target, token_, body, headers);
   }
@@ -57,16 +58,17 @@ class HttpServerTest : public ::testing::Test {
   }
 
   std::string new_upload(RawClient& c, size_t size) {
-    HttpReply reply = must(c.exchange(
-        request("POST", "/v1/uploads", nlohmann::json{{"name", "big.bin"}, {"size", size}}.dump())));
+    HttpReply reply = must(c.exchange(request(
+        "POST", "/v1/uploads", nlohmann::json{{"name", "big.bin"}, {"size", size}}.dump())));
     EXPECT_EQ(reply.status, 201) << reply.body;
     return nlohmann::json::parse(reply.body)["id"];
   }
 
   std::string chunk_header(const std::string& id, size_t first, size_t length, size_t total) {
     return "PUT /v1/uploads/" + id + " HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " + token_ +
-           "\r\nContent-Range: bytes " + std::to_string(first) + "-" + std::to_string(first + length - 1) +
-           "/" + std::to_string(total) + "\r\nContent-Length: " + std::to_string(length) + "\r\n\r\n";
+           "\r\nContent-Range: bytes " + std::to_string(first) + "-" +
+           std::to_string(first + length - 1) + "/" + std::to_string(total) +
+           "\r\nContent-Length: " + std::to_string(length) + "\r\n\r\n";
   }
 
   int64_t committed(RawClient& c, const std::string& id) {
@@ -113,7 +115,8 @@ TEST_F(HttpServerTest, CutConnectionMidChunkCommitsNothingAndResumeCompletes) {
   std::this_thread::sleep_for(200ms);
   EXPECT_EQ(committed(*control, id), 0);
 
-  HttpReply first = must(control->exchange(chunk_header(id, 0, chunk, total) + bytes.substr(0, chunk)));
+  HttpReply first =
+      must(control->exchange(chunk_header(id, 0, chunk, total) + bytes.substr(0, chunk)));
   ASSERT_EQ(first.status, 200) << first.body;
   {  // the second chunk is cut too
     auto cut = client();
@@ -122,7 +125,8 @@ TEST_F(HttpServerTest, CutConnectionMidChunkCommitsNothingAndResumeCompletes) {
   std::this_thread::sleep_for(200ms);
   EXPECT_EQ(committed(*control, id), static_cast<int64_t>(chunk));
 
-  HttpReply second = must(control->exchange(chunk_header(id, chunk, chunk, total) + bytes.substr(chunk)));
+  HttpReply second =
+      must(control->exchange(chunk_header(id, chunk, chunk, total) + bytes.substr(chunk)));
   ASSERT_EQ(second.status, 200) << second.body;
   const std::string sha = storage::sha256_bytes(bytes);
   HttpReply done = must(control->exchange(
@@ -139,7 +143,8 @@ TEST_F(HttpServerTest, HeaderOverTheLimitGives431AndTheServerStaysUp) {
   start();
   {
     auto c = client();
-    HttpReply reply = must(c->exchange(request("GET", "/healthz", "", {{"X-Fill", std::string(20'000, 'a')}})));
+    HttpReply reply =
+        must(c->exchange(request("GET", "/healthz", "", {{"X-Fill", std::string(20'000, 'a')}})));
     EXPECT_EQ(reply.status, 431);
     EXPECT_EQ(nlohmann::json::parse(reply.body)["error"]["code"], "too_large");
     EXPECT_TRUE(c->wait_closed());
@@ -162,7 +167,8 @@ TEST_F(HttpServerTest, BodyOverTheRouteLimitGives413) {
   }
   {  // JSON routes allow 1 MiB
     auto c = client();
-    HttpReply reply = must(c->exchange(request("POST", "/v1/jobs", std::string((1 << 20) + 1, ' '))));
+    HttpReply reply =
+        must(c->exchange(request("POST", "/v1/jobs", std::string((1 << 20) + 1, ' '))));
     EXPECT_EQ(reply.status, 413);
   }
   {  // a chunked body has no length up front: it is cut when it passes the limit
@@ -204,7 +210,8 @@ TEST_F(HttpServerTest, LargeFilesStreamWithRanges) {
   const std::string bytes = random_bytes(8 << 20, 12);
   const std::string sha = store_->put_blob(bytes);
   auto c = client();
-  HttpReply part = must(c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"Range", "bytes=1000000-5999999"}})));
+  HttpReply part = must(
+      c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"Range", "bytes=1000000-5999999"}})));
   ASSERT_EQ(part.status, 206);
   EXPECT_EQ(part.header("content-range"), "bytes 1000000-5999999/8388608");
   EXPECT_EQ(part.body, bytes.substr(1'000'000, 5'000'000));
@@ -212,10 +219,12 @@ TEST_F(HttpServerTest, LargeFilesStreamWithRanges) {
   ASSERT_EQ(full.status, 200);
   EXPECT_EQ(full.body.size(), bytes.size());
   EXPECT_EQ(storage::sha256_bytes(full.body), sha);
-  HttpReply not_modified = must(c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"If-None-Match", "\"" + sha + "\""}})));
+  HttpReply not_modified = must(
+      c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"If-None-Match", "\"" + sha + "\""}})));
   EXPECT_EQ(not_modified.status, 304);
   EXPECT_EQ(not_modified.header("content-length"), "");
-  HttpReply bad = must(c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"Range", "bytes=9000000-"}})));
+  HttpReply bad =
+      must(c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"Range", "bytes=9000000-"}})));
   EXPECT_EQ(bad.status, 416);
   EXPECT_EQ(bad.header("content-range"), "bytes */8388608");
   EXPECT_EQ(must(c->exchange(request("GET", "/healthz"))).status, 200);  // framing intact

@@ -27,7 +27,9 @@ TEST_F(JobRoutesTest, CreateGetAndList) {
   EXPECT_EQ(jobs[0]["id"], second["id"]);  // newest first
   EXPECT_EQ(json_of(call("GET", "/v1/jobs?state=queued"))["jobs"].size(), 2u);
   EXPECT_EQ(json_of(call("GET", "/v1/jobs?state=running"))["jobs"].size(), 0u);
-  EXPECT_EQ(json_of(call("GET", "/v1/jobs?mission_id=" + mission["id"].get<std::string>()))["jobs"].size(), 2u);
+  EXPECT_EQ(json_of(call("GET", "/v1/jobs?mission_id=" + mission["id"].get<std::string>()))["jobs"]
+                .size(),
+            2u);
   EXPECT_EQ(json_of(call("GET", "/v1/jobs?mission_id=other"))["jobs"].size(), 0u);
   EXPECT_EQ(json_of(call("GET", "/v1/jobs?limit=1"))["jobs"].size(), 1u);
 
@@ -91,7 +93,8 @@ TEST_F(JobRoutesTest, ReprocessMakesOneJobPerMatchingMission) {
   auto a = create_mission("bridge-a");
   auto b = create_mission("bridge-b");
   create_mission("hull-c");
-  Response response = post("/v1/reprocess", {{"name_prefix", "bridge-"}, {"stages", {"ingest", "map"}},
+  Response response = post("/v1/reprocess", {{"name_prefix", "bridge-"},
+                                             {"stages", {"ingest", "map"}},
                                              {"options", {{"map", {{"voxel_m", 0.1}}}}}});
   ASSERT_EQ(response.status, 201) << response.body;
   auto jobs = json_of(response)["jobs"];
@@ -109,12 +112,14 @@ TEST_F(JobRoutesTest, ReprocessMakesOneJobPerMatchingMission) {
   EXPECT_EQ(json_of(by_id)["jobs"].size(), 1u);
 
   const size_t before = json_of(call("GET", "/v1/jobs"))["jobs"].size();
-  Response unknown = post("/v1/reprocess", {{"mission_ids", {a["id"], "nope"}}, {"stages", {"ingest"}}});
+  Response unknown =
+      post("/v1/reprocess", {{"mission_ids", {a["id"], "nope"}}, {"stages", {"ingest"}}});
   EXPECT_EQ(unknown.status, 404);
   EXPECT_NE(unknown.body.find("mission_ids[1]"), std::string::npos);
   EXPECT_EQ(json_of(call("GET", "/v1/jobs"))["jobs"].size(), before);  // nothing made
 
-  Response both = post("/v1/reprocess", {{"mission_ids", {a["id"]}}, {"name_prefix", "b"}, {"stages", {"ingest"}}});
+  Response both = post("/v1/reprocess",
+                       {{"mission_ids", {a["id"]}}, {"name_prefix", "b"}, {"stages", {"ingest"}}});
   EXPECT_EQ(both.status, 400);
 }
 
@@ -128,9 +133,11 @@ class ArtifactRoutesTest : public HandlerTest {
     job_id_ = create_job(mission["id"])["id"];
     auto leased = lease();
     const std::string blob = upload(bytes_, 30'000);
-    Response registered = post("/v1/worker/jobs/" + job_id_ + "/artifacts",
-                               {{"lease_id", leased["lease_id"]}, {"stage", "ingest"},
-                                {"name", "report.json"}, {"blob", blob}});
+    Response registered =
+        post("/v1/worker/jobs/" + job_id_ + "/artifacts", {{"lease_id", leased["lease_id"]},
+                                                           {"stage", "ingest"},
+                                                           {"name", "report.json"},
+                                                           {"blob", blob}});
     ASSERT_EQ(registered.status, 201) << registered.body;
     artifact_id_ = json_of(registered)["id"];
     sha_ = blob;
@@ -176,9 +183,9 @@ TEST_F(ArtifactRoutesTest, RangesAreByteExact) {
     ASSERT_EQ(part.status, 206) << c.range;
     ASSERT_TRUE(part.file.has_value());
     EXPECT_EQ(read_region(*part.file), bytes_.substr(c.offset, c.length)) << c.range;
-    EXPECT_EQ(part.headers.get("Content-Range"),
-              "bytes " + std::to_string(c.offset) + "-" + std::to_string(c.offset + c.length - 1) + "/" +
-                  std::to_string(n))
+    EXPECT_EQ(part.headers.get("Content-Range"), "bytes " + std::to_string(c.offset) + "-" +
+                                                     std::to_string(c.offset + c.length - 1) + "/" +
+                                                     std::to_string(n))
         << c.range;
   }
 }

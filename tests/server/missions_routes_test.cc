@@ -25,7 +25,8 @@ TEST_F(MissionRoutesTest, CreateGetAndListByPrefix) {
   EXPECT_EQ(all.size(), 3u);
   auto bridges = json_of(call("GET", "/v1/missions?prefix=bridge-"))["missions"];
   ASSERT_EQ(bridges.size(), 2u);
-  for (const auto& mission : bridges) EXPECT_EQ(mission["name"].get<std::string>().rfind("bridge-", 0), 0u);
+  for (const auto& mission : bridges)
+    EXPECT_EQ(mission["name"].get<std::string>().rfind("bridge-", 0), 0u);
   // Percent-encoded query values are decoded.
   EXPECT_EQ(json_of(call("GET", "/v1/missions?prefix=hull%2Dc"))["missions"].size(), 1u);
   EXPECT_EQ(call("GET", "/v1/missions/nope").status, 404);
@@ -52,8 +53,8 @@ TEST_F(MissionRoutesTest, DotDotMemberGivesUnsafePathNamingIt) {
 }
 
 TEST_F(MissionRoutesTest, AbsoluteMemberGivesUnsafePath) {
-  Response response = create_from_tar(
-      build_tar({tar_file("mission.yaml", minimal_manifest()), tar_file("/etc/passwd", "root:x:0:0")}));
+  Response response = create_from_tar(build_tar(
+      {tar_file("mission.yaml", minimal_manifest()), tar_file("/etc/passwd", "root:x:0:0")}));
   EXPECT_EQ(response.status, 400);
   EXPECT_EQ(error_code_of(response), "unsafe_path");
   EXPECT_NE(response.body.find("/etc/passwd"), std::string::npos) << response.body;

@@ -40,7 +40,8 @@ TEST_F(UploadRoutesTest, CreateRejectsBadBodiesNamingTheField) {
   Response missing = post("/v1/uploads", {{"name", "m.tar"}});
   EXPECT_EQ(missing.status, 400);
   EXPECT_EQ(error_code_of(missing), "invalid_field");
-  EXPECT_NE(json_of(missing)["error"]["message"].get<std::string>().find("size"), std::string::npos);
+  EXPECT_NE(json_of(missing)["error"]["message"].get<std::string>().find("size"),
+            std::string::npos);
 
   Response typo = post("/v1/uploads", {{"name", "m.tar"}, {"size", 3}, {"sise", 3}});
   EXPECT_EQ(typo.status, 400);
@@ -97,9 +98,9 @@ TEST_F(UploadRoutesTest, OutOfOrderOrOverlappingChunksGive409WithTheOffset) {
 TEST_F(UploadRoutesTest, MalformedOrInconsistentRangesGive416AndCommitNothing) {
   const std::string id = new_upload(10);
   const std::string five = "hello";
-  for (const char* range : {"bytes 0-4", "bytes=0-4/10", "bytes 4-0/10", "bytes 0-10/10",
-                            "bytes a-4/10", "bytes 0-4/*", "bytes  0-4/10", "items 0-4/10",
-                            "bytes -4/10", "bytes 0-4/10, 5-9"}) {
+  for (const char* range :
+       {"bytes 0-4", "bytes=0-4/10", "bytes 4-0/10", "bytes 0-10/10", "bytes a-4/10", "bytes 0-4/*",
+        "bytes  0-4/10", "items 0-4/10", "bytes -4/10", "bytes 0-4/10, 5-9"}) {
     Response response = put(id, range, five);
     EXPECT_EQ(response.status, 416) << range;
     EXPECT_EQ(error_code_of(response), "bad_range") << range;
@@ -132,7 +133,8 @@ TEST_F(UploadRoutesTest, IncompleteUploadGivesSizeMismatch) {
   const std::string bytes = random_bytes(64, 4);
   const std::string id = new_upload(64);
   ASSERT_EQ(put(id, "bytes 0-31/64", bytes.substr(0, 32)).status, 200);
-  Response done = post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
+  Response done =
+      post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
   EXPECT_EQ(done.status, 422);
   EXPECT_EQ(error_code_of(done), "size_mismatch");
 }
@@ -161,7 +163,9 @@ TEST_F(UploadRoutesTest, EmptyUploadCompletes) {
   Response blob = call("GET", "/v1/blobs/" + storage::sha256_bytes(""));
   ASSERT_EQ(blob.status, 200);
   EXPECT_EQ(blob.file->length, 0u);
-  EXPECT_EQ(call("GET", "/v1/blobs/" + storage::sha256_bytes(""), "", {{"Range", "bytes=0-"}}).status, 416);
+  EXPECT_EQ(
+      call("GET", "/v1/blobs/" + storage::sha256_bytes(""), "", {{"Range", "bytes=0-"}}).status,
+      416);
 }
 
 TEST_F(UploadRoutesTest, DeleteAndUnknownIds) {

@@ -32,9 +32,11 @@ TEST_F(WorkerRoutesTest, FullRunToSucceeded) {
   const std::string lease_id = leased["lease_id"];
   EXPECT_EQ(json_of(call("GET", "/v1/jobs/" + id))["state"], "running");
 
-  Response beat = post(worker_path(id, "heartbeat"),
-                       {{"lease_id", lease_id}, {"stage", "ingest"}, {"progress", 0.5},
-                        {"log", {"reading imu.csv", "1000 samples"}}});
+  Response beat =
+      post(worker_path(id, "heartbeat"), {{"lease_id", lease_id},
+                                          {"stage", "ingest"},
+                                          {"progress", 0.5},
+                                          {"log", {"reading imu.csv", "1000 samples"}}});
   ASSERT_EQ(beat.status, 200) << beat.body;
   EXPECT_EQ(json_of(beat)["canceled"], false);
   EXPECT_GT(json_of(beat)["expires_at_ms"].get<int64_t>(), 0);
@@ -42,13 +44,15 @@ TEST_F(WorkerRoutesTest, FullRunToSucceeded) {
   auto log = json_of(call("GET", "/v1/jobs/" + id + "/log?from=0"));
   ASSERT_EQ(log["lines"].size(), 2u);
   EXPECT_EQ(log["lines"][1]["text"], "1000 samples");
-  auto rest = json_of(call("GET", "/v1/jobs/" + id + "/log?from=" + std::to_string(log["next"].get<int64_t>())));
+  auto rest = json_of(
+      call("GET", "/v1/jobs/" + id + "/log?from=" + std::to_string(log["next"].get<int64_t>())));
   EXPECT_EQ(rest["lines"].size(), 0u);
   EXPECT_EQ(call("GET", "/v1/jobs/" + id + "/log?from=-1").status, 400);
   EXPECT_EQ(call("GET", "/v1/jobs/nope/log").status, 404);
 
-  Response stage = post(worker_path(id, "stages/ingest/complete"),
-                        {{"lease_id", lease_id}, {"report", {{"imu_samples", 1000}}}, {"seconds", 1.5}});
+  Response stage =
+      post(worker_path(id, "stages/ingest/complete"),
+           {{"lease_id", lease_id}, {"report", {{"imu_samples", 1000}}}, {"seconds", 1.5}});
   EXPECT_EQ(stage.status, 204) << stage.body;
   EXPECT_EQ(post(worker_path(id, "stages/bake/complete"), {{"lease_id", lease_id}}).status, 400);
 
@@ -62,7 +66,8 @@ TEST_F(WorkerRoutesTest, FailNeedsAnErrorAndRecordsIt) {
   const std::string id = create_job(mission_["id"])["id"];
   const std::string lease_id = lease()["lease_id"];
   EXPECT_EQ(post(worker_path(id, "fail"), {{"lease_id", lease_id}}).status, 400);
-  Response failed = post(worker_path(id, "fail"), {{"lease_id", lease_id}, {"error", "imu.csv line 3: NaN"}});
+  Response failed =
+      post(worker_path(id, "fail"), {{"lease_id", lease_id}, {"error", "imu.csv line 3: NaN"}});
   ASSERT_EQ(failed.status, 200);
   EXPECT_EQ(json_of(failed)["state"], "failed");
   EXPECT_EQ(json_of(failed)["error"], "imu.csv line 3: NaN");
@@ -90,18 +95,21 @@ TEST_F(WorkerRoutesTest, CancelReachesTheWorkerThroughTheHeartbeat) {
   Response beat = post(worker_path(id, "heartbeat"), {{"lease_id", lease_id}});
   ASSERT_EQ(beat.status, 200) << beat.body;
   EXPECT_EQ(json_of(beat)["canceled"], true);
-  EXPECT_EQ(error_code_of(post(worker_path(id, "complete"), {{"lease_id", lease_id}})), "lease_lost");
+  EXPECT_EQ(error_code_of(post(worker_path(id, "complete"), {{"lease_id", lease_id}})),
+            "lease_lost");
 }
 
 TEST_F(WorkerRoutesTest, ArtifactNeedsAnUploadedBlob) {
   const std::string id = create_job(mission_["id"])["id"];
   const std::string lease_id = lease()["lease_id"];
-  Response missing = post(worker_path(id, "artifacts"),
-                          {{"lease_id", lease_id}, {"stage", "ingest"}, {"name", "a.json"},
-                           {"blob", storage::sha256_bytes("never")}});
+  Response missing = post(worker_path(id, "artifacts"), {{"lease_id", lease_id},
+                                                         {"stage", "ingest"},
+                                                         {"name", "a.json"},
+                                                         {"blob", storage::sha256_bytes("never")}});
   EXPECT_EQ(missing.status, 404);
-  Response bad_stage = post(worker_path(id, "artifacts"), {{"lease_id", lease_id}, {"stage", "cook"},
-                                                          {"name", "a.json"}, {"blob", upload("x")}});
+  Response bad_stage =
+      post(worker_path(id, "artifacts"),
+           {{"lease_id", lease_id}, {"stage", "cook"}, {"name", "a.json"}, {"blob", upload("x")}});
   EXPECT_EQ(bad_stage.status, 400);
 }
 

@@ -44,7 +44,8 @@ bool slab(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vecto
   return true;
 }
 
-double box_sdf(const Eigen::Vector3d& p_local, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+double box_sdf(const Eigen::Vector3d& p_local, const Eigen::Vector3d& lo,
+               const Eigen::Vector3d& hi) {
   const Eigen::Vector3d center = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   const Eigen::Vector3d q = (p_local - center).cwiseAbs() - half;
   return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
@@ -75,7 +76,9 @@ class Plane : public Primitive {
     *n = denom < 0.0 ? normal_ : Eigen::Vector3d(-normal_);
     return true;
   }
-  double signed_distance(const Eigen::Vector3d& p) const override { return normal_.dot(p - point_); }
+  double signed_distance(const Eigen::Vector3d& p) const override {
+    return normal_.dot(p - point_);
+  }
 
  private:
   Eigen::Vector3d point_, normal_;
@@ -108,7 +111,8 @@ class Box : public Primitive {
 
 class Cylinder : public Primitive {
  public:
-  Cylinder(const Eigen::Vector3d& center, const Eigen::Matrix3d& R, double radius, double half_height)
+  Cylinder(const Eigen::Vector3d& center, const Eigen::Matrix3d& R, double radius,
+           double half_height)
       : center_(center), R_(R), radius_(radius), half_height_(half_height) {
     bounds = world_bounds(center, R, Eigen::Vector3d(-radius, -radius, -half_height),
                           Eigen::Vector3d(radius, radius, half_height));
@@ -240,8 +244,8 @@ class ReliefWall : public Primitive {
   }
 
  private:
-  bool slab_interval(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
-                     double t_max, double* ta, double* tb) const {
+  bool slab_interval(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min, double t_max,
+                     double* ta, double* tb) const {
     const Eigen::Vector3d lo(x0_, 0.0, g_.z_min), hi(x1_, g_.relief_m, g_.z_max);
     double t0 = t_min, t1 = t_max;
     for (int i = 0; i < 3; ++i) {
@@ -266,11 +270,13 @@ class ReliefWall : public Primitive {
     const int row = static_cast<int>(std::floor((z - g_.z_min) / g_.block_height_m)) + dr;
     const double offset = (row & 1) ? 0.5 * g_.block_length_m : 0.0;
     const int k = static_cast<int>(std::floor((x - x0_ - offset) / g_.block_length_m)) + dk;
-    const double cx0 = x0_ + offset + k * g_.block_length_m, cz0 = g_.z_min + row * g_.block_height_m;
+    const double cx0 = x0_ + offset + k * g_.block_length_m,
+                 cz0 = g_.z_min + row * g_.block_height_m;
     *cell_lo = Eigen::Vector3d(cx0, 0.0, cz0);
     *cell_hi = Eigen::Vector3d(cx0 + g_.block_length_m, g_.relief_m, cz0 + g_.block_height_m);
     const double half_joint = 0.5 * g_.joint_m;
-    *lo = Eigen::Vector3d(std::max(cx0 + half_joint, x0_), 0.0, std::max(cz0 + half_joint, g_.z_min));
+    *lo =
+        Eigen::Vector3d(std::max(cx0 + half_joint, x0_), 0.0, std::max(cz0 + half_joint, g_.z_min));
     *hi = Eigen::Vector3d(std::min(cx0 + g_.block_length_m - half_joint, x1_), g_.relief_m,
                           std::min(cz0 + g_.block_height_m - half_joint, g_.z_max));
   }
@@ -349,8 +355,8 @@ void AnalyticScene::add(std::unique_ptr<Primitive> primitive) {
   primitives_.push_back(std::move(primitive));
 }
 
-bool AnalyticScene::raycast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                            double t_min, double t_max, RayHit* hit) const {
+bool AnalyticScene::raycast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double t_min,
+                            double t_max, RayHit* hit) const {
   const Eigen::Vector3d inv(1.0 / dir.x(), 1.0 / dir.y(), 1.0 / dir.z());
   double best = t_max;
   int best_index = -1;

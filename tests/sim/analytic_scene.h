@@ -42,7 +42,8 @@ class Primitive {
 std::unique_ptr<Primitive> make_plane(const Eigen::Vector3d& point, const Eigen::Vector3d& normal,
                                       const Material& material, const std::string& name);
 // Box with centre, rotation R_world_box and half extents.
-std::unique_ptr<Primitive> make_box(const Eigen::Vector3d& center, const Eigen::Matrix3d& R_world_box,
+std::unique_ptr<Primitive> make_box(const Eigen::Vector3d& center,
+                                    const Eigen::Matrix3d& R_world_box,
                                     const Eigen::Vector3d& half_extents, const Material& material,
                                     const std::string& name);
 // Capped cylinder along the local z axis of R_world_cylinder.
@@ -54,14 +55,14 @@ std::unique_ptr<Primitive> make_cylinder(const Eigen::Vector3d& center,
 struct ReliefWallGeometry {
   // Local frame: x along the wall, y out of the relief face, z up. Face centre at `center`.
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  double yaw_rad = 0.0;          // rotation of the local frame about world z
-  double length_m = 40.0;        // along x
+  double yaw_rad = 0.0;              // rotation of the local frame about world z
+  double length_m = 40.0;            // along x
   double z_min = -6.0, z_max = 3.0;  // local z extent (relative to center)
-  double thickness_m = 1.0;      // wall body behind the face
-  double block_length_m = 0.4;   // cinder block pitch along x (joint included)
-  double block_height_m = 0.2;   // pitch along z
-  double joint_m = 0.015;        // mortar joint width
-  double relief_m = 0.04;        // how far blocks stand out of the mortar plane
+  double thickness_m = 1.0;          // wall body behind the face
+  double block_length_m = 0.4;       // cinder block pitch along x (joint included)
+  double block_height_m = 0.2;       // pitch along z
+  double joint_m = 0.015;            // mortar joint width
+  double relief_m = 0.04;            // how far blocks stand out of the mortar plane
 };
 std::unique_ptr<Primitive> make_relief_wall(const ReliefWallGeometry& geometry,
                                             const Material& material, const std::string& name);

@@ -30,8 +30,10 @@ std_msgs::Header header(const std::string& frame, TimeNs t_ns) {
 geometry_msgs::Pose to_msg(const Pose3& T) {
   geometry_msgs::Pose p;
   const Eigen::Quaterniond q(T.linear());
-  p.position.x = T.translation().x(), p.position.y = T.translation().y(), p.position.z = T.translation().z();
-  p.orientation.x = q.x(), p.orientation.y = q.y(), p.orientation.z = q.z(), p.orientation.w = q.w();
+  p.position.x = T.translation().x(), p.position.y = T.translation().y(),
+  p.position.z = T.translation().z();
+  p.orientation.x = q.x(), p.orientation.y = q.y(), p.orientation.z = q.z(),
+  p.orientation.w = q.w();
   return p;
 }
 
@@ -62,7 +64,8 @@ void BagWriter::imu(const std::string& topic, const std::string& frame, TimeNs t
   m.header = header(frame, t_ns);
   m.orientation_covariance[0] = -1.0;  // no orientation estimate
   m.angular_velocity.x = gyro.x(), m.angular_velocity.y = gyro.y(), m.angular_velocity.z = gyro.z();
-  m.linear_acceleration.x = accel.x(), m.linear_acceleration.y = accel.y(), m.linear_acceleration.z = accel.z();
+  m.linear_acceleration.x = accel.x(), m.linear_acceleration.y = accel.y(),
+  m.linear_acceleration.z = accel.z();
   impl_->bag.write(topic, m.header.stamp, m);
 }
 
@@ -85,8 +88,10 @@ void BagWriter::cloud(const std::string& topic, const std::string& frame, const 
     m.fields.push_back(f);
   };
   uint32_t offset = 0;
-  for (const char* axis : {"x", "y", "z"}) field(axis, offset, sensor_msgs::PointField::FLOAT32), offset += 4;
-  if (cloud.has_intensity()) field("intensity", offset, sensor_msgs::PointField::FLOAT32), offset += 4;
+  for (const char* axis : {"x", "y", "z"})
+    field(axis, offset, sensor_msgs::PointField::FLOAT32), offset += 4;
+  if (cloud.has_intensity())
+    field("intensity", offset, sensor_msgs::PointField::FLOAT32), offset += 4;
   if (cloud.has_ring()) field("ring", offset, sensor_msgs::PointField::UINT16), offset += 2;
   if (cloud.has_time()) field("time", offset, sensor_msgs::PointField::FLOAT32), offset += 4;
   m.height = 1;
@@ -115,7 +120,8 @@ void BagWriter::image(const std::string& topic, const std::string& frame, TimeNs
   m.is_bigendian = 0;
   m.step = gray.cols;
   m.data.resize(static_cast<size_t>(gray.rows) * gray.cols);
-  for (int r = 0; r < gray.rows; ++r) std::memcpy(&m.data[size_t(r) * gray.cols], gray.ptr(r), gray.cols);
+  for (int r = 0; r < gray.rows; ++r)
+    std::memcpy(&m.data[size_t(r) * gray.cols], gray.ptr(r), gray.cols);
   impl_->bag.write(topic, m.header.stamp, m);
 }
 

@@ -35,8 +35,8 @@ void write_pcd_binary(const std::string& path, const PointCloud& cloud) {
   if (has_r) fields += " ring", sizes += " 2", types += " U", counts += " 1", stride += 2;
   if (has_t) fields += " time", sizes += " 4", types += " F", counts += " 1", stride += 4;
   std::string header = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " + fields +
-                       "\nSIZE " + sizes + "\nTYPE " + types + "\nCOUNT " + counts +
-                       "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " +
+                       "\nSIZE " + sizes + "\nTYPE " + types + "\nCOUNT " + counts + "\nWIDTH " +
+                       std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " +
                        std::to_string(n) + "\nDATA binary\n";
   std::vector<char> body(n * stride);
   char* out = body.data();
@@ -62,12 +62,14 @@ void write_ply_binary(const std::string& path, const TriangleMesh& mesh) {
   body.reserve(mesh.num_vertices() * 12 + mesh.num_faces() * 13);
   for (const auto& v : mesh.vertices) {
     const float xyz[3] = {float(v.x()), float(v.y()), float(v.z())};
-    body.insert(body.end(), reinterpret_cast<const char*>(xyz), reinterpret_cast<const char*>(xyz) + 12);
+    body.insert(body.end(), reinterpret_cast<const char*>(xyz),
+                reinterpret_cast<const char*>(xyz) + 12);
   }
   for (const auto& f : mesh.faces) {
     body.push_back(3);
     const int32_t idx[3] = {f[0], f[1], f[2]};
-    body.insert(body.end(), reinterpret_cast<const char*>(idx), reinterpret_cast<const char*>(idx) + 12);
+    body.insert(body.end(), reinterpret_cast<const char*>(idx),
+                reinterpret_cast<const char*>(idx) + 12);
   }
   std::FILE* f = open_or_throw(path);
   write_or_throw(f, header.data(), header.size(), path);
@@ -113,8 +115,8 @@ void write_tum(const std::string& path, const Trajectory& trajectory) {
   for (const auto& p : trajectory) {
     const Eigen::Quaterniond q(p.T_world_body.linear());
     const Eigen::Vector3d t = p.T_world_body.translation();
-    std::snprintf(buffer, sizeof(buffer), " %.9f %.9f %.9f %.9f %.9f %.9f %.9f", t.x(), t.y(), t.z(),
-                  q.x(), q.y(), q.z(), q.w());
+    std::snprintf(buffer, sizeof(buffer), " %.9f %.9f %.9f %.9f %.9f %.9f %.9f", t.x(), t.y(),
+                  t.z(), q.x(), q.y(), q.z(), q.w());
     file.line(format_seconds(p.t_ns) + buffer);
   }
   file.close();

@@ -54,8 +54,8 @@ bool CameraModel::project(const Eigen::Vector3d& p, Eigen::Vector2d* uv) const {
   return uv->x() >= 0.0 && uv->y() >= 0.0 && uv->x() <= width - 1.0 && uv->y() <= height - 1.0;
 }
 
-cv::Mat render_image(const SimWorld& world, const CameraModel& camera,
-                     const Pose3& T_world_camera, const CameraRenderOptions& options, Rng& rng) {
+cv::Mat render_image(const SimWorld& world, const CameraModel& camera, const Pose3& T_world_camera,
+                     const CameraRenderOptions& options, Rng& rng) {
   cv::Mat image(camera.height, camera.width, CV_8UC1);
   const Eigen::Matrix3d R = T_world_camera.linear();
   const Eigen::Vector3d origin = T_world_camera.translation();

@@ -38,8 +38,8 @@ struct CameraRenderOptions {
 };
 
 // 8-bit grayscale image.
-cv::Mat render_image(const SimWorld& world, const CameraModel& camera,
-                     const Pose3& T_world_camera, const CameraRenderOptions& options, Rng& rng);
+cv::Mat render_image(const SimWorld& world, const CameraModel& camera, const Pose3& T_world_camera,
+                     const CameraRenderOptions& options, Rng& rng);
 
 struct TrackObservation {
   int64_t landmark_id;

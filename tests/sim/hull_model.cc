@@ -19,8 +19,9 @@ HullShape::HullShape(const HullOptions& options) : options_(options) {
   for (int i = 0; i <= n; ++i) {
     const double phi = -0.5 * M_PI + M_PI * i / n;
     const double e = 2.0 / options.section_exponent;
-    const Eigen::Vector2d q(-0.5 * options.beam_m * std::copysign(std::pow(std::abs(std::sin(phi)), e), std::sin(phi)),
-                            -options.draft_m * std::pow(std::abs(std::cos(phi)), e));
+    const Eigen::Vector2d q(
+        -0.5 * options.beam_m * std::copysign(std::pow(std::abs(std::sin(phi)), e), std::sin(phi)),
+        -options.draft_m * std::pow(std::abs(std::cos(phi)), e));
     if (i > 0) cumulative += (q - previous).norm();
     previous = q;
     table_phi_.push_back(phi);
@@ -65,17 +66,21 @@ TriangleMesh make_hull_mesh(const HullOptions& options) {
   const HullShape shape(options);
   const int n_len = options.length_segments, n_sec = options.section_segments,
             n_fb = options.freeboard_segments;
-  if (n_len < 2 || n_sec < 4 || n_fb < 1) throw std::invalid_argument("HullOptions: too few segments");
+  if (n_len < 2 || n_sec < 4 || n_fb < 1)
+    throw std::invalid_argument("HullOptions: too few segments");
   const int rows = n_fb + n_sec + 1 + n_fb;  // port topside, section, starboard topside
   TriangleMesh mesh;
   for (int i = 0; i <= n_len; ++i) {
     const double xi = -options.end_xi + 2.0 * options.end_xi * i / n_len;
     const Eigen::Vector3d port = shape.surface(xi, -1.0).p, starboard = shape.surface(xi, 1.0).p;
     for (int k = 0; k < n_fb; ++k)
-      mesh.vertices.emplace_back(port.x(), port.y(), options.freeboard_m * (1.0 - double(k) / n_fb));
-    for (int j = 0; j <= n_sec; ++j) mesh.vertices.push_back(shape.surface(xi, -1.0 + 2.0 * j / n_sec).p);
+      mesh.vertices.emplace_back(port.x(), port.y(),
+                                 options.freeboard_m * (1.0 - double(k) / n_fb));
+    for (int j = 0; j <= n_sec; ++j)
+      mesh.vertices.push_back(shape.surface(xi, -1.0 + 2.0 * j / n_sec).p);
     for (int k = 1; k <= n_fb; ++k)
-      mesh.vertices.emplace_back(starboard.x(), starboard.y(), options.freeboard_m * double(k) / n_fb);
+      mesh.vertices.emplace_back(starboard.x(), starboard.y(),
+                                 options.freeboard_m * double(k) / n_fb);
   }
   auto v = [rows](int i, int r) { return i * rows + r; };
   // Shell: (i, r) -> (i+1, r) -> (i+1, r+1) faces outward (x cross the around-section direction).
@@ -108,7 +113,8 @@ TriangleMesh make_hull_mesh(const HullOptions& options) {
 
 namespace {
 void basis(const Eigen::Vector3d& axis, Eigen::Vector3d* u, Eigen::Vector3d* w) {
-  const Eigen::Vector3d helper = std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d helper =
+      std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   *u = axis.cross(helper).normalized();
   *w = axis.cross(*u);
 }
@@ -121,7 +127,8 @@ TriangleMesh foreign_object_mesh(const ForeignObject& object) {
   Eigen::Vector3d u, w;
   basis(a, &u, &w);
   auto at = [&](double rho, double angle, double height) {
-    return Eigen::Vector3d(object.center + rho * (std::cos(angle) * u + std::sin(angle) * w) + height * a);
+    return Eigen::Vector3d(object.center + rho * (std::cos(angle) * u + std::sin(angle) * w) +
+                           height * a);
   };
   TriangleMesh mesh;
   std::vector<double> ring_rho, ring_height;
@@ -134,7 +141,8 @@ TriangleMesh foreign_object_mesh(const ForeignObject& object) {
     for (int j = 0; j < kRings; ++j) {
       const double rho = object.radius_m * (1.0 - double(j) / kRings);
       ring_rho.push_back(rho);
-      ring_height.push_back(j == 0 ? -kSink : 0.5 * object.height_m * (1.0 + std::cos(M_PI * rho / object.radius_m)));
+      ring_height.push_back(
+          j == 0 ? -kSink : 0.5 * object.height_m * (1.0 + std::cos(M_PI * rho / object.radius_m)));
     }
   }
   for (size_t j = 0; j < ring_rho.size(); ++j)
@@ -161,7 +169,8 @@ std::vector<Landmark> scatter_landmarks(const TriangleMesh& mesh, double density
   std::vector<Landmark> out;
   int64_t id = first_id;
   for (const auto& f : mesh.faces) {
-    const Eigen::Vector3d &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
+    const Eigen::Vector3d &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]],
+                          &c = mesh.vertices[f[2]];
     const Eigen::Vector3d cross = (b - a).cross(c - a);
     const double area = 0.5 * cross.norm();
     if (area <= 0.0) continue;

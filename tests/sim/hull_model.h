@@ -24,7 +24,7 @@ struct HullOptions {
   double section_exponent = 6.0;  // superellipse exponent: flat bottom, round bilge
   double end_xi = 0.98;           // the mesh stops at |2x/L| = end_xi and is capped there
   int length_segments = 160;
-  int section_segments = 64;      // waterline to waterline around the keel
+  int section_segments = 64;  // waterline to waterline around the keel
   int freeboard_segments = 4;
 };
 
@@ -48,7 +48,7 @@ class HullShape {
  private:
   Eigen::Vector3d point(double xi, double sigma) const;
   HullOptions options_;
-  std::vector<double> arc_;    // normalised arc length at table_phi_
+  std::vector<double> arc_;  // normalised arc length at table_phi_
   std::vector<double> table_phi_;
 };
 
@@ -61,7 +61,7 @@ struct ForeignObject {
   Eigen::Vector3d center;  // base centre on the real hull surface (world)
   Eigen::Vector3d axis;    // outward unit normal of the hull there (world)
   double radius_m = 0.0;
-  double height_m = 0.0;   // how far the object stands out of the hull
+  double height_m = 0.0;  // how far the object stands out of the hull
   std::string kind_name() const { return kind == Kind::kCylinder ? "cylinder" : "patch"; }
 };
 

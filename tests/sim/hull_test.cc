@@ -2,13 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
-#include <unistd.h>
 
 #include "tests/sim/mesh_bvh.h"
 #include "tests/sim/scenarios.h"
@@ -68,9 +68,12 @@ TEST(Hull, ForeignObjectsStandOnTheRealHullNotOnTheCad) {
     EXPECT_NEAR(hit.t, o.height_m, 0.003);
     // In world, the object is detected against the real hull only: the real hull as seen by
     // the sensors (with objects) is hit at the top.
-    ASSERT_TRUE(raycast_brute_force(s.real_mesh_world, top + 0.5 * o.axis, -o.axis, 0.0, 1.0, &hit));
+    ASSERT_TRUE(
+        raycast_brute_force(s.real_mesh_world, top + 0.5 * o.axis, -o.axis, 0.0, 1.0, &hit));
     EXPECT_NEAR(hit.t, 0.5, 0.01) << o.kind_name();
-    if (o.kind == ForeignObject::Kind::kCylinder) EXPECT_DOUBLE_EQ(o.height_m, 0.11);
+    if (o.kind == ForeignObject::Kind::kCylinder) {
+      EXPECT_DOUBLE_EQ(o.height_m, 0.11);
+    }
     if (o.kind == ForeignObject::Kind::kPatch) {
       EXPECT_GE(o.height_m, 0.06);
       EXPECT_LE(o.height_m, 0.18);
@@ -124,8 +127,8 @@ TEST_F(HullMission, DvlRangesMatchRaycastsAgainstTheRealHull) {
       if (!found) continue;
       ++checked;
       close += std::abs(measured - hit.t) < 5 * 0.003;
-      EXPECT_GT(hit.t, 1.0);  // 1-2 m standoff with 30 degree beams
-      EXPECT_LT(hit.t, 2.5);
+      // 1.5 m standoff along 30-degree beams (plus misalignment and hull curvature).
+      EXPECT_NEAR(hit.t * std::cos(M_PI / 6), 1.5, 0.35);
     }
   }
   ASSERT_GT(checked, 40);
@@ -160,8 +163,10 @@ TEST_F(HullMission, ImagesAreTexturedPngsAndTracksHitTheBlobs) {
     const int u = static_cast<int>(std::lround(std::stod(row[2])));
     const int v = static_cast<int>(std::lround(std::stod(row[3])));
     const double value = image.at<uint8_t>(v, u);
-    if (albedo.at(std::stoll(row[0])) < 0.5) dark += value, ++n_dark;
-    else bright += value, ++n_bright;
+    if (albedo.at(std::stoll(row[0])) < 0.5)
+      dark += value, ++n_dark;
+    else
+      bright += value, ++n_bright;
   }
   ASSERT_GT(n_dark, 10);
   ASSERT_GT(n_bright, 10);

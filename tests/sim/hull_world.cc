@@ -69,8 +69,8 @@ double HullWorld::shade(const Eigen::Vector3d& origin, const Eigen::Vector3d& di
   const double r = hit->range_m;
   const double cosine = std::max(0.0, -hit->normal.dot(dir));
   const double falloff = options_.reference_range_m * options_.reference_range_m / (r * r);
-  const double attenuation = std::exp(-2.0 * options_.water_attenuation_per_m *
-                                      (r - options_.reference_range_m));
+  const double attenuation =
+      std::exp(-2.0 * options_.water_attenuation_per_m * (r - options_.reference_range_m));
   return std::clamp(options_.background + hit->albedo * cosine * falloff * attenuation, 0.0, 1.0);
 }
 

@@ -15,8 +15,8 @@ namespace keel::sim {
 
 struct HullWorldOptions {
   double water_attenuation_per_m = 0.12;  // beam attenuation c (1/m), two-way path
-  double reference_range_m = 1.5;        // range at which the LED gives albedo * cos
-  double background = 0.04;              // open water
+  double reference_range_m = 1.5;         // range at which the LED gives albedo * cos
+  double background = 0.04;               // open water
 };
 
 class HullWorld : public SimWorld {

@@ -31,7 +31,9 @@ std::vector<ImuSample> simulate_imu(const PathMotion& motion, double duration_s,
   const double sigma_a = o.accel_noise_density * std::sqrt(o.rate_hz);
   const double walk_g = o.gyro_random_walk * std::sqrt(dt);
   const double walk_a = o.accel_random_walk * std::sqrt(dt);
-  auto gaussian3 = [&rng] { return Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian()); };
+  auto gaussian3 = [&rng] {
+    return Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian());
+  };
   Eigen::Vector3d bg = Eigen::Vector3d::Zero(), ba = Eigen::Vector3d::Zero();
   if (o.noise) {  // turn-on biases, small (a calibrated unit)
     bg = 2e-4 * gaussian3();

@@ -28,8 +28,8 @@ struct ImuOptions {  // seed 000 Table I (Xsens MTi-30)
 };
 
 struct ImuSample {
-  int64_t t_ns;                  // since mission start
-  Eigen::Vector3d gyro, accel;   // body rate (rad/s) and specific force (m/s^2), IMU = body frame
+  int64_t t_ns;                 // since mission start
+  Eigen::Vector3d gyro, accel;  // body rate (rad/s) and specific force (m/s^2), IMU = body frame
   Eigen::Vector3d gyro_bias, accel_bias;  // true biases at t
 };
 

@@ -41,7 +41,8 @@ TEST(Imu, NoiseFreeSamplesIntegrateToTheTrajectory) {
     Eigen::Vector3d v = init.v_world, p = init.p_world;
     for (; k + 1 < samples.size(); ++k) {
       const double dt = (samples[k + 1].t_ns - samples[k].t_ns) * 1e-9;
-      const Eigen::Matrix3d R_next = R * exp_so3(0.5 * (samples[k].gyro + samples[k + 1].gyro) * dt);
+      const Eigen::Matrix3d R_next =
+          R * exp_so3(0.5 * (samples[k].gyro + samples[k + 1].gyro) * dt);
       const Eigen::Vector3d a0 = R * samples[k].accel + g, a1 = R_next * samples[k + 1].accel + g;
       p += v * dt + (2.0 * a0 + a1) / 6.0 * dt * dt;
       v += 0.5 * (a0 + a1) * dt;
@@ -50,7 +51,8 @@ TEST(Imu, NoiseFreeSamplesIntegrateToTheTrajectory) {
     const KinematicState end = s.motion->state(samples.back().t_ns * 1e-9);
     EXPECT_LT((p - end.p_world).norm(), 0.01) << name;
     EXPECT_LT((v - end.v_world).norm(), 0.002) << name;
-    EXPECT_LT(Eigen::AngleAxisd(end.q_world_body.toRotationMatrix().transpose() * R).angle(), 1e-4) << name;
+    EXPECT_LT(Eigen::AngleAxisd(end.q_world_body.toRotationMatrix().transpose() * R).angle(), 1e-4)
+        << name;
   }
 }
 
@@ -96,8 +98,10 @@ TEST(Dvl, NoiseFreeVelocityIsScaledVelocityOfTheDvlOrigin) {
         return Eigen::Vector3d(st.p_world + st.q_world_body * T_body_dvl(t).translation());
       };
       const KinematicState st = s.motion->state(t);
-      const Eigen::Matrix3d R_world_dvl = st.q_world_body.toRotationMatrix() * T_body_dvl(t).linear();
-      const Eigen::Vector3d expected = 1.02 * R_world_dvl.transpose() * (origin(t + h) - origin(t - h)) / (2 * h);
+      const Eigen::Matrix3d R_world_dvl =
+          st.q_world_body.toRotationMatrix() * T_body_dvl(t).linear();
+      const Eigen::Vector3d expected =
+          1.02 * R_world_dvl.transpose() * (origin(t + h) - origin(t - h)) / (2 * h);
       EXPECT_LT((samples[i].velocity - expected).norm(), 1e-6) << name << " t=" << t;
       EXPECT_TRUE(samples[i].valid);
     }
@@ -108,8 +112,8 @@ TEST(Dvl, DropoutFractionMatchesTheRate) {
   const Scenario s = make_scenario("usv-bridge", 4);
   DvlOptions options;
   options.dropout_rate = 0.2;
-  const auto samples = simulate_dvl(*s.motion, 220.0, [&](double) { return s.T_body_sensor.at("dvl"); },
-                                    options, 4);
+  const auto samples = simulate_dvl(
+      *s.motion, 220.0, [&](double) { return s.T_body_sensor.at("dvl"); }, options, 4);
   size_t lost = 0;
   for (const auto& x : samples) lost += !x.valid;
   EXPECT_NEAR(double(lost) / samples.size(), 0.2, 0.06);

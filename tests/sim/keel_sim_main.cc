@@ -18,10 +18,12 @@ int main(int argc, char** argv) {
   app.add_option("--seed", options.seed, "random seed (same seed, same bytes)");
   app.add_option("--out", options.out_dir, "output mission folder")->required();
   app.add_option("--duration", options.duration_s, "seconds (default: the scenario's whole path)");
-  app.add_option("--sensors", options.sensors, "comma-separated subset of imu,dvl,lidar_h,lidar_v,sonar,camera,depth")
+  app.add_option("--sensors", options.sensors,
+                 "comma-separated subset of imu,dvl,lidar_h,lidar_v,sonar,camera,depth")
       ->delimiter(',');
   app.add_option("--dvl-scale", options.dvl_scale, "true DVL scale factor s_d (seed 000 Eq. (8))");
-  app.add_option("--dvl-dropout-rate", options.dvl_dropout_rate, "fraction of DVL samples lost (bursts)");
+  app.add_option("--dvl-dropout-rate", options.dvl_dropout_rate,
+                 "fraction of DVL samples lost (bursts)");
   app.add_flag("--bag", options.write_bag, "also write mission.bag and mission_bag.yaml");
   app.add_option("--threads", options.threads, "worker threads")->check(CLI::Range(1, 64));
   app.add_option("--set", options.settings, "key=value overrides: " + keel::sim::settings_help());
@@ -29,14 +31,17 @@ int main(int argc, char** argv) {
   try {
     const auto start = std::chrono::steady_clock::now();
     const auto s = keel::sim::run_simulation(options);
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf(
         "keel-sim: %s seed %llu -> %s\n  duration %.1f s, path %.1f m, imu %zu, dvl %zu, scans %zu "
-        "(%zu points), images %zu, track observations %zu\n  odometry RMSE %.3f m, MAP RMSE %.3f m, "
+        "(%zu points), images %zu, track observations %zu\n  odometry RMSE %.3f m, MAP RMSE %.3f "
+        "m, "
         "%.1f s wall\n",
-        options.scenario.c_str(), static_cast<unsigned long long>(options.seed), options.out_dir.c_str(),
-        s.duration_s, s.path_length_m, s.imu_samples, s.dvl_samples, s.scans, s.scan_points, s.images,
-        s.track_observations, s.odometry_rmse_m, s.map_rmse_m, elapsed);
+        options.scenario.c_str(), static_cast<unsigned long long>(options.seed),
+        options.out_dir.c_str(), s.duration_s, s.path_length_m, s.imu_samples, s.dvl_samples,
+        s.scans, s.scan_points, s.images, s.track_observations, s.odometry_rmse_m, s.map_rmse_m,
+        elapsed);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keel-sim: %s\n", e.what());

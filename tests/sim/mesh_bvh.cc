@@ -8,8 +8,8 @@ namespace {
 
 // Moller-Trumbore ray-triangle intersection, both faces.
 bool moller_trumbore(const Eigen::Vector3d& v0, const Eigen::Vector3d& v1,
-                     const Eigen::Vector3d& v2, const Eigen::Vector3d& o,
-                     const Eigen::Vector3d& d, double* t, double* b1, double* b2) {
+                     const Eigen::Vector3d& v2, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                     double* t, double* b1, double* b2) {
   const Eigen::Vector3d e1 = v1 - v0, e2 = v2 - v0;
   const Eigen::Vector3d pvec = d.cross(e2);
   const double det = e1.dot(pvec);

@@ -12,13 +12,13 @@
 namespace keel::sim {
 
 struct KinematicState {
-  double t_s = 0.0;             // seconds since mission start
-  Eigen::Vector3d p_world;      // body origin in world
-  Eigen::Vector3d v_world;      // d/dt p_world
-  Eigen::Vector3d a_world;      // d2/dt2 p_world
+  double t_s = 0.0;         // seconds since mission start
+  Eigen::Vector3d p_world;  // body origin in world
+  Eigen::Vector3d v_world;  // d/dt p_world
+  Eigen::Vector3d a_world;  // d2/dt2 p_world
   Eigen::Quaterniond q_world_body;
-  Eigen::Vector3d omega_body;   // angular velocity of body w.r.t. world, in body
-  double path_s = 0.0;          // arc length travelled along the path
+  Eigen::Vector3d omega_body;  // angular velocity of body w.r.t. world, in body
+  double path_s = 0.0;         // arc length travelled along the path
 };
 
 struct MotionOptions {

@@ -13,7 +13,8 @@ TEST(Motion, BridgePathMatchesSpecAndReturnsToStart) {
   const PathMotion& m = *s.motion;
   EXPECT_NEAR(m.path().length(), 265.0, 15.0);
   EXPECT_NEAR(m.end_time(), 225.0, 10.0);
-  const KinematicState start = m.state(0.0), mid = m.state(100.0), end = m.state(m.end_time() + 1.0);
+  const KinematicState start = m.state(0.0), mid = m.state(100.0),
+                       end = m.state(m.end_time() + 1.0);
   EXPECT_NEAR(mid.v_world.head<2>().norm(), 1.2, 0.01);
   EXPECT_LT((end.p_world - start.p_world).head<2>().norm(), 3.0);
   EXPECT_LT(end.v_world.head<2>().norm(), 1e-9);  // at rest at the end

@@ -19,8 +19,9 @@ PointCloud simulate_lidar_sweep(const SimWorld& world, const PoseTable& poses,
                                 const SpinningLidarOptions& o, Rng& rng) {
   std::vector<double> sin_el(o.rings), cos_el(o.rings);
   for (int r = 0; r < o.rings; ++r) {
-    const double el = (o.elevation_min_deg + (o.elevation_max_deg - o.elevation_min_deg) * r /
-                                                 std::max(o.rings - 1, 1)) * M_PI / 180.0;
+    const double el = (o.elevation_min_deg +
+                       (o.elevation_max_deg - o.elevation_min_deg) * r / std::max(o.rings - 1, 1)) *
+                      M_PI / 180.0;
     sin_el[r] = std::sin(el);
     cos_el[r] = std::cos(el);
   }

@@ -20,8 +20,22 @@ inline uint64_t splitmix64(uint64_t x) {
 
 // Stream ids (kept stable: changing them changes every mission's bytes).
 enum class Stream : uint64_t {
-  kScene = 1, kMotion, kImu, kDvl, kDvlRanges, kServo, kDepth, kLidarH, kLidarV, kSonar,
-  kCamera, kOdometry, kMapPoses, kHull, kLandmarks, kDropout,
+  kScene = 1,
+  kMotion,
+  kImu,
+  kDvl,
+  kDvlRanges,
+  kServo,
+  kDepth,
+  kLidarH,
+  kLidarV,
+  kSonar,
+  kCamera,
+  kOdometry,
+  kMapPoses,
+  kHull,
+  kLandmarks,
+  kDropout,
 };
 
 class Rng {

@@ -17,9 +17,15 @@ Pose3 pose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   return T;
 }
 
-Eigen::Matrix3d rot_x(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix(); }
-Eigen::Matrix3d rot_y(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()).toRotationMatrix(); }
-Eigen::Matrix3d rot_z(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+Eigen::Matrix3d rot_x(double a) {
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix();
+}
+Eigen::Matrix3d rot_y(double a) {
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()).toRotationMatrix();
+}
+Eigen::Matrix3d rot_z(double a) {
+  return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
 
 // Camera looking along body +x: camera x = body -y, camera y = body -z, camera z = body x.
 Eigen::Matrix3d forward_looking() {
@@ -41,14 +47,17 @@ void add_water(AnalyticScene* scene) {
   scene->add(make_plane({0, 0, -6}, {0, 0, 1}, kSeabed, "seabed"));
 }
 
-void add_stadium_pier(AnalyticScene* scene, const Eigen::Vector3d& center, const std::string& name) {
+void add_stadium_pier(AnalyticScene* scene, const Eigen::Vector3d& center,
+                      const std::string& name) {
   // Rounded-end concrete pier from the seabed to the deck (Welland Canal Bridge 13 style).
   const double half_length = 2.5, radius = 1.2, z0 = -6.0, z1 = 6.0;
   const Eigen::Vector3d c(center.x(), center.y(), 0.5 * (z0 + z1));
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   scene->add(make_box(c, I, {radius, half_length, 0.5 * (z1 - z0)}, kConcrete, name));
-  scene->add(make_cylinder(c + Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0), kConcrete, name + "_north"));
-  scene->add(make_cylinder(c - Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0), kConcrete, name + "_south"));
+  scene->add(make_cylinder(c + Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0),
+                           kConcrete, name + "_north"));
+  scene->add(make_cylinder(c - Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0),
+                           kConcrete, name + "_south"));
 }
 
 std::unique_ptr<AnalyticScene> bridge_scene() {
@@ -57,7 +66,8 @@ std::unique_ptr<AnalyticScene> bridge_scene() {
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   // Partially submerged cinder-block walls along both banks (seed 000 Fig. 3(a)).
   ReliefWallGeometry north;
-  north.center = {0, 20, 0}, north.yaw_rad = M_PI, north.length_m = 200, north.z_min = -6, north.z_max = 2.5;
+  north.center = {0, 20, 0}, north.yaw_rad = M_PI, north.length_m = 200, north.z_min = -6,
+  north.z_max = 2.5;
   scene->add(make_relief_wall(north, kCinder, "north_wall"));
   ReliefWallGeometry south = north;
   south.center = {0, -20, 0}, south.yaw_rad = 0.0;
@@ -76,7 +86,8 @@ std::unique_ptr<AnalyticScene> bridge_scene() {
   scene->add(make_box({2.6, 0, 5.75}, I, {0.2, 21.0, 0.25}, kConcrete, "girder_east"));
   scene->add(make_box({-2.6, 0, 5.75}, I, {0.2, 21.0, 0.25}, kConcrete, "girder_west"));
   // Mooring dolphins (timber piles).
-  const Eigen::Vector3d piles[] = {{-27, 11, -1.5}, {-18, -12, -1.5}, {19, -13, -1.5}, {33, 10, -1.5}};
+  const Eigen::Vector3d piles[] = {
+      {-27, 11, -1.5}, {-18, -12, -1.5}, {19, -13, -1.5}, {33, 10, -1.5}};
   for (const auto& p : piles) scene->add(make_cylinder(p, I, 0.35, 5.5, kConcrete, "pile"));
   return scene;
 }
@@ -84,12 +95,13 @@ std::unique_ptr<AnalyticScene> bridge_scene() {
 std::vector<Eigen::Vector3d> bridge_waypoints() {
   // Approach along the channel, figure-eight around both piers (loop closures), back along
   // the south wall to the start. Scaled so the path is ~265 m (seed 000 Sec. V-C).
-  const double xy[][2] = {
-      {-78, 1.5}, {-66, 1.5}, {-54, 1.5}, {-42, 1.5}, {-30, 1.2}, {-20, 0.8}, {-11, 0.3}, {-5, 0.0},
-      {0, 0.0}, {5.5, 1.5}, {9.5, 6.5}, {7.5, 13.0}, {0, 16.5}, {-7.5, 13.0}, {-9.5, 7.0}, {-5.5, 1.5},
-      {0, -0.5}, {5.5, -2.0}, {9.5, -7.0}, {7.5, -13.0}, {0, -16.0}, {-7.5, -14.0},
-      {-12, -15.0}, {-22, -15.5}, {-34, -15.5}, {-46, -15.0}, {-58, -13.0}, {-68, -9.0},
-      {-75, -4.5}, {-78, 0.0}};
+  const double xy[][2] = {{-90, 1.5},   {-78, 1.5},   {-66, 1.5},    {-54, 1.5},   {-42, 1.5},
+                          {-30, 1.2},   {-20, 0.8},   {-11, 0.3},    {-5, 0.0},    {0, 0.0},
+                          {5.5, 1.5},   {9.5, 6.5},   {7.5, 13.0},   {0, 16.5},    {-7.5, 13.0},
+                          {-9.5, 7.0},  {-5.5, 1.5},  {0, -0.5},     {5.5, -2.0},  {9.5, -7.0},
+                          {7.5, -13.0}, {0, -16.0},   {-7.5, -14.0}, {-12, -15.0}, {-22, -15.5},
+                          {-34, -15.5}, {-46, -15.0}, {-58, -13.0},  {-68, -9.0},  {-75, -4.5},
+                          {-82, -2.0},  {-90, 0.0}};
   std::vector<Eigen::Vector3d> out;
   for (const auto& p : xy) out.emplace_back(p[0], p[1], 0.0);
   return out;
@@ -142,8 +154,8 @@ Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions&
   s.world = std::move(scene);
   MotionOptions motion = options.motion;
   motion.yaw_follows_path = true;
-  s.motion = std::make_unique<PathMotion>(SmoothPath(bridge ? bridge_waypoints() : corridor_waypoints()),
-                                          motion, seed);
+  s.motion = std::make_unique<PathMotion>(
+      SmoothPath(bridge ? bridge_waypoints() : corridor_waypoints()), motion, seed);
   s.default_duration_s = std::ceil(s.motion->end_time());
   if (!bridge) s.degenerate_axis_world = Eigen::Vector3d::UnitX();
   add_usv_rig(&s);
@@ -188,6 +200,8 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   // Survey lanes along the starboard side and bilge; the vehicle faces the hull (yaw 90 deg)
   // and the tray servo points the DVL and camera along the inward normal.
   const double lanes[] = {0.85, 0.72, 0.59, 0.46, 0.33};
+  const Eigen::Vector3d kPivotInBody(0.6, 0.0, -0.1);
+  const Eigen::Matrix3d kYaw90 = rot_z(M_PI / 2);
   const double half_span_m = 5.0;
   std::vector<Eigen::Vector3d> waypoints;
   std::vector<double> angles;
@@ -195,33 +209,40 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     for (int k = 0; k <= 10; ++k) {
       const double x = (lane % 2 == 0 ? -1.0 : 1.0) * half_span_m * (1.0 - 0.2 * k);
       const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m, lanes[lane]);
-      waypoints.push_back(sp.p + options.hull_standoff_m * sp.normal);
+      // The standoff is the DVL's (on the tray pivot, 0.6 m ahead of the body origin).
+      waypoints.push_back(sp.p + options.hull_standoff_m * sp.normal - kYaw90 * kPivotInBody);
       angles.push_back(std::atan2(-sp.normal.z(), -sp.normal.y()));
     }
   }
   MotionOptions motion = options.motion;
   motion.yaw_follows_path = false;
-  motion.fixed_yaw_rad = M_PI / 2;
+  motion.fixed_yaw_rad = M_PI / 2;  // kYaw90
   if (!options.speed_overridden) motion.cruise_speed_mps = 0.25;
-  motion.roll_amplitude_rad = 0.005, motion.pitch_amplitude_rad = 0.004, motion.heave_amplitude_m = 0.01;
+  motion.roll_amplitude_rad = 0.005, motion.pitch_amplitude_rad = 0.004,
+  motion.heave_amplitude_m = 0.01;
   s.motion = std::make_unique<PathMotion>(SmoothPath(waypoints, {angles}), motion, seed);
   s.default_duration_s = std::ceil(s.motion->end_time());
 
   // Foreign objects on the real hull (seed 001 Sec. 4: a 0.11 m cylinder, biofouling
   // 0.06-0.18 m), positions jittered by the seed.
-  struct Placement { ForeignObject::Kind kind; double x, sigma; };
+  struct Placement {
+    ForeignObject::Kind kind;
+    double x, sigma;
+  };
   const Placement placements[] = {{ForeignObject::Kind::kCylinder, 1.5, 0.72},
                                   {ForeignObject::Kind::kPatch, -2.8, 0.85},
                                   {ForeignObject::Kind::kPatch, 3.2, 0.46},
                                   {ForeignObject::Kind::kPatch, -0.6, 0.33}};
   TriangleMesh real = transform_mesh(s.cad_mesh, s.T_world_cad);
-  const auto hull_landmarks = scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
+  const auto hull_landmarks =
+      scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
   std::vector<Landmark> landmarks = hull_landmarks;
   for (const auto& place : placements) {
     ForeignObject object;
     object.kind = place.kind;
     const double x = place.x + rng.uniform(-0.5, 0.5);
-    const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m, place.sigma + rng.uniform(-0.02, 0.02));
+    const SurfacePoint sp =
+        shape.surface(2.0 * x / options.hull.length_m, place.sigma + rng.uniform(-0.02, 0.02));
     if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object.center, &object.axis))
       throw std::logic_error("hauv-hull: foreign object misses the CAD mesh");
     if (object.kind == ForeignObject::Kind::kCylinder) {
@@ -231,8 +252,8 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     }
     const TriangleMesh object_mesh = foreign_object_mesh(object);
     const auto on_object = scatter_landmarks(object_mesh, 150.0, 2.0, false,
-                                             1000000 + 10000 * int64_t(s.foreign_objects.size()), seed,
-                                             1 + s.foreign_objects.size());
+                                             1000000 + 10000 * int64_t(s.foreign_objects.size()),
+                                             seed, 1 + s.foreign_objects.size());
     landmarks.insert(landmarks.end(), on_object.begin(), on_object.end());
     append_mesh(&real, object_mesh);
     s.foreign_objects.push_back(object);
@@ -247,9 +268,9 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   s.T_body_sensor["imu"] = Pose3::Identity();
   s.T_body_sensor["depth"] = Pose3::Identity();
   s.has_servo = true;
-  s.T_body_servo = pose(Eigen::Matrix3d::Identity(), {0.6, 0.0, -0.1});
+  s.T_body_servo = pose(Eigen::Matrix3d::Identity(), kPivotInBody);
   s.servo_axis = -Eigen::Vector3d::UnitY();
-  s.T_body_sensor["dvl"] = pose(forward_looking(), {0.6, 0.0, -0.1});
+  s.T_body_sensor["dvl"] = pose(forward_looking(), kPivotInBody);
   s.T_body_sensor["dvl_ranges"] = s.T_body_sensor["dvl"];
   s.T_body_sensor["cam0"] = pose(forward_looking(), {0.65, 0.15, 0.05});
   s.T_body_sensor["servo"] = s.T_body_servo;
@@ -273,9 +294,11 @@ double Scenario::servo_angle(double t_s) const {
 Pose3 Scenario::T_body_sensor_at(const std::string& sensor, double t_s) const {
   const auto it = T_body_sensor.find(sensor);
   if (it == T_body_sensor.end()) throw std::invalid_argument("no sensor " + sensor + " in " + name);
-  if (std::find(tray_sensors.begin(), tray_sensors.end(), sensor) == tray_sensors.end()) return it->second;
+  if (std::find(tray_sensors.begin(), tray_sensors.end(), sensor) == tray_sensors.end())
+    return it->second;
   Pose3 rotation = Pose3::Identity();
-  rotation.linear() = Eigen::AngleAxisd(servo_angle(t_s), servo_axis.normalized()).toRotationMatrix();
+  rotation.linear() =
+      Eigen::AngleAxisd(servo_angle(t_s), servo_axis.normalized()).toRotationMatrix();
   return T_body_servo * rotation * T_body_servo.inverse() * it->second;
 }
 

@@ -17,7 +17,7 @@
 namespace keel::sim {
 
 struct ScenarioOptions {
-  MotionOptions motion;         // the scenario sets speed/heading defaults, overrides follow
+  MotionOptions motion;  // the scenario sets speed/heading defaults, overrides follow
   bool speed_overridden = false;
   HullOptions hull;
   double hull_standoff_m = 1.5;  // seed 001: 1-2 m
@@ -32,7 +32,7 @@ struct Scenario {
   const AnalyticScene* analytic = nullptr;  // usv scenarios
   const HullWorld* hull_world = nullptr;    // hauv-hull
   double default_duration_s = 0.0;
-  std::vector<std::string> default_sensors;  // --sensors names
+  std::vector<std::string> default_sensors;    // --sensors names
   std::map<std::string, Pose3> T_body_sensor;  // at servo angle 0 for tray sensors
   std::vector<std::string> tray_sensors;       // sensors riding the servo tray
   Eigen::Vector3d degenerate_axis_world = Eigen::Vector3d::Zero();

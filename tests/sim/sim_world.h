@@ -6,11 +6,11 @@
 namespace keel::sim {
 
 struct RayHit {
-  double range_m = 0.0;     // distance along the (unit) ray
-  Eigen::Vector3d normal;   // unit surface normal at the hit, facing the ray origin side
-  int surface = -1;         // primitive or triangle id
-  bool returns = true;      // false: the surface absorbs range sensors (water surface)
-  double albedo = 0.5;      // diffuse reflectivity in [0, 1]
+  double range_m = 0.0;    // distance along the (unit) ray
+  Eigen::Vector3d normal;  // unit surface normal at the hit, facing the ray origin side
+  int surface = -1;        // primitive or triangle id
+  bool returns = true;     // false: the surface absorbs range sensors (water surface)
+  double albedo = 0.5;     // diffuse reflectivity in [0, 1]
 };
 
 class SimWorld {

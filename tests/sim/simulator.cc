@@ -105,7 +105,8 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
       value = std::stod(text, &used);
       if (used != text.size() || !std::isfinite(value)) throw std::invalid_argument(text);
     } catch (const std::exception&) {
-      throw std::invalid_argument("--set " + key + ": expected a finite number, got '" + text + "'");
+      throw std::invalid_argument("--set " + key + ": expected a finite number, got '" + text +
+                                  "'");
     }
     if (auto it = table.find(key); it != table.end()) {
       if (value < 0.0 && key.find("gain") == std::string::npos)
@@ -114,8 +115,9 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
       if (key == "motion.speed") c->speed_overridden = true;
       continue;
     }
-    const bool integer = std::find_if(std::begin(kIntegerSettings), std::end(kIntegerSettings),
-                                      [&](const char* k) { return key == k; }) != std::end(kIntegerSettings);
+    const bool integer =
+        std::find_if(std::begin(kIntegerSettings), std::end(kIntegerSettings),
+                     [&](const char* k) { return key == k; }) != std::end(kIntegerSettings);
     if (integer) {
       if (value < 1 || value > 100000 || value != std::floor(value))
         throw std::invalid_argument("--set " + key + ": expected an integer in [1, 100000]");
@@ -125,7 +127,8 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
       continue;
     }
     if (key == "imu.noise" || key == "dvl.noise" || key == "camera.tracks") {
-      if (value != 0.0 && value != 1.0) throw std::invalid_argument("--set " + key + ": expected 0 or 1");
+      if (value != 0.0 && value != 1.0)
+        throw std::invalid_argument("--set " + key + ": expected 0 or 1");
       if (key == "imu.noise") s->imu.noise = value != 0.0;
       if (key == "dvl.noise") s->dvl.noise = value != 0.0;
       if (key == "camera.tracks") s->feature_tracks = value != 0.0;
@@ -133,10 +136,12 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
     }
     throw std::invalid_argument("--set: unknown key '" + key + "'; valid keys: " + settings_help());
   }
-  if (s->imu.rate_hz <= 0 || s->dvl.rate_hz <= 0 || s->lidar.rate_hz <= 0 || s->sonar.rate_hz <= 0 ||
-      s->depth_rate_hz <= 0 || s->servo_rate_hz <= 0 || s->odometry.rate_hz <= 0 || s->map.rate_hz <= 0)
+  if (s->imu.rate_hz <= 0 || s->dvl.rate_hz <= 0 || s->lidar.rate_hz <= 0 ||
+      s->sonar.rate_hz <= 0 || s->depth_rate_hz <= 0 || s->servo_rate_hz <= 0 ||
+      s->odometry.rate_hz <= 0 || s->map.rate_hz <= 0)
     throw std::invalid_argument("--set: every rate_hz must be > 0");
-  if (c->motion.cruise_speed_mps <= 0) throw std::invalid_argument("--set motion.speed: must be > 0");
+  if (c->motion.cruise_speed_mps <= 0)
+    throw std::invalid_argument("--set motion.speed: must be > 0");
 }
 
 namespace {
@@ -168,7 +173,7 @@ void write_text(const std::string& path, const std::string& text) {
 struct ScanJob {
   std::string sensor;  // lidar_h, lidar_v, sonar, cam0
   size_t index = 0;
-  int64_t t_ns = 0;    // since mission start
+  int64_t t_ns = 0;  // since mission start
 };
 
 struct ScanResult {
@@ -213,15 +218,18 @@ void parallel_for(size_t n, int threads, const std::function<void(size_t)>& fn) 
 }
 
 std::vector<std::string> resolve_sensors(const SimOptions& options, const Scenario& scenario) {
-  const std::set<std::string> known = {"imu", "dvl", "lidar_h", "lidar_v", "sonar", "camera", "depth"};
-  std::vector<std::string> requested = options.sensors.empty() ? scenario.default_sensors : options.sensors;
+  const std::set<std::string> known = {"imu",   "dvl",    "lidar_h", "lidar_v",
+                                       "sonar", "camera", "depth"};
+  std::vector<std::string> requested =
+      options.sensors.empty() ? scenario.default_sensors : options.sensors;
   std::vector<std::string> out;
   for (const auto& s : requested) {
     if (!known.count(s))
       throw std::invalid_argument("--sensors: unknown sensor '" + s +
                                   "' (expected imu,dvl,lidar_h,lidar_v,sonar,camera,depth)");
-    const bool available = std::find(scenario.default_sensors.begin(), scenario.default_sensors.end(), s) !=
-                           scenario.default_sensors.end();
+    const bool available =
+        std::find(scenario.default_sensors.begin(), scenario.default_sensors.end(), s) !=
+        scenario.default_sensors.end();
     if (!available)
       throw std::invalid_argument("--sensors: scenario " + scenario.name + " has no " + s);
     if (std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
@@ -245,8 +253,11 @@ SimSummary run_simulation(const SimOptions& options) {
 
   const Scenario scenario = make_scenario(options.scenario, options.seed, scenario_options);
   const std::vector<std::string> sensors = resolve_sensors(options, scenario);
-  auto has = [&](const std::string& s) { return std::find(sensors.begin(), sensors.end(), s) != sensors.end(); };
-  const double duration = options.duration_s > 0.0 ? options.duration_s : scenario.default_duration_s;
+  auto has = [&](const std::string& s) {
+    return std::find(sensors.begin(), sensors.end(), s) != sensors.end();
+  };
+  const double duration =
+      options.duration_s > 0.0 ? options.duration_s : scenario.default_duration_s;
   if (!(duration > 0.0 && duration < 7 * 24 * 3600.0))
     throw std::invalid_argument("--duration: expected seconds in (0, 604800)");
   const bool hauv = scenario.platform == "hauv";
@@ -301,20 +312,23 @@ SimSummary run_simulation(const SimOptions& options) {
     TextFile f((out / "imu.csv").string());
     f.line("t,wx,wy,wz,ax,ay,az");
     for (const auto& s : samples) {
-      const double v[6] = {s.gyro.x(), s.gyro.y(), s.gyro.z(), s.accel.x(), s.accel.y(), s.accel.z()};
+      const double v[6] = {s.gyro.x(),  s.gyro.y(),  s.gyro.z(),
+                           s.accel.x(), s.accel.y(), s.accel.z()};
       f.row(t0 + s.t_ns, v, 6);
       if (bag) bag->imu("/imu/data", "imu", t0 + s.t_ns, s.gyro, s.accel);
     }
     f.close();
     summary.imu_samples = samples.size();
-    emit_sensor("imu", "imu", "file", "imu.csv", "/imu/data", settings.imu.rate_hz, [&](YAML::Emitter& y) {
-      y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
-      y << YAML::Key << "gyro_noise_density" << YAML::Value << settings.imu.gyro_noise_density;
-      y << YAML::Key << "accel_noise_density" << YAML::Value << settings.imu.accel_noise_density;
-      y << YAML::Key << "gyro_random_walk" << YAML::Value << settings.imu.gyro_random_walk;
-      y << YAML::Key << "accel_random_walk" << YAML::Value << settings.imu.accel_random_walk;
-      y << YAML::EndMap;
-    });
+    emit_sensor(
+        "imu", "imu", "file", "imu.csv", "/imu/data", settings.imu.rate_hz, [&](YAML::Emitter& y) {
+          y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
+          y << YAML::Key << "gyro_noise_density" << YAML::Value << settings.imu.gyro_noise_density;
+          y << YAML::Key << "accel_noise_density" << YAML::Value
+            << settings.imu.accel_noise_density;
+          y << YAML::Key << "gyro_random_walk" << YAML::Value << settings.imu.gyro_random_walk;
+          y << YAML::Key << "accel_random_walk" << YAML::Value << settings.imu.accel_random_walk;
+          y << YAML::EndMap;
+        });
   }
 
   // ---- DVL velocity and (hull) four-beam ranges ----
@@ -325,9 +339,10 @@ SimSummary run_simulation(const SimOptions& options) {
     for (int b = 0; b < 4; ++b) {
       RayHit hit;
       const Eigen::Vector3d dir = T_world_dvl.linear() * beams[b];
-      ranges[b] = scenario.world->raycast(T_world_dvl.translation(), dir, 0.05, 50.0, &hit) && hit.returns
-                      ? hit.range_m
-                      : std::nan("");
+      ranges[b] =
+          scenario.world->raycast(T_world_dvl.translation(), dir, 0.05, 50.0, &hit) && hit.returns
+              ? hit.range_m
+              : std::nan("");
     }
     return ranges;
   };
@@ -340,7 +355,8 @@ SimSummary run_simulation(const SimOptions& options) {
         return std::count_if(r.begin(), r.end(), [](double x) { return !std::isnan(x); }) >= 3;
       };
     }
-    const auto samples = simulate_dvl(*scenario.motion, duration, T_body_dvl, settings.dvl, seed, lock);
+    const auto samples =
+        simulate_dvl(*scenario.motion, duration, T_body_dvl, settings.dvl, seed, lock);
     TextFile f((out / "dvl.csv").string());
     f.line("t,vx,vy,vz,valid");
     for (const auto& s : samples) {
@@ -348,16 +364,19 @@ SimSummary run_simulation(const SimOptions& options) {
       const double row[4] = {v.x(), v.y(), v.z(), s.valid ? 1.0 : 0.0};
       f.row(t0 + s.t_ns, row, 4);
       if (bag && s.valid)
-        bag->twist("/dvl/twist", "dvl", t0 + s.t_ns, v, settings.dvl.velocity_sigma_rel * s.velocity_true.norm());
+        bag->twist("/dvl/twist", "dvl", t0 + s.t_ns, v,
+                   settings.dvl.velocity_sigma_rel * s.velocity_true.norm());
     }
     f.close();
     summary.dvl_samples = samples.size();
-    emit_sensor("dvl", "dvl", "file", "dvl.csv", "/dvl/twist", settings.dvl.rate_hz, [&](YAML::Emitter& y) {
-      y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
-      y << YAML::Key << "velocity_sigma_rel" << YAML::Value << settings.dvl.velocity_sigma_rel;
-      y << YAML::Key << "bias_random_walk_rel" << YAML::Value << settings.dvl.bias_random_walk_rel;
-      y << YAML::EndMap;
-    });
+    emit_sensor(
+        "dvl", "dvl", "file", "dvl.csv", "/dvl/twist", settings.dvl.rate_hz, [&](YAML::Emitter& y) {
+          y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
+          y << YAML::Key << "velocity_sigma_rel" << YAML::Value << settings.dvl.velocity_sigma_rel;
+          y << YAML::Key << "bias_random_walk_rel" << YAML::Value
+            << settings.dvl.bias_random_walk_rel;
+          y << YAML::EndMap;
+        });
     if (hauv) {
       Rng rng(seed, Stream::kDvlRanges);
       TextFile r((out / "dvl_ranges.csv").string());
@@ -386,7 +405,8 @@ SimSummary run_simulation(const SimOptions& options) {
   // ---- servo (hull: whenever a tray sensor is simulated) ----
   if (scenario.has_servo && (has("dvl") || has("camera"))) {
     auto angle = [&](double t) { return scenario.servo_angle(t); };
-    const auto samples = simulate_servo(angle, duration, settings.servo_rate_hz, settings.servo_sigma_rad, seed);
+    const auto samples =
+        simulate_servo(angle, duration, settings.servo_rate_hz, settings.servo_sigma_rad, seed);
     TextFile f((out / "servo.csv").string()), g((out / "ground_truth" / "servo.csv").string());
     f.line("t,angle");
     g.line("t,angle");
@@ -396,31 +416,34 @@ SimSummary run_simulation(const SimOptions& options) {
     }
     f.close();
     g.close();
-    emit_sensor("servo", "servo", "file", "servo.csv", "", settings.servo_rate_hz, [&](YAML::Emitter& y) {
-      y << YAML::Key << "axis" << YAML::Value;
-      emit_vector(y, scenario.servo_axis);
-      y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key << "angle_sigma"
-        << YAML::Value << settings.servo_sigma_rad << YAML::EndMap;
-    });
+    emit_sensor("servo", "servo", "file", "servo.csv", "", settings.servo_rate_hz,
+                [&](YAML::Emitter& y) {
+                  y << YAML::Key << "axis" << YAML::Value;
+                  emit_vector(y, scenario.servo_axis);
+                  y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key
+                    << "angle_sigma" << YAML::Value << settings.servo_sigma_rad << YAML::EndMap;
+                });
   }
 
   // ---- depth ----
   if (has("depth")) {
-    const auto samples = simulate_depth(*scenario.motion, duration,
-                                        scenario.T_body_sensor.at("depth").translation(),
-                                        settings.depth_rate_hz, settings.depth_sigma_m, seed);
+    const auto samples =
+        simulate_depth(*scenario.motion, duration, scenario.T_body_sensor.at("depth").translation(),
+                       settings.depth_rate_hz, settings.depth_sigma_m, seed);
     TextFile f((out / "depth.csv").string());
     f.line("t,depth");
     for (const auto& s : samples) f.row(t0 + s.t_ns, &s.value, 1);
     f.close();
-    emit_sensor("depth", "depth", "file", "depth.csv", "", settings.depth_rate_hz, [&](YAML::Emitter& y) {
-      y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key << "depth_sigma"
-        << YAML::Value << settings.depth_sigma_m << YAML::EndMap;
-    });
+    emit_sensor("depth", "depth", "file", "depth.csv", "", settings.depth_rate_hz,
+                [&](YAML::Emitter& y) {
+                  y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key
+                    << "depth_sigma" << YAML::Value << settings.depth_sigma_m << YAML::EndMap;
+                });
   }
 
   // ---- scans and images: independent jobs on threads, written in chunks ----
-  const double camera_rate = settings.camera_rate_hz > 0.0 ? settings.camera_rate_hz : scenario.camera_rate_hz;
+  const double camera_rate =
+      settings.camera_rate_hz > 0.0 ? settings.camera_rate_hz : scenario.camera_rate_hz;
   std::vector<ScanJob> jobs;
   std::map<std::string, std::vector<ScanJob>> per_sensor;
   auto schedule = [&](const std::string& sensor, double rate) {
@@ -437,10 +460,12 @@ SimSummary run_simulation(const SimOptions& options) {
   if (has("sonar")) schedule("sonar", settings.sonar.rate_hz);
   if (has("camera")) schedule("cam0", camera_rate);
   for (const auto& [name, list] : per_sensor) jobs.insert(jobs.end(), list.begin(), list.end());
-  std::stable_sort(jobs.begin(), jobs.end(), [](const ScanJob& a, const ScanJob& b) { return a.t_ns < b.t_ns; });
+  std::stable_sort(jobs.begin(), jobs.end(),
+                   [](const ScanJob& a, const ScanJob& b) { return a.t_ns < b.t_ns; });
 
   const bool tracks = hauv && settings.feature_tracks && has("camera");
-  std::vector<std::vector<TrackObservation>> all_tracks(per_sensor.count("cam0") ? per_sensor["cam0"].size() : 0);
+  std::vector<std::vector<TrackObservation>> all_tracks(
+      per_sensor.count("cam0") ? per_sensor["cam0"].size() : 0);
   std::atomic<size_t> total_points{0};
   const size_t chunk = 64;
   std::vector<ScanResult> results(chunk);
@@ -454,20 +479,22 @@ SimSummary run_simulation(const SimOptions& options) {
       const double t = job.t_ns * 1e-9;
       if (job.sensor == "cam0") {
         const Pose3 T_world_camera = truth.T_world_body(t) * scenario.T_body_sensor_at("cam0", t);
-        result.image = render_image(*scenario.world, scenario.camera, T_world_camera, settings.camera, rng);
+        result.image =
+            render_image(*scenario.world, scenario.camera, T_world_camera, settings.camera, rng);
         if (!cv::imwrite((out / "cam0" / file_name(job.index, "png")).string(), result.image))
-          throw std::runtime_error("cannot write " + (out / "cam0" / file_name(job.index, "png")).string());
+          throw std::runtime_error("cannot write " +
+                                   (out / "cam0" / file_name(job.index, "png")).string());
         if (tracks)
-          all_tracks[job.index] = visible_landmarks(*scenario.world, scenario.camera, T_world_camera,
-                                                    scenario.hull_world->landmarks());
+          all_tracks[job.index] = visible_landmarks(
+              *scenario.world, scenario.camera, T_world_camera, scenario.hull_world->landmarks());
         return;
       }
       if (job.sensor == "sonar") {
         const Pose3 T_world_sonar = truth.T_world_body(t) * scenario.T_body_sensor_at("sonar", t);
         result.cloud = simulate_sonar_ping(*scenario.world, T_world_sonar, settings.sonar, rng);
       } else {
-        result.cloud = simulate_lidar_sweep(*scenario.world, truth, scenario.T_body_sensor.at(job.sensor), t,
-                                            settings.lidar, rng);
+        result.cloud = simulate_lidar_sweep(
+            *scenario.world, truth, scenario.T_body_sensor.at(job.sensor), t, settings.lidar, rng);
       }
       result.cloud.t_ns = options.t0_ns + job.t_ns;
       result.cloud.frame = job.sensor;
@@ -484,49 +511,53 @@ SimSummary run_simulation(const SimOptions& options) {
       }
     }
   }
-  summary.scans = jobs.size();
+  summary.scans = jobs.size() - (per_sensor.count("cam0") ? per_sensor["cam0"].size() : 0);
   summary.scan_points = total_points;
   for (const auto& [sensor, list] : per_sensor) {
     TextFile index((out / sensor / "index.csv").string());
     index.line("t,file");
     for (const auto& job : list)
-      index.line(format_seconds(t0 + job.t_ns) + "," + file_name(job.index, sensor == "cam0" ? "png" : "pcd"));
+      index.line(format_seconds(t0 + job.t_ns) + "," +
+                 file_name(job.index, sensor == "cam0" ? "png" : "pcd"));
     index.close();
   }
   for (const char* lidar : {"lidar_h", "lidar_v"}) {
     if (!per_sensor.count(lidar)) continue;
-    emit_sensor(lidar, "lidar", "scans", lidar, std::string("/") + lidar + "/points", settings.lidar.rate_hz,
-                [&](YAML::Emitter& y) {
+    emit_sensor(lidar, "lidar", "scans", lidar, std::string("/") + lidar + "/points",
+                settings.lidar.rate_hz, [&](YAML::Emitter& y) {
                   y << YAML::Key << "point_time" << YAML::Value << YAML::BeginMap;
                   y << YAML::Key << "field" << YAML::Value << "time";
                   y << YAML::Key << "unit" << YAML::Value << "s";
                   y << YAML::Key << "reference" << YAML::Value << "scan_start" << YAML::EndMap;
                   y << YAML::Key << "range_m" << YAML::Value << YAML::Flow << YAML::BeginSeq
                     << settings.lidar.range_min_m << settings.lidar.range_max_m << YAML::EndSeq;
-                  y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key << "range_sigma"
-                    << YAML::Value << settings.lidar.range_sigma_m << YAML::EndMap;
+                  y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key
+                    << "range_sigma" << YAML::Value << settings.lidar.range_sigma_m << YAML::EndMap;
                 });
   }
   if (per_sensor.count("sonar")) {
-    emit_sensor("sonar", "sonar", "scans", "sonar", "/sonar/points", settings.sonar.rate_hz, [&](YAML::Emitter& y) {
-      y << YAML::Key << "range_m" << YAML::Value << YAML::Flow << YAML::BeginSeq << settings.sonar.range_min_m
-        << settings.sonar.range_max_m << YAML::EndSeq;
-      y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key << "range_sigma" << YAML::Value
-        << settings.sonar.range_sigma_m << YAML::EndMap;
-    });
+    emit_sensor("sonar", "sonar", "scans", "sonar", "/sonar/points", settings.sonar.rate_hz,
+                [&](YAML::Emitter& y) {
+                  y << YAML::Key << "range_m" << YAML::Value << YAML::Flow << YAML::BeginSeq
+                    << settings.sonar.range_min_m << settings.sonar.range_max_m << YAML::EndSeq;
+                  y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap << YAML::Key
+                    << "range_sigma" << YAML::Value << settings.sonar.range_sigma_m << YAML::EndMap;
+                });
   }
   if (per_sensor.count("cam0")) {
     summary.images = per_sensor["cam0"].size();
     const CameraModel& c = scenario.camera;
-    emit_sensor("cam0", "camera", "images", "cam0", "/cam0/image_raw", camera_rate, [&](YAML::Emitter& y) {
-      y << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
-      y << YAML::Key << "model" << YAML::Value << c.model_name();
-      y << YAML::Key << "width" << YAML::Value << c.width << YAML::Key << "height" << YAML::Value << c.height;
-      y << YAML::Key << "fx" << YAML::Value << c.fx << YAML::Key << "fy" << YAML::Value << c.fy;
-      y << YAML::Key << "cx" << YAML::Value << c.cx << YAML::Key << "cy" << YAML::Value << c.cy;
-      y << YAML::Key << "distortion" << YAML::Value << YAML::Flow << c.distortion;
-      y << YAML::EndMap;
-    });
+    emit_sensor(
+        "cam0", "camera", "images", "cam0", "/cam0/image_raw", camera_rate, [&](YAML::Emitter& y) {
+          y << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
+          y << YAML::Key << "model" << YAML::Value << c.model_name();
+          y << YAML::Key << "width" << YAML::Value << c.width << YAML::Key << "height"
+            << YAML::Value << c.height;
+          y << YAML::Key << "fx" << YAML::Value << c.fx << YAML::Key << "fy" << YAML::Value << c.fy;
+          y << YAML::Key << "cx" << YAML::Value << c.cx << YAML::Key << "cy" << YAML::Value << c.cy;
+          y << YAML::Key << "distortion" << YAML::Value << YAML::Flow << c.distortion;
+          y << YAML::EndMap;
+        });
   }
   sensors_yaml << YAML::EndSeq;
   sensors_bag_yaml << YAML::EndSeq;
@@ -605,7 +636,8 @@ SimSummary run_simulation(const SimOptions& options) {
         y << YAML::Flow << YAML::BeginMap << YAML::Key << "kind" << YAML::Value << o.kind_name();
         y << YAML::Key << "center" << YAML::Value;
         emit_vector(y, o.center);
-        y << YAML::Key << (o.kind == ForeignObject::Kind::kCylinder ? "axis" : "normal") << YAML::Value;
+        y << YAML::Key << (o.kind == ForeignObject::Kind::kCylinder ? "axis" : "normal")
+          << YAML::Value;
         emit_vector(y, o.axis);
         y << YAML::Key << "radius" << YAML::Value << o.radius_m;
         y << YAML::Key << "height" << YAML::Value << o.height_m << YAML::EndMap;
@@ -633,7 +665,8 @@ SimSummary run_simulation(const SimOptions& options) {
     y << YAML::Key << "body_frame" << YAML::Value << "base_link";
     y << YAML::Key << "world_frame" << YAML::Value << "world";
     if (which == 1) y << YAML::Key << "bag" << YAML::Value << "mission.bag";
-    y << YAML::Key << "sensors" << YAML::Value << YAML::Load((which == 0 ? sensors_yaml : sensors_bag_yaml).c_str());
+    y << YAML::Key << "sensors" << YAML::Value
+      << YAML::Load((which == 0 ? sensors_yaml : sensors_bag_yaml).c_str());
     y << YAML::Key << "trajectories" << YAML::Value << YAML::BeginMap;
     if (which == 0) {
       y << YAML::Key << "map" << YAML::Value << "map_poses.tum";
@@ -641,8 +674,8 @@ SimSummary run_simulation(const SimOptions& options) {
     } else {
       y << YAML::Key << "map" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "topic"
         << YAML::Value << "/slam/keyframes" << YAML::EndMap;
-      y << YAML::Key << "odometry" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "topic"
-        << YAML::Value << "/slam/odometry" << YAML::EndMap;
+      y << YAML::Key << "odometry" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+        << "topic" << YAML::Value << "/slam/odometry" << YAML::EndMap;
     }
     y << YAML::Key << "ground_truth" << YAML::Value << "ground_truth/trajectory.tum";
     y << YAML::EndMap;

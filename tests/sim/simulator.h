@@ -36,14 +36,14 @@ struct SimOptions {
   std::string scenario = "usv-bridge";
   uint64_t seed = 1;
   std::string out_dir;
-  double duration_s = 0.0;            // <= 0: the scenario's full path
-  std::vector<std::string> sensors;   // imu,dvl,lidar_h,lidar_v,sonar,camera,depth; empty: all
+  double duration_s = 0.0;           // <= 0: the scenario's full path
+  std::vector<std::string> sensors;  // imu,dvl,lidar_h,lidar_v,sonar,camera,depth; empty: all
   double dvl_scale = 1.0;
   double dvl_dropout_rate = 0.0;
   bool write_bag = false;
   int threads = 2;
   TimeNs t0_ns = 1700000000LL * 1000000000LL;  // mission start stamp
-  std::vector<std::string> settings;  // "key=value" overrides (see settings_help())
+  std::vector<std::string> settings;           // "key=value" overrides (see settings_help())
 };
 
 struct SimSummary {

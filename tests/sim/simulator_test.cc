@@ -59,7 +59,8 @@ TEST_F(SimulatorTest, SameSeedSameBytesOtherSeedOtherBytes) {
   }
   EXPECT_GT(files, 50u);
   EXPECT_NE(slurp(root_ / "a" / "imu.csv"), slurp(root_ / "c" / "imu.csv"));
-  EXPECT_NE(slurp(root_ / "a" / "lidar_h" / "000005.pcd"), slurp(root_ / "c" / "lidar_h" / "000005.pcd"));
+  EXPECT_NE(slurp(root_ / "a" / "lidar_h" / "000005.pcd"),
+            slurp(root_ / "c" / "lidar_h" / "000005.pcd"));
   EXPECT_NE(slurp(root_ / "a" / "odometry.tum"), slurp(root_ / "c" / "odometry.tum"));
 }
 
@@ -74,7 +75,9 @@ TEST_F(SimulatorTest, ManifestNamesFilesThatExist) {
   ASSERT_EQ(mission["sensors"].size(), 7u);
   for (const auto& sensor : mission["sensors"]) {
     for (const char* key : {"file", "scans", "images"})
-      if (sensor[key]) EXPECT_TRUE(fs::exists(dir / sensor[key].as<std::string>())) << sensor[key];
+      if (sensor[key]) {
+        EXPECT_TRUE(fs::exists(dir / sensor[key].as<std::string>())) << sensor[key];
+      }
     EXPECT_EQ(sensor["T_body_sensor"]["rotation_xyzw"].size(), 4u);
   }
   for (const char* key : {"map", "odometry", "ground_truth"})
@@ -103,7 +106,9 @@ TEST_F(SimulatorTest, BagCarriesTheSameData) {
   EXPECT_EQ(manifest["bag"].as<std::string>(), "mission.bag");
   EXPECT_EQ(manifest["trajectories"]["odometry"]["topic"].as<std::string>(), "/slam/odometry");
   for (const auto& sensor : manifest["sensors"])
-    if (sensor["topic"]) EXPECT_GT(counts[sensor["topic"].as<std::string>()], 0u) << sensor["name"];
+    if (sensor["topic"]) {
+      EXPECT_GT(counts[sensor["topic"].as<std::string>()], 0u) << sensor["name"];
+    }
 }
 
 TEST_F(SimulatorTest, BadOptionsAreRejectedWithTheirName) {

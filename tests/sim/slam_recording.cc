@@ -23,7 +23,8 @@ Trajectory simulate_odometry(const PoseTable& truth, double duration_s, TimeNs t
   const double yaw_bias = o.yaw_bias_sigma_per_m * rng.gaussian();
   const double gain = o.degenerate_gain + o.degenerate_gain_sigma * rng.gaussian();
   const bool degenerate = o.degenerate_axis_world.norm() > 0.0;
-  const Eigen::Vector3d axis = degenerate ? o.degenerate_axis_world.normalized() : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d axis =
+      degenerate ? o.degenerate_axis_world.normalized() : Eigen::Vector3d::Zero();
   Trajectory out;
   Pose3 previous_true, estimate;
   for (int64_t t_ns : sample_times_ns(o.rate_hz, duration_s)) {
@@ -44,7 +45,8 @@ Trajectory simulate_odometry(const PoseTable& truth, double duration_s, TimeNs t
       step.linear() = delta.linear();
       step.translation() = previous_true.linear().transpose() * step_world;
       Pose3 next = estimate * step;
-      // Yaw error: rotate the new heading about world z (a gravity-aligned system keeps roll/pitch).
+      // Yaw error: rotate the new heading about world z (a gravity-aligned system keeps
+      // roll/pitch).
       next.linear() = exp_so3(Eigen::Vector3d(0, 0, yaw_error)) * next.linear();
       estimate = next;
     }
@@ -58,7 +60,8 @@ Trajectory simulate_map_poses(const PoseTable& truth, double duration_s, TimeNs 
                               const MapPoseOptions& o, uint64_t seed) {
   Rng rng(seed, Stream::kMapPoses);
   const bool degenerate = o.degenerate_axis_world.norm() > 0.0;
-  const Eigen::Vector3d axis = degenerate ? o.degenerate_axis_world.normalized() : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d axis =
+      degenerate ? o.degenerate_axis_world.normalized() : Eigen::Vector3d::Zero();
   double axis_error = 0.0;
   Eigen::Vector3d previous_position;
   Trajectory out;

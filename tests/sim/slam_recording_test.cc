@@ -16,15 +16,16 @@ TEST(SlamRecording, OdometryDriftsMoreThanMapPoses) {
     const PoseTable truth(*s.motion, duration);
     const Trajectory odometry = simulate_odometry(truth, duration, 0, {}, seed);
     const Trajectory map = simulate_map_poses(truth, duration, 0, {}, seed);
-    EXPECT_NEAR(map.size(), duration, 2.0);          // ~1 Hz keyframes
+    EXPECT_NEAR(map.size(), duration, 2.0);            // ~1 Hz keyframes
     EXPECT_NEAR(odometry.size(), duration * 10, 2.0);  // 10 Hz
     const double odometry_rmse = position_rmse(odometry, truth, 0);
     const double map_rmse = position_rmse(map, truth, 0);
     EXPECT_GT(odometry_rmse, 2.0 * map_rmse) << seed;
     EXPECT_LT(map_rmse, 0.1);
     // "A few % of distance": final drift between 0.2 % and 10 % of the path.
-    const double final_error = (odometry.back().T_world_body.translation() -
-                                truth.T_world_body(duration).translation()).norm();
+    const double final_error =
+        (odometry.back().T_world_body.translation() - truth.T_world_body(duration).translation())
+            .norm();
     EXPECT_GT(final_error, 0.002 * s.motion->path().length());
     EXPECT_LT(final_error, 0.10 * s.motion->path().length());
   }

@@ -34,16 +34,18 @@ void CubicSpline1d::evaluate(double u, double* y, double* dy, double* ddy) const
   const double h = knots_[i + 1] - knots_[i];
   const double a = (knots_[i + 1] - u) / h, b = (u - knots_[i]) / h;
   const double m0 = second_[i], m1 = second_[i + 1];
-  *y = a * values_[i] + b * values_[i + 1] + ((a * a * a - a) * m0 + (b * b * b - b) * m1) * h * h / 6.0;
-  *dy = (values_[i + 1] - values_[i]) / h + ((1.0 - 3.0 * a * a) * m0 + (3.0 * b * b - 1.0) * m1) * h / 6.0;
+  *y = a * values_[i] + b * values_[i + 1] +
+       ((a * a * a - a) * m0 + (b * b * b - b) * m1) * h * h / 6.0;
+  *dy = (values_[i + 1] - values_[i]) / h +
+        ((1.0 - 3.0 * a * a) * m0 + (3.0 * b * b - 1.0) * m1) * h / 6.0;
   *ddy = a * m0 + b * m1;
 }
 
 namespace {
 constexpr int kTablePerSegment = 32;
 // 5-point Gauss-Legendre nodes and weights on [-1, 1].
-constexpr double kGaussNode[5] = {0.0, -0.5384693101056831, 0.5384693101056831,
-                                  -0.9061798459386640, 0.9061798459386640};
+constexpr double kGaussNode[5] = {0.0, -0.5384693101056831, 0.5384693101056831, -0.9061798459386640,
+                                  0.9061798459386640};
 constexpr double kGaussWeight[5] = {0.5688888888888889, 0.4786286704993665, 0.4786286704993665,
                                     0.2369268850561891, 0.2369268850561891};
 }  // namespace

@@ -88,8 +88,8 @@ void parallel_for(size_t n, int num_threads, const Function& function) {
 struct MeshQuery::Impl {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<Eigen::Vector3i> faces;
-  std::vector<Eigen::Vector3d> face_normals;    // unit; zero for degenerate faces
-  std::vector<Eigen::Vector3d> vertex_normals;  // angle-weighted pseudonormals, unit
+  std::vector<Eigen::Vector3d> face_normals;                   // unit; zero for degenerate faces
+  std::vector<Eigen::Vector3d> vertex_normals;                 // angle-weighted pseudonormals, unit
   std::unordered_map<uint64_t, Eigen::Vector3d> edge_normals;  // sum of face normals, unit
   std::vector<CgalTriangle> triangles;  // the tree's primitives point into this vector
   std::vector<int> triangle_face;       // tree triangle -> index into `faces`
@@ -165,7 +165,7 @@ Eigen::Vector3d MeshQuery::Impl::feature_normal(int f, const TrianglePoint& on_t
     normal = edge_normals.at(edge_key(face[on_triangle.index], face[(on_triangle.index + 1) % 3]));
   }
   // Opposite faces (a sheet folded onto itself) cancel; fall back to the face's own normal.
-  return face_normals[f];
+  return normal.squaredNorm() > 0.5 ? normal : face_normals[f];
 }
 
 ClosestPoint MeshQuery::Impl::closest_point(const Eigen::Vector3d& query) const {
@@ -196,8 +196,8 @@ std::optional<RayHit> MeshQuery::Impl::raycast(const Ray& ray) const {
   const double min_range = std::max(ray.min_range_m, 0.0);
   if (ray.max_range_m < min_range) return std::nullopt;
   const Eigen::Vector3d start = ray.origin + min_range * direction;
-  const Kernel::Ray_3 cgal_ray(to_cgal(start), Kernel::Vector_3(direction.x(), direction.y(),
-                                                                  direction.z()));
+  const Kernel::Ray_3 cgal_ray(to_cgal(start),
+                               Kernel::Vector_3(direction.x(), direction.y(), direction.z()));
   const auto intersection = tree.first_intersection(cgal_ray);
   if (!intersection) return std::nullopt;
   Eigen::Vector3d hit;
@@ -239,8 +239,7 @@ namespace {
 void check_finite(const std::vector<Eigen::Vector3d>& queries) {
   for (size_t i = 0; i < queries.size(); ++i) {
     if (!queries[i].allFinite()) {
-      throw std::invalid_argument("MeshQuery: query point " + std::to_string(i) +
-                                  " is not finite");
+      throw std::invalid_argument("MeshQuery: query point " + std::to_string(i) + " is not finite");
     }
   }
 }
@@ -259,9 +258,8 @@ std::vector<double> MeshQuery::signed_distances(const std::vector<Eigen::Vector3
                                                 int num_threads) const {
   check_finite(queries);
   std::vector<double> results(queries.size());
-  parallel_for(queries.size(), num_threads, [&](size_t i) {
-    results[i] = impl_->closest_point(queries[i]).signed_distance_m;
-  });
+  parallel_for(queries.size(), num_threads,
+               [&](size_t i) { results[i] = impl_->closest_point(queries[i]).signed_distance_m; });
   return results;
 }
 

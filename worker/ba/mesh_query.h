@@ -20,10 +20,10 @@ namespace keel::ba {
 enum class MeshFeature { kFace, kEdge, kVertex };
 
 struct ClosestPoint {
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();   // closest point on the mesh (mesh frame)
-  int face = -1;                                     // index into TriangleMesh::faces
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // closest point on the mesh (mesh frame)
+  int face = -1;                                    // index into TriangleMesh::faces
   MeshFeature feature = MeshFeature::kFace;
-  double distance_m = 0.0;                           // |query - point|
+  double distance_m = 0.0;  // |query - point|
   // Positive on the side the surface normal points to (outside of a closed, outward-oriented
   // mesh), negative inside. Eq. (5), seed 001, with n the pseudonormal below.
   double signed_distance_m = 0.0;
@@ -41,9 +41,9 @@ struct Ray {
 };
 
 struct RayHit {
-  double distance_m = 0.0;                         // along the unit direction from origin
+  double distance_m = 0.0;  // along the unit direction from origin
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
-  int face = -1;                                   // index into TriangleMesh::faces
+  int face = -1;                                           // index into TriangleMesh::faces
   Eigen::Vector3d face_normal = Eigen::Vector3d::UnitZ();  // unit, from the face's winding
 };
 

@@ -12,7 +12,7 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<Eigen::Vector3i> faces;  // counter-clockwise seen from outside
   // Optional per-vertex data, as a PLY file may carry it: empty or vertices.size().
-  std::vector<Eigen::Vector3d> vertex_normals;                 // unit, outward
+  std::vector<Eigen::Vector3d> vertex_normals;              // unit, outward
   std::vector<Eigen::Matrix<uint8_t, 3, 1>> vertex_colors;  // RGB
 
   size_t num_vertices() const { return vertices.size(); }

@@ -34,20 +34,23 @@ struct BagReader::Impl {
     for (const auto& t : topics)
       if (t.topic == topic_name) return t;
     std::string known;
-    for (const auto& t : topics) known += (known.empty() ? "" : ", ") + t.topic + " (" + t.datatype + ")";
-    throw IoError(name() + ": no topic '" + topic_name + "' in the bag (topics: " +
-                  (known.empty() ? "none" : known) + ")");
+    for (const auto& t : topics)
+      known += (known.empty() ? "" : ", ") + t.topic + " (" + t.datatype + ")";
+    throw IoError(name() + ": no topic '" + topic_name +
+                  "' in the bag (topics: " + (known.empty() ? "none" : known) + ")");
   }
 
   // Checks the topic's type against `accepted`; returns the type.
-  std::string expect_type(const std::string& topic_name, std::initializer_list<const char*> accepted) const {
+  std::string expect_type(const std::string& topic_name,
+                          std::initializer_list<const char*> accepted) const {
     const BagTopicInfo& info = topic(topic_name);
     std::string list;
     for (const char* type : accepted) {
       if (info.datatype == type) return info.datatype;
       list += (list.empty() ? "" : " or ") + std::string(type);
     }
-    throw IoError(name() + ": topic '" + topic_name + "' holds " + info.datatype + "; expected " + list);
+    throw IoError(name() + ": topic '" + topic_name + "' holds " + info.datatype + "; expected " +
+                  list);
   }
 
   // Runs `body` over every message of a topic, turning rosbag errors into IoError.
@@ -58,9 +61,11 @@ struct BagReader::Impl {
       size_t index = 0;
       for (const rosbag::MessageInstance& m : view) body(m, index++);
     } catch (const rosbag::BagException& e) {
-      throw IoError(name() + ": cannot read topic '" + topic_name + "' (truncated or corrupt bag?): " + e.what());
+      throw IoError(name() + ": cannot read topic '" + topic_name +
+                    "' (truncated or corrupt bag?): " + e.what());
     } catch (const ros::Exception& e) {
-      throw IoError(name() + ": cannot decode a message of topic '" + topic_name + "': " + e.what());
+      throw IoError(name() + ": cannot decode a message of topic '" + topic_name +
+                    "': " + e.what());
     }
   }
 };
@@ -80,8 +85,9 @@ std::string where(const BagReader::Impl& impl, const std::string& topic, size_t 
 void check_increasing(const BagReader::Impl& impl, const std::string& topic, size_t index,
                       TimeNs t_ns, TimeNs previous_ns) {
   if (index > 0 && t_ns <= previous_ns)
-    throw IoError(where(impl, topic, index) + ": " + (t_ns == previous_ns ? "duplicate" : "decreasing") +
-                  " stamp " + format_seconds(t_ns) + " (previous " + format_seconds(previous_ns) +
+    throw IoError(where(impl, topic, index) + ": " +
+                  (t_ns == previous_ns ? "duplicate" : "decreasing") + " stamp " +
+                  format_seconds(t_ns) + " (previous " + format_seconds(previous_ns) +
                   "); expected strictly increasing header stamps");
 }
 
@@ -95,28 +101,38 @@ Eigen::Vector3d finite3(const Vector& v, const std::string& what) {
 Pose3 pose_of(const geometry_msgs::Pose& p, const std::string& what) {
   const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
   if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3)
-    throw IoError(what + ": orientation is not a unit quaternion (|q| = " + std::to_string(q.norm()) + ")");
+    throw IoError(
+        what + ": orientation is not a unit quaternion (|q| = " + std::to_string(q.norm()) + ")");
   return make_pose(q, finite3(p.position, what));
 }
 
 FieldType field_type(uint8_t datatype, const std::string& name, const std::string& what) {
   using F = sensor_msgs::PointField;
   switch (datatype) {
-    case F::INT8: return FieldType::kInt8;
-    case F::UINT8: return FieldType::kUint8;
-    case F::INT16: return FieldType::kInt16;
-    case F::UINT16: return FieldType::kUint16;
-    case F::INT32: return FieldType::kInt32;
-    case F::UINT32: return FieldType::kUint32;
-    case F::FLOAT32: return FieldType::kFloat32;
-    case F::FLOAT64: return FieldType::kFloat64;
+    case F::INT8:
+      return FieldType::kInt8;
+    case F::UINT8:
+      return FieldType::kUint8;
+    case F::INT16:
+      return FieldType::kInt16;
+    case F::UINT16:
+      return FieldType::kUint16;
+    case F::INT32:
+      return FieldType::kInt32;
+    case F::UINT32:
+      return FieldType::kUint32;
+    case F::FLOAT32:
+      return FieldType::kFloat32;
+    case F::FLOAT64:
+      return FieldType::kFloat64;
   }
   throw IoError(what + ": field '" + name + "' has unknown datatype " + std::to_string(datatype));
 }
 
 class BagScanSource : public ScanSource {
  public:
-  BagScanSource(std::shared_ptr<const BagReader::Impl> impl, std::string topic, ScanReadOptions options)
+  BagScanSource(std::shared_ptr<const BagReader::Impl> impl, std::string topic,
+                ScanReadOptions options)
       : impl_(std::move(impl)), topic_(std::move(topic)), options_(std::move(options)) {
     impl_->expect_type(topic_, {"sensor_msgs/PointCloud2"});
     count_ = impl_->topic(topic_).messages;
@@ -128,7 +144,9 @@ class BagScanSource : public ScanSource {
     }
   }
   size_t size() const override { return count_; }
-  std::string current_source() const override { return index_ == 0 ? "" : where(*impl_, topic_, index_ - 1); }
+  std::string current_source() const override {
+    return index_ == 0 ? "" : where(*impl_, topic_, index_ - 1);
+  }
 
   bool next(PointCloud& cloud) override {
     try {
@@ -144,20 +162,24 @@ class BagScanSource : public ScanSource {
       ++it_;
       return true;
     } catch (const rosbag::BagException& e) {
-      throw IoError(where(*impl_, topic_, index_) + ": cannot read (truncated or corrupt bag?): " + e.what());
+      throw IoError(where(*impl_, topic_, index_) +
+                    ": cannot read (truncated or corrupt bag?): " + e.what());
     } catch (const ros::Exception& e) {
       throw IoError(where(*impl_, topic_, index_) + ": cannot decode: " + e.what());
     }
   }
 
  private:
-  PointCloud unpack(const sensor_msgs::PointCloud2& msg, TimeNs t_ns, const std::string& what) const {
+  PointCloud unpack(const sensor_msgs::PointCloud2& msg, TimeNs t_ns,
+                    const std::string& what) const {
     if (msg.is_bigendian) throw IoError(what + ": big-endian point data is not supported");
     const size_t points = static_cast<size_t>(msg.width) * msg.height;
     const size_t row_bytes = static_cast<size_t>(msg.width) * msg.point_step;
-    if (msg.row_step < row_bytes || msg.data.size() < static_cast<size_t>(msg.row_step) * msg.height)
+    if (msg.row_step < row_bytes ||
+        msg.data.size() < static_cast<size_t>(msg.row_step) * msg.height)
       throw IoError(what + ": data holds " + std::to_string(msg.data.size()) + " bytes; " +
-                    std::to_string(msg.height) + " rows of " + std::to_string(msg.row_step) + " needed");
+                    std::to_string(msg.height) + " rows of " + std::to_string(msg.row_step) +
+                    " needed");
     PackedCloudView view;
     view.num_points = points;
     view.point_step = msg.point_step;
@@ -194,19 +216,26 @@ ImageFrame raw_image(const sensor_msgs::Image& msg, bool decode, const std::stri
   frame.height = static_cast<int>(msg.height);
   int in_channels = 0;
   const std::string& e = msg.encoding;
-  if (e == "mono8" || e == "8UC1") frame.channels = in_channels = 1, frame.bit_depth = 8;
-  else if (e == "mono16" || e == "16UC1") frame.channels = in_channels = 1, frame.bit_depth = 16;
-  else if (e == "rgb8" || e == "bgr8" || e == "8UC3") frame.channels = 3, in_channels = 3, frame.bit_depth = 8;
-  else if (e == "rgba8" || e == "bgra8" || e == "8UC4") frame.channels = 3, in_channels = 4, frame.bit_depth = 8;
+  if (e == "mono8" || e == "8UC1")
+    frame.channels = in_channels = 1, frame.bit_depth = 8;
+  else if (e == "mono16" || e == "16UC1")
+    frame.channels = in_channels = 1, frame.bit_depth = 16;
+  else if (e == "rgb8" || e == "bgr8" || e == "8UC3")
+    frame.channels = 3, in_channels = 3, frame.bit_depth = 8;
+  else if (e == "rgba8" || e == "bgra8" || e == "8UC4")
+    frame.channels = 3, in_channels = 4, frame.bit_depth = 8;
   else
-    throw IoError(what + ": image encoding '" + e + "' not supported (mono8, mono16, rgb8, bgr8, rgba8, bgra8)");
+    throw IoError(what + ": image encoding '" + e +
+                  "' not supported (mono8, mono16, rgb8, bgr8, rgba8, bgra8)");
   const size_t pixel_bytes = in_channels * frame.bit_depth / 8;
-  if (msg.step < msg.width * pixel_bytes || msg.data.size() < static_cast<size_t>(msg.step) * msg.height)
+  if (msg.step < msg.width * pixel_bytes ||
+      msg.data.size() < static_cast<size_t>(msg.step) * msg.height)
     throw IoError(what + ": image data holds " + std::to_string(msg.data.size()) + " bytes; " +
                   std::to_string(msg.height) + " rows of " + std::to_string(msg.step) + " needed");
   if (!decode) return frame;
   const bool swap = e == "bgr8" || e == "bgra8";
-  frame.pixels.resize(static_cast<size_t>(frame.width) * frame.height * frame.channels * frame.bit_depth / 8);
+  frame.pixels.resize(static_cast<size_t>(frame.width) * frame.height * frame.channels *
+                      frame.bit_depth / 8);
   size_t out = 0;
   for (size_t r = 0; r < msg.height; ++r) {
     const uint8_t* row = msg.data.data() + r * msg.step;
@@ -229,14 +258,17 @@ class BagImageSource : public ImageSource {
  public:
   BagImageSource(std::shared_ptr<const BagReader::Impl> impl, std::string topic)
       : impl_(std::move(impl)), topic_(std::move(topic)) {
-    compressed_ = impl_->expect_type(topic_, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"}) ==
-                  "sensor_msgs/CompressedImage";
+    compressed_ =
+        impl_->expect_type(topic_, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"}) ==
+        "sensor_msgs/CompressedImage";
     count_ = impl_->topic(topic_).messages;
     view_ = std::make_unique<rosbag::View>(impl_->bag, rosbag::TopicQuery(topic_));
     it_ = view_->begin();
   }
   size_t size() const override { return count_; }
-  std::string current_source() const override { return index_ == 0 ? "" : where(*impl_, topic_, index_ - 1); }
+  std::string current_source() const override {
+    return index_ == 0 ? "" : where(*impl_, topic_, index_ - 1);
+  }
 
   bool next(ImageFrame& frame, bool decode) override {
     try {
@@ -259,7 +291,8 @@ class BagImageSource : public ImageSource {
       ++it_;
       return true;
     } catch (const rosbag::BagException& e) {
-      throw IoError(where(*impl_, topic_, index_) + ": cannot read (truncated or corrupt bag?): " + e.what());
+      throw IoError(where(*impl_, topic_, index_) +
+                    ": cannot read (truncated or corrupt bag?): " + e.what());
     } catch (const ros::Exception& e) {
       throw IoError(where(*impl_, topic_, index_) + ": cannot decode: " + e.what());
     }
@@ -356,7 +389,8 @@ DvlSeries BagReader::read_dvl(const std::string& topic) const {
 }
 
 Trajectory BagReader::read_trajectory(const std::string& topic) const {
-  const std::string type = impl_->expect_type(topic, {"geometry_msgs/PoseStamped", "nav_msgs/Odometry"});
+  const std::string type =
+      impl_->expect_type(topic, {"geometry_msgs/PoseStamped", "nav_msgs/Odometry"});
   const bool odometry = type == "nav_msgs/Odometry";
   Trajectory out;
   impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
@@ -384,7 +418,8 @@ std::vector<StaticTransform> BagReader::read_static_transforms(const std::string
   impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
     auto msg = m.instantiate<tf2_msgs::TFMessage>();
     for (const auto& t : msg->transforms) {
-      const std::string what = where(*impl_, topic, i) + " " + t.header.frame_id + "->" + t.child_frame_id;
+      const std::string what =
+          where(*impl_, topic, i) + " " + t.header.frame_id + "->" + t.child_frame_id;
       geometry_msgs::Pose p;
       p.position.x = t.transform.translation.x;
       p.position.y = t.transform.translation.y;
@@ -400,7 +435,8 @@ std::vector<StaticTransform> BagReader::read_static_transforms(const std::string
   return out;
 }
 
-std::unique_ptr<ScanSource> BagReader::open_scans(const std::string& topic, ScanReadOptions options) const {
+std::unique_ptr<ScanSource> BagReader::open_scans(const std::string& topic,
+                                                  ScanReadOptions options) const {
   return std::make_unique<BagScanSource>(impl_, topic, std::move(options));
 }
 

@@ -43,10 +43,11 @@ class BagReader {
 
   // Each fails naming bag, topic and message index on a wrong message type, a non-finite
   // value or a duplicate/decreasing stamp.
-  ImuSeries read_imu(const std::string& topic) const;          // sensor_msgs/Imu
-  DvlSeries read_dvl(const std::string& topic) const;          // geometry_msgs/Twist(WithCovariance)Stamped
+  ImuSeries read_imu(const std::string& topic) const;  // sensor_msgs/Imu
+  DvlSeries read_dvl(const std::string& topic) const;  // geometry_msgs/Twist(WithCovariance)Stamped
   Trajectory read_trajectory(const std::string& topic) const;  // PoseStamped or nav_msgs/Odometry
-  std::vector<StaticTransform> read_static_transforms(const std::string& topic = "/tf_static") const;
+  std::vector<StaticTransform> read_static_transforms(
+      const std::string& topic = "/tf_static") const;
   // sensor_msgs/PointCloud2, one message at a time; the time field as in ScanReadOptions.
   std::unique_ptr<ScanSource> open_scans(const std::string& topic, ScanReadOptions options) const;
   // sensor_msgs/Image (mono8/16, rgb8, bgr8, rgba8, bgra8) or sensor_msgs/CompressedImage.

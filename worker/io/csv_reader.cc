@@ -30,12 +30,16 @@ CsvReader::CsvReader(const std::filesystem::path& path, std::vector<std::string>
   split_commas(header, fields_);
   std::vector<std::string> found;
   for (auto f : fields_) found.emplace_back(trim(f));
-  bool ok = found.size() >= columns.size() && found.size() <= columns.size() + optional_columns.size();
+  bool ok =
+      found.size() >= columns.size() && found.size() <= columns.size() + optional_columns.size();
   for (size_t i = 0; ok && i < found.size(); ++i) {
-    const std::string& want = i < columns.size() ? columns[i] : optional_columns[i - columns.size()];
+    const std::string& want =
+        i < columns.size() ? columns[i] : optional_columns[i - columns.size()];
     ok = found[i] == want;
   }
-  if (!ok) lines_.fail("header: expected '" + expected + "', found '" + join(found, 0, found.size()) + "'");
+  if (!ok)
+    lines_.fail("header: expected '" + expected + "', found '" + join(found, 0, found.size()) +
+                "'");
   names_ = std::move(found);
 }
 

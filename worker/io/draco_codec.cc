@@ -142,7 +142,8 @@ void measure_error(const std::vector<Vector>& originals, const std::vector<bool>
   result->position_error_bound_m = 0.5 * std::sqrt(3.0) * step;
   // Allow for float rounding of large coordinates on top of half a step.
   double largest = 0.0;
-  for (const auto& p : originals) largest = std::max(largest, p.template cast<double>().cwiseAbs().maxCoeff());
+  for (const auto& p : originals)
+    largest = std::max(largest, p.template cast<double>().cwiseAbs().maxCoeff());
   const double tolerance = result->position_error_bound_m + 8.0 * largest * 1.2e-7;
   result->max_position_error_m = max_nearest_distance(originals, used, decoded, step, tolerance);
 }
@@ -226,11 +227,13 @@ DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positi
   builder.SetAttributeValuesForAllPoints(position_id, positions.data(), sizeof(Eigen::Vector3f));
   std::vector<int> field_ids;
   for (const auto& field : fields) {
-    field_ids.push_back(builder.AddAttribute(draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32));
+    field_ids.push_back(
+        builder.AddAttribute(draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32));
     builder.SetAttributeValuesForAllPoints(field_ids.back(), field.values.data(), sizeof(float));
   }
   std::unique_ptr<draco::PointCloud> cloud = builder.Finalize(false);
-  for (size_t f = 0; f < fields.size(); ++f) name_attribute(cloud.get(), field_ids[f], fields[f].name);
+  for (size_t f = 0; f < fields.size(); ++f)
+    name_attribute(cloud.get(), field_ids[f], fields[f].name);
 
   draco::Encoder encoder = make_encoder(options);
   draco::EncoderBuffer buffer;
@@ -257,7 +260,8 @@ DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
   return encode_draco_point_cloud(cloud.xyz, with_intensity, options);
 }
 
-DracoEncoded encode_draco_mesh(const TriangleMesh& mesh, const std::vector<ScalarField>& vertex_fields,
+DracoEncoded encode_draco_mesh(const TriangleMesh& mesh,
+                               const std::vector<ScalarField>& vertex_fields,
                                const DracoOptions& options) {
   check_options(options);
   check_positions(mesh.vertices, "encode_draco_mesh");
@@ -293,9 +297,9 @@ DracoEncoded encode_draco_mesh(const TriangleMesh& mesh, const std::vector<Scala
   draco_mesh.SetNumFaces(mesh.faces.size());
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
     const Eigen::Vector3i& face = mesh.faces[f];
-    draco_mesh.SetFace(draco::FaceIndex(static_cast<uint32_t>(f)),
-                       {draco::PointIndex(face[0]), draco::PointIndex(face[1]),
-                        draco::PointIndex(face[2])});
+    draco_mesh.SetFace(
+        draco::FaceIndex(static_cast<uint32_t>(f)),
+        {draco::PointIndex(face[0]), draco::PointIndex(face[1]), draco::PointIndex(face[2])});
   }
 
   draco::Encoder encoder = make_encoder(options);
@@ -362,8 +366,8 @@ void write_draco_file(const std::filesystem::path& path, const std::string& byte
   std::error_code error;
   std::filesystem::rename(temporary, path, error);
   if (error) {
-    throw std::runtime_error(path.string() + ": cannot move the written file into place: " +
-                             error.message());
+    throw std::runtime_error(path.string() +
+                             ": cannot move the written file into place: " + error.message());
   }
 }
 

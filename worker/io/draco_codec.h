@@ -15,8 +15,8 @@
 namespace keel::io {
 
 struct DracoOptions {
-  int position_bits = 14;   // quantization of positions, 1..30 (Draco's own default is 11)
-  int field_bits = 12;      // quantization of scalar fields, 1..30; 0 stores them lossless
+  int position_bits = 14;     // quantization of positions, 1..30 (Draco's own default is 11)
+  int field_bits = 12;        // quantization of scalar fields, 1..30; 0 stores them lossless
   int compression_level = 7;  // 0 (fastest) .. 10 (smallest); Draco speed = 10 - level
 };
 

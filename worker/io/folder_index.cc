@@ -22,7 +22,8 @@ std::vector<IndexEntry> read_folder_index(const fs::path& folder) {
       csv.fail("file '" + name + "': expected a file name inside the folder");
     e.path = (folder / rel).lexically_normal();
     std::error_code ec;
-    if (!fs::is_regular_file(e.path, ec)) csv.fail("file '" + name + "' not found (" + e.path.string() + ")");
+    if (!fs::is_regular_file(e.path, ec))
+      csv.fail("file '" + name + "' not found (" + e.path.string() + ")");
     entries.push_back(std::move(e));
   }
   return entries;

@@ -18,6 +18,7 @@ struct IndexEntry {
 // Fails naming index.csv and the line for a bad header, stamp, duplicate or decreasing
 // stamp, a path leaving the folder, or a file that does not exist.
 std::vector<IndexEntry> read_folder_index(const std::filesystem::path& folder);
-void write_folder_index(const std::filesystem::path& folder, const std::vector<IndexEntry>& entries);
+void write_folder_index(const std::filesystem::path& folder,
+                        const std::vector<IndexEntry>& entries);
 
 }  // namespace keel::io

@@ -24,7 +24,8 @@ ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
   if (mat.channels() == 4) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
   if (mat.channels() == 3) cv::cvtColor(mat, mat, cv::COLOR_BGR2RGB);
   if (mat.channels() != 1 && mat.channels() != 3)
-    throw IoError(source + ": " + std::to_string(mat.channels()) + " channels; expected gray or RGB");
+    throw IoError(source + ": " + std::to_string(mat.channels()) +
+                  " channels; expected gray or RGB");
   if (mat.depth() != CV_8U && mat.depth() != CV_16U)
     throw IoError(source + ": unsupported pixel depth; expected 8 or 16 bit");
   ImageFrame frame;
@@ -34,7 +35,8 @@ ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
   frame.bit_depth = mat.depth() == CV_8U ? 8 : 16;
   const size_t row_bytes = mat.cols * mat.elemSize();
   frame.pixels.resize(row_bytes * mat.rows);
-  for (int r = 0; r < mat.rows; ++r) std::memcpy(frame.pixels.data() + r * row_bytes, mat.ptr(r), row_bytes);
+  for (int r = 0; r < mat.rows; ++r)
+    std::memcpy(frame.pixels.data() + r * row_bytes, mat.ptr(r), row_bytes);
   return frame;
 }
 
@@ -48,25 +50,38 @@ ImageFrame read_png_info(const std::filesystem::path& path) {
   const size_t n = std::fread(head, 1, sizeof(head), f.get());
   static const uint8_t kMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (n < 8 || std::memcmp(head, kMagic, 8) != 0) throw IoError(file + ": not a PNG file");
-  if (n < 33 || std::memcmp(head + 12, "IHDR", 4) != 0) throw IoError(file + ": truncated PNG (no IHDR chunk)");
+  if (n < 33 || std::memcmp(head + 12, "IHDR", 4) != 0)
+    throw IoError(file + ": truncated PNG (no IHDR chunk)");
   ImageFrame frame;
   frame.width = static_cast<int>(big_endian32(head + 16));
   frame.height = static_cast<int>(big_endian32(head + 20));
   frame.bit_depth = head[24];
   switch (head[25]) {  // PNG colour type
-    case 0: frame.channels = 1; break;
-    case 2: frame.channels = 3; break;
-    case 3: frame.channels = 3; break;  // palette, decoded to RGB
-    case 4: frame.channels = 2; break;
-    case 6: frame.channels = 4; break;
-    default: throw IoError(file + ": bad PNG colour type " + std::to_string(head[25]));
+    case 0:
+      frame.channels = 1;
+      break;
+    case 2:
+      frame.channels = 3;
+      break;
+    case 3:
+      frame.channels = 3;
+      break;  // palette, decoded to RGB
+    case 4:
+      frame.channels = 2;
+      break;
+    case 6:
+      frame.channels = 4;
+      break;
+    default:
+      throw IoError(file + ": bad PNG colour type " + std::to_string(head[25]));
   }
   if (frame.width <= 0 || frame.height <= 0) throw IoError(file + ": PNG with zero size");
   return frame;
 }
 
 ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source) {
-  const cv::Mat buffer(1, static_cast<int>(encoded.size()), CV_8U, const_cast<uint8_t*>(encoded.data()));
+  const cv::Mat buffer(1, static_cast<int>(encoded.size()), CV_8U,
+                       const_cast<uint8_t*>(encoded.data()));
   const cv::Mat mat = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
   if (mat.empty()) throw IoError(source + ": cannot decode image (truncated or not PNG/JPEG)");
   return from_mat(mat, source);
@@ -81,7 +96,8 @@ void write_png(const std::filesystem::path& path, const ImageFrame& image) {
   const std::string file = path.string();
   if (image.bit_depth != 8 || (image.channels != 1 && image.channels != 3) ||
       image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels)
-    throw IoError(file + ": write_png expects 8-bit gray or RGB pixels of width*height*channels bytes");
+    throw IoError(file +
+                  ": write_png expects 8-bit gray or RGB pixels of width*height*channels bytes");
   cv::Mat mat(image.height, image.width, image.channels == 1 ? CV_8UC1 : CV_8UC3,
               const_cast<uint8_t*>(image.pixels.data()));
   cv::Mat out = mat;

@@ -36,7 +36,8 @@ void write_loop_closures(const std::filesystem::path& path, const std::vector<Lo
     const Eigen::Vector3d t = loop.T_body_i_body_j.translation();
     const Eigen::Quaterniond q(loop.T_body_i_body_j.rotation());
     w.seconds(loop.t_i_ns).text(",").seconds(loop.t_j_ns);
-    for (double x : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(), loop.sigma_t_m, loop.sigma_r_rad})
+    for (double x :
+         {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(), loop.sigma_t_m, loop.sigma_r_rad})
       w.text(",").number(x);
     w.text("\n");
   }

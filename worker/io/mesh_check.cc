@@ -71,8 +71,7 @@ void count_faces_and_edges(const TriangleMesh& mesh, const MeshCheckOptions& opt
       continue;
     }
     const Eigen::Vector3d& a = mesh.vertices[f[0]];
-    const double area =
-        0.5 * (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm();
+    const double area = 0.5 * (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a).norm();
     if (area <= min_area) ++report->zero_area_faces;
     std::array<int, 3> key{f[0], f[1], f[2]};
     std::sort(key.begin(), key.end());
@@ -125,17 +124,15 @@ void add_warnings(const MeshCheckOptions& options, MeshCheckReport* report) {
               "vertices belong to no face");
   const double extent = report->largest_extent_m;
   if (report->num_vertices > 0 && extent > options.max_plausible_extent_m) {
-    report->warnings.push_back(
-        {"units", 1,
-         "largest extent " + format_m(extent) + " m exceeds " +
-             format_m(options.max_plausible_extent_m) +
-             " m: are the coordinates in millimetres?"});
+    report->warnings.push_back({"units", 1,
+                                "largest extent " + format_m(extent) + " m exceeds " +
+                                    format_m(options.max_plausible_extent_m) +
+                                    " m: are the coordinates in millimetres?"});
   } else if (report->num_vertices > 0 && extent < options.min_plausible_extent_m) {
-    report->warnings.push_back(
-        {"units", 1,
-         "largest extent " + format_m(extent) + " m is below " +
-             format_m(options.min_plausible_extent_m) +
-             " m: are the coordinates in kilometres?"});
+    report->warnings.push_back({"units", 1,
+                                "largest extent " + format_m(extent) + " m is below " +
+                                    format_m(options.min_plausible_extent_m) +
+                                    " m: are the coordinates in kilometres?"});
   }
 }
 

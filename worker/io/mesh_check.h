@@ -31,19 +31,19 @@ struct MeshWarning {
 struct MeshCheckReport {
   size_t num_vertices = 0;
   size_t num_faces = 0;
-  size_t num_edges = 0;                // distinct undirected edges
+  size_t num_edges = 0;  // distinct undirected edges
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
   double largest_extent_m = 0.0;
-  size_t invalid_index_faces = 0;      // an index outside the vertex list (otherwise skipped)
-  size_t repeated_index_faces = 0;     // a vertex index used twice in one face
-  size_t zero_area_faces = 0;          // distinct indices, but (near) zero area
-  size_t non_manifold_edges = 0;       // shared by more than two faces
-  size_t boundary_edges = 0;           // used by exactly one face
-  size_t inconsistent_edges = 0;       // two faces traverse it in the same direction
-  size_t duplicate_faces = 0;          // same vertex set as an earlier face
+  size_t invalid_index_faces = 0;   // an index outside the vertex list (otherwise skipped)
+  size_t repeated_index_faces = 0;  // a vertex index used twice in one face
+  size_t zero_area_faces = 0;       // distinct indices, but (near) zero area
+  size_t non_manifold_edges = 0;    // shared by more than two faces
+  size_t boundary_edges = 0;        // used by exactly one face
+  size_t inconsistent_edges = 0;    // two faces traverse it in the same direction
+  size_t duplicate_faces = 0;       // same vertex set as an earlier face
   size_t unreferenced_vertices = 0;
-  std::vector<MeshWarning> warnings;   // one per problem found, with its count
+  std::vector<MeshWarning> warnings;  // one per problem found, with its count
 
   size_t degenerate_faces() const {
     return invalid_index_faces + repeated_index_faces + zero_area_faces;

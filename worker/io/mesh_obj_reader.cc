@@ -37,22 +37,22 @@ int parse_corner(const std::filesystem::path& path, size_t line, std::string_vie
   size_t start = 0;
   while (true) {
     const size_t slash = corner.find('/', start);
-    const std::string_view field =
-        corner.substr(start, slash == std::string_view::npos ? std::string_view::npos
-                                                             : slash - start);
+    const std::string_view field = corner.substr(
+        start, slash == std::string_view::npos ? std::string_view::npos : slash - start);
     if (part > 2) fail(path, line, "face corner " + quoted(corner) + " has more than 3 fields");
     const bool optional = part == 1;  // "v//vn" leaves the texture index out
     if (!(field.empty() && optional)) {
       int64_t index = 0;
       if (!mesh_detail::parse_int64(field, &index) || index == 0) {
-        fail(path, line, "face corner " + quoted(corner) + ": expected a non-zero " +
-                             names[part] + " index, got " + quoted(field));
+        fail(path, line,
+             "face corner " + quoted(corner) + ": expected a non-zero " + names[part] +
+                 " index, got " + quoted(field));
       }
       const int64_t resolved = resolve_index(index, defined[part]);
       if (resolved < 0) {
-        fail(path, line, std::string(names[part]) + " index " + std::to_string(index) +
-                             " out of range (" + std::to_string(defined[part]) + " " +
-                             plural[part] + " defined before this line)");
+        fail(path, line,
+             std::string(names[part]) + " index " + std::to_string(index) + " out of range (" +
+                 std::to_string(defined[part]) + " " + plural[part] + " defined before this line)");
       }
       if (part == 0) position = resolved;
     }
@@ -86,7 +86,8 @@ TriangleMesh read_obj_mesh(const std::filesystem::path& path) {
           fail(path, n, "expected a number, got " + quoted(tokens[1 + i]));
         }
       }
-      if (!mesh_detail::is_finite(p)) fail(path, n, "vertex has a non-finite coordinate (NaN or inf)");
+      if (!mesh_detail::is_finite(p))
+        fail(path, n, "vertex has a non-finite coordinate (NaN or inf)");
       mesh.vertices.push_back(p);
       ++counts.positions;
     } else if (keyword == "vt") {
@@ -95,8 +96,8 @@ TriangleMesh read_obj_mesh(const std::filesystem::path& path) {
       ++counts.normals;
     } else if (keyword == "f") {
       if (tokens.size() < 4) {
-        fail(path, n, "face has " + std::to_string(tokens.size() - 1) +
-                          " corners (expected at least 3)");
+        fail(path, n,
+             "face has " + std::to_string(tokens.size() - 1) + " corners (expected at least 3)");
       }
       polygon.clear();
       for (size_t i = 1; i < tokens.size(); ++i) {

@@ -66,8 +66,9 @@ TriangleMesh read_off_mesh(const std::filesystem::path& path) {
   mesh.vertices.reserve(num_vertices);
   for (int64_t v = 0; v < num_vertices; ++v) {
     if (!lines.next_content(&line, '#')) {
-      fail(path, lines.line_number(), "truncated: expected " + std::to_string(num_vertices) +
-                                          " vertices, the file ends after " + std::to_string(v));
+      fail(path, lines.line_number(),
+           "truncated: expected " + std::to_string(num_vertices) +
+               " vertices, the file ends after " + std::to_string(v));
     }
     mesh_detail::split_whitespace(line, &tokens);
     if (tokens.size() < 3) fail(path, lines.line_number(), "expected 'x y z'");
@@ -86,8 +87,9 @@ TriangleMesh read_off_mesh(const std::filesystem::path& path) {
   std::vector<int> polygon;
   for (int64_t f = 0; f < num_faces; ++f) {
     if (!lines.next_content(&line, '#')) {
-      fail(path, lines.line_number(), "truncated: expected " + std::to_string(num_faces) +
-                                          " faces, the file ends after " + std::to_string(f));
+      fail(path, lines.line_number(),
+           "truncated: expected " + std::to_string(num_faces) + " faces, the file ends after " +
+               std::to_string(f));
     }
     const size_t n = lines.line_number();
     mesh_detail::split_whitespace(line, &tokens);
@@ -97,8 +99,9 @@ TriangleMesh read_off_mesh(const std::filesystem::path& path) {
     }
     // Values after the n indices are an optional face colour.
     if (static_cast<int64_t>(tokens.size()) < corners + 1) {
-      fail(path, n, "face declares " + std::to_string(corners) + " vertices but lists " +
-                        std::to_string(tokens.size() - 1));
+      fail(path, n,
+           "face declares " + std::to_string(corners) + " vertices but lists " +
+               std::to_string(tokens.size() - 1));
     }
     polygon.clear();
     for (int64_t i = 1; i <= corners; ++i) {
@@ -107,8 +110,9 @@ TriangleMesh read_off_mesh(const std::filesystem::path& path) {
         fail(path, n, "expected a vertex index, got " + quoted(tokens[i]));
       }
       if (index < 0 || index >= num_vertices) {
-        fail(path, n, "vertex index " + std::to_string(index) + " out of range (the file has " +
-                          std::to_string(num_vertices) + " vertices)");
+        fail(path, n,
+             "vertex index " + std::to_string(index) + " out of range (the file has " +
+                 std::to_string(num_vertices) + " vertices)");
       }
       polygon.push_back(static_cast<int>(index));
     }

@@ -31,8 +31,8 @@ void PlyBinaryWriter::finish() {
   if (error) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);
-    throw std::runtime_error(path_.string() + ": cannot move the written file into place: " +
-                             error.message());
+    throw std::runtime_error(path_.string() +
+                             ": cannot move the written file into place: " + error.message());
   }
   buffer_.clear();
   buffer_.shrink_to_fit();

@@ -35,8 +35,8 @@ struct PlyElement {
 struct PlyHeader {
   PlyFormat format = PlyFormat::kAscii;
   std::vector<PlyElement> elements;
-  size_t body_offset = 0;       // first byte after end_header
-  size_t body_first_line = 0;   // line number of the first body line (ascii)
+  size_t body_offset = 0;      // first byte after end_header
+  size_t body_first_line = 0;  // line number of the first body line (ascii)
 };
 
 std::optional<PlyType> parse_type(std::string_view name) {
@@ -72,8 +72,9 @@ size_t type_size(PlyType type) {
 PlyType parse_type_or_fail(const std::filesystem::path& path, size_t line, std::string_view name) {
   const auto type = parse_type(name);
   if (!type) {
-    fail(path, line, "unknown PLY property type " + quoted(name) +
-                         " (expected char, uchar, short, ushort, int, uint, float, double)");
+    fail(path, line,
+         "unknown PLY property type " + quoted(name) +
+             " (expected char, uchar, short, ushort, int, uint, float, double)");
   }
   return *type;
 }
@@ -107,8 +108,9 @@ PlyHeader parse_header(const std::filesystem::path& path, std::string_view text)
       } else if (tokens[1] == "binary_big_endian") {
         header.format = PlyFormat::kBinaryBigEndian;
       } else {
-        fail(path, n, "unknown PLY format " + quoted(tokens[1]) +
-                          " (expected ascii, binary_little_endian or binary_big_endian)");
+        fail(path, n,
+             "unknown PLY format " + quoted(tokens[1]) +
+                 " (expected ascii, binary_little_endian or binary_big_endian)");
       }
       have_format = true;
     } else if (keyword == "element") {
@@ -154,9 +156,9 @@ class AsciiSource {
   void begin_item(const PlyElement& element, uint64_t index) {
     std::string_view line;
     if (!lines_.next_content(&line, '\0')) {
-      fail(path_, lines_.line_number(), "truncated: element '" + element.name + "' declares " +
-                         std::to_string(element.count) + " items, the file ends after " +
-                         std::to_string(index));
+      fail(path_, lines_.line_number(),
+           "truncated: element '" + element.name + "' declares " + std::to_string(element.count) +
+               " items, the file ends after " + std::to_string(index));
     }
     mesh_detail::split_whitespace(line, &tokens_);
     next_token_ = 0;
@@ -205,10 +207,10 @@ class BinarySource {
   double value(PlyType type, const std::string& property) {
     const size_t size = type_size(type);
     if (offset_ + size > body_.size()) {
-      fail(path_, 0, "truncated binary data: element '" + element_->name + "' item " +
-                         std::to_string(index_) + " of " + std::to_string(element_->count) +
-                         ", property '" + property + "' at byte " +
-                         std::to_string(body_offset_ + offset_));
+      fail(path_, 0,
+           "truncated binary data: element '" + element_->name + "' item " +
+               std::to_string(index_) + " of " + std::to_string(element_->count) + ", property '" +
+               property + "' at byte " + std::to_string(body_offset_ + offset_));
     }
     unsigned char bytes[8];
     std::memcpy(bytes, body_.data() + offset_, size);
@@ -228,14 +230,22 @@ class BinarySource {
  private:
   static double decode(PlyType type, const unsigned char* b) {
     switch (type) {
-      case PlyType::kInt8: return static_cast<int8_t>(b[0]);
-      case PlyType::kUint8: return b[0];
-      case PlyType::kInt16: return load<int16_t>(b);
-      case PlyType::kUint16: return load<uint16_t>(b);
-      case PlyType::kInt32: return load<int32_t>(b);
-      case PlyType::kUint32: return load<uint32_t>(b);
-      case PlyType::kFloat32: return load<float>(b);
-      case PlyType::kFloat64: return load<double>(b);
+      case PlyType::kInt8:
+        return static_cast<int8_t>(b[0]);
+      case PlyType::kUint8:
+        return b[0];
+      case PlyType::kInt16:
+        return load<int16_t>(b);
+      case PlyType::kUint16:
+        return load<uint16_t>(b);
+      case PlyType::kInt32:
+        return load<int32_t>(b);
+      case PlyType::kUint32:
+        return load<uint32_t>(b);
+      case PlyType::kFloat32:
+        return load<float>(b);
+      case PlyType::kFloat64:
+        return load<double>(b);
     }
     return 0;
   }
@@ -327,9 +337,8 @@ void read_body(const std::filesystem::path& path, const PlyHeader& header, Sourc
   std::vector<int> polygon;
   for (const auto& element : header.elements) {
     const bool is_vertex = &element == vertex;
-    const int face_list = element.name == "face"
-                              ? find_property(element, {"vertex_indices", "vertex_index"})
-                              : -1;
+    const int face_list =
+        element.name == "face" ? find_property(element, {"vertex_indices", "vertex_index"}) : -1;
     if (element.name == "face" && face_list < 0) {
       fail(path, 0, "PLY element 'face' has no 'vertex_indices' list");
     }
@@ -365,9 +374,9 @@ void read_body(const std::filesystem::path& path, const PlyHeader& header, Sourc
       if (is_vertex) {
         const Eigen::Vector3d p(scalars[layout.x], scalars[layout.y], scalars[layout.z]);
         if (!mesh_detail::is_finite(p)) {
-          fail(path, source.line(), "vertex " + std::to_string(item) +
-                                        " has a non-finite coordinate (NaN or inf)" +
-                                        source.where());
+          fail(path, source.line(),
+               "vertex " + std::to_string(item) + " has a non-finite coordinate (NaN or inf)" +
+                   source.where());
         }
         mesh->vertices.push_back(p);
         if (layout.has_normals()) {
@@ -383,9 +392,9 @@ void read_body(const std::filesystem::path& path, const PlyHeader& header, Sourc
       } else if (face_list >= 0) {
         const auto& indices = lists[face_list];
         if (indices.size() < 3) {
-          fail(path, source.line(), "face " + std::to_string(item) + " has " +
-                                        std::to_string(indices.size()) +
-                                        " vertices (expected at least 3)" + source.where());
+          fail(path, source.line(),
+               "face " + std::to_string(item) + " has " + std::to_string(indices.size()) +
+                   " vertices (expected at least 3)" + source.where());
         }
         polygon.clear();
         for (const double index : indices) {
@@ -393,8 +402,8 @@ void read_body(const std::filesystem::path& path, const PlyHeader& header, Sourc
               index != std::floor(index)) {
             fail(path, source.line(),
                  "face " + std::to_string(item) + ": vertex index " + number(index) +
-                     " out of range (the file has " + std::to_string(num_vertices) +
-                     " vertices)" + source.where());
+                     " out of range (the file has " + std::to_string(num_vertices) + " vertices)" +
+                     source.where());
           }
           polygon.push_back(static_cast<int>(index));
         }

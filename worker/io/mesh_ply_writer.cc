@@ -21,8 +21,7 @@ void check_mesh_for_writing(const TriangleMesh& mesh) {
                                 std::to_string(n));
   }
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    if ((mesh.faces[f].array() < 0).any() ||
-        (mesh.faces[f].array() >= static_cast<int>(n)).any()) {
+    if ((mesh.faces[f].array() < 0).any() || (mesh.faces[f].array() >= static_cast<int>(n)).any()) {
       throw std::invalid_argument("write_ply_mesh: face " + std::to_string(f) +
                                   " has a vertex index outside [0, " + std::to_string(n) + ")");
     }
@@ -39,8 +38,10 @@ void write_ply_mesh(const std::filesystem::path& path, const TriangleMesh& mesh,
                       {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"});
   const std::string position_type = options.double_positions ? "double" : "float";
   std::string header = "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
-  for (const char* axis : {"x", "y", "z"}) header += "property " + position_type + " " + axis + "\n";
-  if (mesh.has_vertex_normals()) header += "property float nx\nproperty float ny\nproperty float nz\n";
+  for (const char* axis : {"x", "y", "z"})
+    header += "property " + position_type + " " + axis + "\n";
+  if (mesh.has_vertex_normals())
+    header += "property float nx\nproperty float ny\nproperty float nz\n";
   if (mesh.has_vertex_colors()) {
     header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   }

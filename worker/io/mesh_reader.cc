@@ -15,8 +15,8 @@ TriangleMesh read_mesh(const std::filesystem::path& path) {
   if (extension == ".obj") return read_obj_mesh(path);
   if (extension == ".stl") return read_stl_mesh(path);
   if (extension == ".off") return read_off_mesh(path);
-  mesh_detail::fail(path, 0,
-                    "unknown mesh extension '" + extension + "' (expected .ply, .obj, .stl or .off)");
+  mesh_detail::fail(
+      path, 0, "unknown mesh extension '" + extension + "' (expected .ply, .obj, .stl or .off)");
 }
 
 }  // namespace keel::io

@@ -13,7 +13,7 @@ namespace {
 using mesh_detail::fail;
 using mesh_detail::quoted;
 
-constexpr size_t kBinaryHeaderBytes = 84;  // 80-byte header + uint32 triangle count
+constexpr size_t kBinaryHeaderBytes = 84;    // 80-byte header + uint32 triangle count
 constexpr size_t kBinaryTriangleBytes = 50;  // normal, 3 corners (12 floats) + uint16
 
 // STL stores every triangle's corners; this turns identical positions into one vertex.
@@ -80,9 +80,10 @@ TriangleMesh read_binary_stl(const std::filesystem::path& path, std::string_view
     for (int c = 0; c < 3; ++c) {
       const Eigen::Vector3d p(values[3 + 3 * c], values[4 + 3 * c], values[5 + 3 * c]);
       if (!mesh_detail::is_finite(p)) {
-        fail(path, 0, "triangle " + std::to_string(t) + " (byte " +
-                          std::to_string(kBinaryHeaderBytes + size_t{t} * kBinaryTriangleBytes) +
-                          ") has a non-finite corner coordinate (NaN or inf)");
+        fail(path, 0,
+             "triangle " + std::to_string(t) + " (byte " +
+                 std::to_string(kBinaryHeaderBytes + size_t{t} * kBinaryTriangleBytes) +
+                 ") has a non-finite corner coordinate (NaN or inf)");
       }
       face[c] = merger.index_of(p);
     }
@@ -126,7 +127,8 @@ TriangleMesh read_ascii_stl(const std::filesystem::path& path, std::string_view 
           fail(path, n, "expected a number, got " + quoted(tokens[1 + i]));
         }
       }
-      if (!mesh_detail::is_finite(p)) fail(path, n, "vertex has a non-finite coordinate (NaN or inf)");
+      if (!mesh_detail::is_finite(p))
+        fail(path, n, "vertex has a non-finite coordinate (NaN or inf)");
       face[corners++] = merger.index_of(p);
     } else if (keyword == "endfacet") {
       if (!in_facet) fail(path, n, "'endfacet' outside a facet");
@@ -162,16 +164,18 @@ TriangleMesh read_stl_mesh(const std::filesystem::path& path) {
   bool binary = false;
   if (!text_solid) {
     if (text.size() < kBinaryHeaderBytes) {
-      fail(path, 0, "truncated binary STL: " + std::to_string(text.size()) +
-                        " bytes, shorter than the 84-byte header");
+      fail(path, 0,
+           "truncated binary STL: " + std::to_string(text.size()) +
+               " bytes, shorter than the 84-byte header");
     }
     const uint64_t expected =
         kBinaryHeaderBytes + uint64_t{binary_triangle_count(text)} * kBinaryTriangleBytes;
     if (expected != text.size()) {
-      fail(path, 0, "truncated or corrupt binary STL: the header declares " +
-                        std::to_string(binary_triangle_count(text)) + " triangles (" +
-                        std::to_string(expected) + " bytes) but the file has " +
-                        std::to_string(text.size()) + " bytes");
+      fail(path, 0,
+           "truncated or corrupt binary STL: the header declares " +
+               std::to_string(binary_triangle_count(text)) + " triangles (" +
+               std::to_string(expected) + " bytes) but the file has " +
+               std::to_string(text.size()) + " bytes");
     }
     binary = true;
   }

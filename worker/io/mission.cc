@@ -14,7 +14,8 @@ enum class Kind { kFile, kFolder, kIndexedFolder };
 
 class Resolver {
  public:
-  Resolver(fs::path dir, std::string manifest) : dir_(std::move(dir)), manifest_(std::move(manifest)) {}
+  Resolver(fs::path dir, std::string manifest)
+      : dir_(std::move(dir)), manifest_(std::move(manifest)) {}
 
   fs::path resolve(const std::string& relative, const std::string& field, Kind kind) const {
     const fs::path rel(relative);
@@ -41,8 +42,10 @@ class Resolver {
   static bool escapes(const fs::path& rel) {
     int depth = 0;
     for (const auto& part : rel.lexically_normal()) {
-      if (part == "..") --depth;
-      else if (part != ".") ++depth;
+      if (part == "..")
+        --depth;
+      else if (part != ".")
+        ++depth;
       if (depth < 0) return true;
     }
     return false;
@@ -68,7 +71,8 @@ Mission load_mission(const fs::path& dir_in) {
   mission.dir = fs::absolute(dir_in, ec).lexically_normal();
   mission.manifest_path = mission.dir / "mission.yaml";
   if (!fs::is_regular_file(mission.manifest_path))
-    throw IoError(mission.manifest_path.string() + ": not found (a mission bundle has mission.yaml at its root)");
+    throw IoError(mission.manifest_path.string() +
+                  ": not found (a mission bundle has mission.yaml at its root)");
   const std::string manifest_name = mission.manifest_path.string();
   const nlohmann::json document = load_yaml_file(mission.manifest_path);
   try {
@@ -86,18 +90,22 @@ Mission load_mission(const fs::path& dir_in) {
     if (!s.file.empty())
       mission.sensor_paths[s.name] = resolver.resolve(s.file, item + ".file", Kind::kFile);
     if (!s.scans.empty())
-      mission.sensor_paths[s.name] = resolver.resolve(s.scans, item + ".scans", Kind::kIndexedFolder);
+      mission.sensor_paths[s.name] =
+          resolver.resolve(s.scans, item + ".scans", Kind::kIndexedFolder);
     if (!s.images.empty())
-      mission.sensor_paths[s.name] = resolver.resolve(s.images, item + ".images", Kind::kIndexedFolder);
+      mission.sensor_paths[s.name] =
+          resolver.resolve(s.images, item + ".images", Kind::kIndexedFolder);
   }
   for (const auto& [name, t] : m.trajectories)
     if (!t.file.empty())
-      mission.trajectory_paths[name] = resolver.resolve(t.file, "trajectories." + name, Kind::kFile);
+      mission.trajectory_paths[name] =
+          resolver.resolve(t.file, "trajectories." + name, Kind::kFile);
   if (!m.loop_closures.empty())
     mission.loop_closures_path = resolver.resolve(m.loop_closures, "loop_closures", Kind::kFile);
   if (!m.ground_truth.empty())
     mission.ground_truth_path = resolver.resolve(m.ground_truth, "ground_truth", Kind::kFile);
-  if (!m.cad_mesh.empty()) mission.cad_mesh_path = resolver.resolve(m.cad_mesh, "cad_mesh", Kind::kFile);
+  if (!m.cad_mesh.empty())
+    mission.cad_mesh_path = resolver.resolve(m.cad_mesh, "cad_mesh", Kind::kFile);
   return mission;
 }
 

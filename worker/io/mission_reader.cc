@@ -96,7 +96,8 @@ bool MissionReader::has_trajectory(const std::string& name) const {
 Trajectory MissionReader::read_trajectory(const std::string& name) const {
   const auto it = mission_.manifest.trajectories.find(name);
   if (it == mission_.manifest.trajectories.end())
-    throw IoError(mission_.manifest_path.string() + ": no trajectory '" + name + "' under trajectories");
+    throw IoError(mission_.manifest_path.string() + ": no trajectory '" + name +
+                  "' under trajectories");
   if (!it->second.topic.empty()) return bag_->read_trajectory(it->second.topic);
   return read_tum(mission_.trajectory_paths.at(name));
 }
@@ -116,7 +117,8 @@ std::optional<Pose3> MissionReader::extrinsic(const std::string& sensor) const {
   if (!bag_) return std::nullopt;
   if (!tf_static_) tf_static_ = bag_->read_static_transforms("/tf_static");
   Pose3 T_body_sensor;
-  if (lookup_static_transform(*tf_static_, mission_.manifest.body_frame, s.effective_frame(), T_body_sensor))
+  if (lookup_static_transform(*tf_static_, mission_.manifest.body_frame, s.effective_frame(),
+                              T_body_sensor))
     return T_body_sensor;
   return std::nullopt;
 }

@@ -20,16 +20,26 @@ T load(const uint8_t* p) {
 
 double load_double(const uint8_t* p, FieldType type) {
   switch (type) {
-    case FieldType::kInt8: return load<int8_t>(p);
-    case FieldType::kUint8: return load<uint8_t>(p);
-    case FieldType::kInt16: return load<int16_t>(p);
-    case FieldType::kUint16: return load<uint16_t>(p);
-    case FieldType::kInt32: return load<int32_t>(p);
-    case FieldType::kUint32: return load<uint32_t>(p);
-    case FieldType::kInt64: return static_cast<double>(load<int64_t>(p));
-    case FieldType::kUint64: return static_cast<double>(load<uint64_t>(p));
-    case FieldType::kFloat32: return load<float>(p);
-    case FieldType::kFloat64: return load<double>(p);
+    case FieldType::kInt8:
+      return load<int8_t>(p);
+    case FieldType::kUint8:
+      return load<uint8_t>(p);
+    case FieldType::kInt16:
+      return load<int16_t>(p);
+    case FieldType::kUint16:
+      return load<uint16_t>(p);
+    case FieldType::kInt32:
+      return load<int32_t>(p);
+    case FieldType::kUint32:
+      return load<uint32_t>(p);
+    case FieldType::kInt64:
+      return static_cast<double>(load<int64_t>(p));
+    case FieldType::kUint64:
+      return static_cast<double>(load<uint64_t>(p));
+    case FieldType::kFloat32:
+      return load<float>(p);
+    case FieldType::kFloat64:
+      return load<double>(p);
   }
   return 0.0;
 }
@@ -48,10 +58,14 @@ int64_t load_int64(const uint8_t* p, FieldType type) {
 
 int64_t ns_per_unit(proto::TimeUnit unit) {
   switch (unit) {
-    case proto::TimeUnit::kSeconds: return 1000000000;
-    case proto::TimeUnit::kMilliseconds: return 1000000;
-    case proto::TimeUnit::kMicroseconds: return 1000;
-    case proto::TimeUnit::kNanoseconds: return 1;
+    case proto::TimeUnit::kSeconds:
+      return 1000000000;
+    case proto::TimeUnit::kMilliseconds:
+      return 1000000;
+    case proto::TimeUnit::kMicroseconds:
+      return 1000;
+    case proto::TimeUnit::kNanoseconds:
+      return 1;
   }
   return 1;
 }
@@ -63,8 +77,7 @@ std::string number_text(double x) {
 }
 
 // Units whose scaling of the raw values would give offsets that fit `limit_s`.
-std::string fitting_units(double raw_min, double raw_max, double base_s, double limit_s,
-                          bool absolute) {
+std::string fitting_units(double raw_min, double raw_max, double base_s, double limit_s) {
   std::string out;
   for (auto unit : {proto::TimeUnit::kSeconds, proto::TimeUnit::kMilliseconds,
                     proto::TimeUnit::kMicroseconds, proto::TimeUnit::kNanoseconds}) {
@@ -74,7 +87,6 @@ std::string fitting_units(double raw_min, double raw_max, double base_s, double 
         (hi - lo) >= 1e-4 * limit_s / 10.0)
       out += (out.empty() ? "" : " or ") + proto::to_string(unit);
   }
-  (void)absolute;
   return out;
 }
 
@@ -82,28 +94,50 @@ std::string fitting_units(double raw_min, double raw_max, double base_s, double 
 
 size_t field_size(FieldType type) {
   switch (type) {
-    case FieldType::kInt8: case FieldType::kUint8: return 1;
-    case FieldType::kInt16: case FieldType::kUint16: return 2;
-    case FieldType::kInt32: case FieldType::kUint32: case FieldType::kFloat32: return 4;
-    case FieldType::kInt64: case FieldType::kUint64: case FieldType::kFloat64: return 8;
+    case FieldType::kInt8:
+    case FieldType::kUint8:
+      return 1;
+    case FieldType::kInt16:
+    case FieldType::kUint16:
+      return 2;
+    case FieldType::kInt32:
+    case FieldType::kUint32:
+    case FieldType::kFloat32:
+      return 4;
+    case FieldType::kInt64:
+    case FieldType::kUint64:
+    case FieldType::kFloat64:
+      return 8;
   }
   return 0;
 }
 
-bool is_integer(FieldType type) { return type != FieldType::kFloat32 && type != FieldType::kFloat64; }
+bool is_integer(FieldType type) {
+  return type != FieldType::kFloat32 && type != FieldType::kFloat64;
+}
 
 std::string to_string(FieldType type) {
   switch (type) {
-    case FieldType::kInt8: return "int8";
-    case FieldType::kUint8: return "uint8";
-    case FieldType::kInt16: return "int16";
-    case FieldType::kUint16: return "uint16";
-    case FieldType::kInt32: return "int32";
-    case FieldType::kUint32: return "uint32";
-    case FieldType::kInt64: return "int64";
-    case FieldType::kUint64: return "uint64";
-    case FieldType::kFloat32: return "float32";
-    case FieldType::kFloat64: return "float64";
+    case FieldType::kInt8:
+      return "int8";
+    case FieldType::kUint8:
+      return "uint8";
+    case FieldType::kInt16:
+      return "int16";
+    case FieldType::kUint16:
+      return "uint16";
+    case FieldType::kInt32:
+      return "int32";
+    case FieldType::kUint32:
+      return "uint32";
+    case FieldType::kInt64:
+      return "int64";
+    case FieldType::kUint64:
+      return "uint64";
+    case FieldType::kFloat32:
+      return "float32";
+    case FieldType::kFloat64:
+      return "float64";
   }
   return "unknown";
 }
@@ -159,13 +193,15 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
   const double lo = *lo_it, hi = *hi_it;
   const double limit_s = 10.0 * sweep_period_s;
   const double stamp_s = absolute ? ns_to_seconds(t_ns) : 0.0;
-  const std::string found = "values in [" + number_text(raw_min) + ", " + number_text(raw_max) + "]";
+  const std::string found =
+      "values in [" + number_text(raw_min) + ", " + number_text(raw_max) + "]";
   if (std::max(std::abs(lo), std::abs(hi)) > limit_s) {
     std::string hint;
-    const std::string units = fitting_units(raw_min, raw_max, stamp_s, limit_s, absolute);
+    const std::string units = fitting_units(raw_min, raw_max, stamp_s, limit_s);
     if (!units.empty()) hint = "; they fit unit " + units;
-    if (!absolute && raw_min * unit_s > 1e8) hint = "; they look like absolute stamps (reference absolute?)";
-    if (absolute && fitting_units(raw_min, raw_max, 0.0, limit_s, false).size() > 0)
+    if (!absolute && raw_min * unit_s > 1e8)
+      hint = "; they look like absolute stamps (reference absolute?)";
+    if (absolute && !fitting_units(raw_min, raw_max, 0.0, limit_s).empty())
       hint = "; they look like offsets from the scan start (reference scan_start?)";
     throw IoError(what + ": " + found + " give offsets [" + number_text(lo) + ", " +
                   number_text(hi) + "] s from the scan stamp " + format_seconds(t_ns) +
@@ -173,10 +209,10 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
   }
   const double span = hi - lo;
   if (span > 0.0 && span < 1e-4 * sweep_period_s) {
-    const std::string units = fitting_units(raw_min, raw_max, stamp_s, limit_s, absolute);
+    const std::string units = fitting_units(raw_min, raw_max, stamp_s, limit_s);
     if (!units.empty() && units.find(proto::to_string(spec.unit)) == std::string::npos)
-      throw IoError(what + ": " + found + " span only " + number_text(span) +
-                    " s of a " + number_text(sweep_period_s) + " s sweep; they fit unit " + units);
+      throw IoError(what + ": " + found + " span only " + number_text(span) + " s of a " +
+                    number_text(sweep_period_s) + " s sweep; they fit unit " + units);
   }
   return offsets;
 }
@@ -204,7 +240,8 @@ PointCloud unpack_cloud(const PackedCloudView& view, TimeNs t_ns, const ScanRead
       throw IoError(source + ": no per-point time field '" + options.point_time->field +
                     "' (fields: " + names + ")");
     }
-    offsets = point_time_offsets(view, *time, t_ns, *options.point_time, options.sweep_period_s, source);
+    offsets =
+        point_time_offsets(view, *time, t_ns, *options.point_time, options.sweep_period_s, source);
   }
 
   PointCloud cloud;
@@ -215,8 +252,8 @@ PointCloud unpack_cloud(const PackedCloudView& view, TimeNs t_ns, const ScanRead
   if (intensity) cloud.intensity.reserve(n);
   if (ring) cloud.ring.reserve(n);
   if (time) cloud.time_s.reserve(n);
-  const bool all_float = xyz[0]->type == FieldType::kFloat32 && xyz[1]->type == FieldType::kFloat32 &&
-                         xyz[2]->type == FieldType::kFloat32;
+  const bool all_float = xyz[0]->type == FieldType::kFloat32 &&
+                         xyz[1]->type == FieldType::kFloat32 && xyz[2]->type == FieldType::kFloat32;
   for (size_t i = 0; i < n; ++i) {
     const uint8_t* record = view.data + i * view.point_step;
     Eigen::Vector3f p;
@@ -224,12 +261,16 @@ PointCloud unpack_cloud(const PackedCloudView& view, TimeNs t_ns, const ScanRead
       p = {load<float>(record + xyz[0]->offset), load<float>(record + xyz[1]->offset),
            load<float>(record + xyz[2]->offset)};
     } else {
-      for (int a = 0; a < 3; ++a) p[a] = static_cast<float>(load_double(record + xyz[a]->offset, xyz[a]->type));
+      for (int a = 0; a < 3; ++a)
+        p[a] = static_cast<float>(load_double(record + xyz[a]->offset, xyz[a]->type));
     }
     if (!options.keep_non_finite && !p.allFinite()) continue;
     cloud.xyz.push_back(p);
-    if (intensity) cloud.intensity.push_back(static_cast<float>(load_double(record + intensity->offset, intensity->type)));
-    if (ring) cloud.ring.push_back(static_cast<uint16_t>(load_double(record + ring->offset, ring->type)));
+    if (intensity)
+      cloud.intensity.push_back(
+          static_cast<float>(load_double(record + intensity->offset, intensity->type)));
+    if (ring)
+      cloud.ring.push_back(static_cast<uint16_t>(load_double(record + ring->offset, ring->type)));
     if (time) cloud.time_s.push_back(static_cast<float>(offsets[i]));
   }
   return cloud;
@@ -248,16 +289,26 @@ void store(uint8_t* p, T value) {
 
 void store_number(uint8_t* p, FieldType type, double value) {
   switch (type) {
-    case FieldType::kInt8: return store<int8_t>(p, static_cast<int8_t>(std::llround(value)));
-    case FieldType::kUint8: return store<uint8_t>(p, static_cast<uint8_t>(std::llround(value)));
-    case FieldType::kInt16: return store<int16_t>(p, static_cast<int16_t>(std::llround(value)));
-    case FieldType::kUint16: return store<uint16_t>(p, static_cast<uint16_t>(std::llround(value)));
-    case FieldType::kInt32: return store<int32_t>(p, static_cast<int32_t>(std::llround(value)));
-    case FieldType::kUint32: return store<uint32_t>(p, static_cast<uint32_t>(std::llround(value)));
-    case FieldType::kInt64: return store<int64_t>(p, static_cast<int64_t>(std::llround(value)));
-    case FieldType::kUint64: return store<uint64_t>(p, static_cast<uint64_t>(std::llround(value)));
-    case FieldType::kFloat32: return store<float>(p, static_cast<float>(value));
-    case FieldType::kFloat64: return store<double>(p, value);
+    case FieldType::kInt8:
+      return store<int8_t>(p, static_cast<int8_t>(std::llround(value)));
+    case FieldType::kUint8:
+      return store<uint8_t>(p, static_cast<uint8_t>(std::llround(value)));
+    case FieldType::kInt16:
+      return store<int16_t>(p, static_cast<int16_t>(std::llround(value)));
+    case FieldType::kUint16:
+      return store<uint16_t>(p, static_cast<uint16_t>(std::llround(value)));
+    case FieldType::kInt32:
+      return store<int32_t>(p, static_cast<int32_t>(std::llround(value)));
+    case FieldType::kUint32:
+      return store<uint32_t>(p, static_cast<uint32_t>(std::llround(value)));
+    case FieldType::kInt64:
+      return store<int64_t>(p, static_cast<int64_t>(std::llround(value)));
+    case FieldType::kUint64:
+      return store<uint64_t>(p, static_cast<uint64_t>(std::llround(value)));
+    case FieldType::kFloat32:
+      return store<float>(p, static_cast<float>(value));
+    case FieldType::kFloat64:
+      return store<double>(p, value);
   }
 }
 

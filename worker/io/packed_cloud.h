@@ -15,7 +15,18 @@
 
 namespace keel::io {
 
-enum class FieldType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kInt64, kUint64, kFloat32, kFloat64 };
+enum class FieldType {
+  kInt8,
+  kUint8,
+  kInt16,
+  kUint16,
+  kInt32,
+  kUint32,
+  kInt64,
+  kUint64,
+  kFloat32,
+  kFloat64
+};
 
 size_t field_size(FieldType type);
 bool is_integer(FieldType type);
@@ -75,8 +86,8 @@ struct PackedCloud {
 
 // How a writer stores the per-point time (ScanWriteOptions).
 struct PointTimeEncoding {
-  proto::PointTimeSpec spec;                // field name, unit, reference
-  FieldType type = FieldType::kFloat32;     // Velodyne float32 s, Ouster uint32 ns, ...
+  proto::PointTimeSpec spec;             // field name, unit, reference
+  FieldType type = FieldType::kFloat32;  // Velodyne float32 s, Ouster uint32 ns, ...
 };
 
 // Packs x y z (float32), intensity (float32) and ring (uint16) when present, and the time

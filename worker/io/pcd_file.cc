@@ -17,16 +17,26 @@ namespace {
 FieldType from_pcl(const pcl::PCLPointField& field, const std::string& file) {
   using T = pcl::PCLPointField;
   switch (field.datatype) {
-    case T::INT8: return FieldType::kInt8;
-    case T::UINT8: return FieldType::kUint8;
-    case T::INT16: return FieldType::kInt16;
-    case T::UINT16: return FieldType::kUint16;
-    case T::INT32: return FieldType::kInt32;
-    case T::UINT32: return FieldType::kUint32;
-    case T::INT64: return FieldType::kInt64;
-    case T::UINT64: return FieldType::kUint64;
-    case T::FLOAT32: return FieldType::kFloat32;
-    case T::FLOAT64: return FieldType::kFloat64;
+    case T::INT8:
+      return FieldType::kInt8;
+    case T::UINT8:
+      return FieldType::kUint8;
+    case T::INT16:
+      return FieldType::kInt16;
+    case T::UINT16:
+      return FieldType::kUint16;
+    case T::INT32:
+      return FieldType::kInt32;
+    case T::UINT32:
+      return FieldType::kUint32;
+    case T::INT64:
+      return FieldType::kInt64;
+    case T::UINT64:
+      return FieldType::kUint64;
+    case T::FLOAT32:
+      return FieldType::kFloat32;
+    case T::FLOAT64:
+      return FieldType::kFloat64;
     default:
       throw IoError(file + ": field '" + field.name + "' has unsupported PCD type " +
                     std::to_string(field.datatype));
@@ -36,16 +46,26 @@ FieldType from_pcl(const pcl::PCLPointField& field, const std::string& file) {
 uint8_t to_pcl(FieldType type) {
   using T = pcl::PCLPointField;
   switch (type) {
-    case FieldType::kInt8: return T::INT8;
-    case FieldType::kUint8: return T::UINT8;
-    case FieldType::kInt16: return T::INT16;
-    case FieldType::kUint16: return T::UINT16;
-    case FieldType::kInt32: return T::INT32;
-    case FieldType::kUint32: return T::UINT32;
-    case FieldType::kInt64: return T::INT64;
-    case FieldType::kUint64: return T::UINT64;
-    case FieldType::kFloat32: return T::FLOAT32;
-    case FieldType::kFloat64: return T::FLOAT64;
+    case FieldType::kInt8:
+      return T::INT8;
+    case FieldType::kUint8:
+      return T::UINT8;
+    case FieldType::kInt16:
+      return T::INT16;
+    case FieldType::kUint16:
+      return T::UINT16;
+    case FieldType::kInt32:
+      return T::INT32;
+    case FieldType::kUint32:
+      return T::UINT32;
+    case FieldType::kInt64:
+      return T::INT64;
+    case FieldType::kUint64:
+      return T::UINT64;
+    case FieldType::kFloat32:
+      return T::FLOAT32;
+    case FieldType::kFloat64:
+      return T::FLOAT64;
   }
   return T::FLOAT32;
 }
@@ -85,8 +105,9 @@ PcdHeader read_header(const fs::path& path) {
   int version = 0;
   pcl::PCDReader reader;
   if (reader.readHeader(file, h.cloud, origin, orientation, version, h.data_type, h.data_idx) < 0)
-    throw IoError(file + ": malformed PCD header (expected VERSION, FIELDS, SIZE, TYPE, COUNT, "
-                         "WIDTH, HEIGHT, POINTS, DATA)");
+    throw IoError(file +
+                  ": malformed PCD header (expected VERSION, FIELDS, SIZE, TYPE, COUNT, "
+                  "WIDTH, HEIGHT, POINTS, DATA)");
   if (h.data_type < 0 || h.data_type > 2) throw IoError(file + ": unknown PCD DATA encoding");
   return h;
 }
@@ -101,18 +122,20 @@ void check_body_size(const fs::path& path, const PcdHeader& h) {
   if (h.data_type == 1 && h.data_idx + body > file_size)
     throw IoError(file + ": truncated PCD: " + std::to_string(points) + " points of " +
                   std::to_string(h.cloud.point_step) + " bytes need " + std::to_string(body) +
-                  " bytes of data, the file has " + std::to_string(file_size - std::min<uint64_t>(file_size, h.data_idx)));
+                  " bytes of data, the file has " +
+                  std::to_string(file_size - std::min<uint64_t>(file_size, h.data_idx)));
   if (h.data_type == 2) {
     uint32_t sizes[2] = {0, 0};  // compressed, uncompressed
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
-    if (!f || std::fseek(f.get(), h.data_idx, SEEK_SET) != 0 || std::fread(sizes, 4, 2, f.get()) != 2)
+    if (!f || std::fseek(f.get(), h.data_idx, SEEK_SET) != 0 ||
+        std::fread(sizes, 4, 2, f.get()) != 2)
       throw IoError(file + ": truncated PCD: missing the binary_compressed size header");
     if (h.data_idx + 8ull + sizes[0] > file_size)
       throw IoError(file + ": truncated PCD: compressed body of " + std::to_string(sizes[0]) +
                     " bytes, the file has " + std::to_string(file_size - h.data_idx - 8));
     if (sizes[1] != body)
-      throw IoError(file + ": malformed PCD: compressed body unpacks to " + std::to_string(sizes[1]) +
-                    " bytes, the header needs " + std::to_string(body));
+      throw IoError(file + ": malformed PCD: compressed body unpacks to " +
+                    std::to_string(sizes[1]) + " bytes, the header needs " + std::to_string(body));
   }
 }
 
@@ -139,7 +162,8 @@ PointCloud read_pcd(const fs::path& path, TimeNs t_ns, const ScanReadOptions& op
                   " points expected)");
   const size_t points = static_cast<size_t>(cloud.width) * cloud.height;
   if (cloud.data.size() < points * cloud.point_step)
-    throw IoError(file + ": truncated PCD: fewer data bytes than " + std::to_string(points) + " points");
+    throw IoError(file + ": truncated PCD: fewer data bytes than " + std::to_string(points) +
+                  " points");
   PackedCloudView view{cloud.data.data(), points, cloud.point_step, fields_of(cloud, file)};
   return unpack_cloud(view, t_ns, options, file);
 }
@@ -166,7 +190,8 @@ void write_pcd(const fs::path& path, const PointCloud& cloud, const ScanWriteOpt
   int result = 0;
   switch (options.encoding) {
     case ScanEncoding::kAscii:
-      result = writer.writeASCII(file, out, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity(), 17);
+      result =
+          writer.writeASCII(file, out, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity(), 17);
       break;
     case ScanEncoding::kBinary:
       result = writer.writeBinary(file, out);

@@ -33,15 +33,24 @@ bool ply_type(std::string_view name, FieldType& type) {
 
 const char* ply_name(FieldType type) {
   switch (type) {
-    case FieldType::kInt8: return "char";
-    case FieldType::kUint8: return "uchar";
-    case FieldType::kInt16: return "short";
-    case FieldType::kUint16: return "ushort";
-    case FieldType::kInt32: return "int";
-    case FieldType::kUint32: return "uint";
-    case FieldType::kFloat32: return "float";
-    case FieldType::kFloat64: return "double";
-    default: return nullptr;  // PLY has no 64-bit integers
+    case FieldType::kInt8:
+      return "char";
+    case FieldType::kUint8:
+      return "uchar";
+    case FieldType::kInt16:
+      return "short";
+    case FieldType::kUint16:
+      return "ushort";
+    case FieldType::kInt32:
+      return "int";
+    case FieldType::kUint32:
+      return "uint";
+    case FieldType::kFloat32:
+      return "float";
+    case FieldType::kFloat64:
+      return "double";
+    default:
+      return nullptr;  // PLY has no 64-bit integers
   }
 }
 
@@ -90,10 +99,13 @@ PlyHeader parse_header(const std::string& bytes, const std::string& file) {
     if (w[0] == "end_header") break;
     if (w[0] == "format") {
       if (w.size() != 3) throw fail(line_number, "malformed format line");
-      if (w[1] == "ascii") h.ascii = true;
-      else if (w[1] == "binary_little_endian") h.ascii = false;
-      else throw fail(line_number, "PLY format '" + std::string(w[1]) +
-                                       "' not supported (ascii or binary_little_endian)");
+      if (w[1] == "ascii")
+        h.ascii = true;
+      else if (w[1] == "binary_little_endian")
+        h.ascii = false;
+      else
+        throw fail(line_number, "PLY format '" + std::string(w[1]) +
+                                    "' not supported (ascii or binary_little_endian)");
       format_seen = true;
     } else if (w[0] == "element") {
       if (w.size() != 3) throw fail(line_number, "malformed element line");
@@ -114,7 +126,8 @@ PlyHeader parse_header(const std::string& bytes, const std::string& file) {
       if (w.size() >= 2 && w[1] == "list")
         throw fail(line_number, "list property in the vertex element is not supported");
       FieldType type;
-      if (w.size() != 3 || !ply_type(w[1], type)) throw fail(line_number, "malformed property line");
+      if (w.size() != 3 || !ply_type(w[1], type))
+        throw fail(line_number, "malformed property line");
       h.fields.push_back({std::string(w[2]), type, h.point_step, 1});
       h.point_step += field_size(type);
     } else {
@@ -129,7 +142,8 @@ PlyHeader parse_header(const std::string& bytes, const std::string& file) {
 }
 
 // Parses `count` ascii vertex lines into packed records.
-std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader& h, const std::string& file) {
+std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader& h,
+                                      const std::string& file) {
   std::vector<uint8_t> data(h.num_vertices * h.point_step);
   size_t position = h.body_offset;
   size_t line_number = h.header_lines;
@@ -144,8 +158,8 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader&
     position = newline + 1;
     if (w.size() < h.fields.size())
       throw IoError(file + ":" + std::to_string(line_number) + ": expected " +
-                    std::to_string(h.fields.size()) + " vertex values, found " + std::to_string(w.size()) +
-                    (position >= bytes.size() ? " (truncated?)" : ""));
+                    std::to_string(h.fields.size()) + " vertex values, found " +
+                    std::to_string(w.size()) + (position >= bytes.size() ? " (truncated?)" : ""));
     uint8_t* record = data.data() + i * h.point_step;
     for (size_t f = 0; f < h.fields.size(); ++f) {
       const PackedField& field = h.fields[f];
@@ -155,15 +169,46 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader&
                       "': expected a number, got '" + std::string(w[f]) + "'");
       uint8_t* p = record + field.offset;
       switch (field.type) {
-        case FieldType::kInt8: { int8_t v = static_cast<int8_t>(value); std::memcpy(p, &v, 1); break; }
-        case FieldType::kUint8: { uint8_t v = static_cast<uint8_t>(value); std::memcpy(p, &v, 1); break; }
-        case FieldType::kInt16: { int16_t v = static_cast<int16_t>(value); std::memcpy(p, &v, 2); break; }
-        case FieldType::kUint16: { uint16_t v = static_cast<uint16_t>(value); std::memcpy(p, &v, 2); break; }
-        case FieldType::kInt32: { int32_t v = static_cast<int32_t>(value); std::memcpy(p, &v, 4); break; }
-        case FieldType::kUint32: { uint32_t v = static_cast<uint32_t>(value); std::memcpy(p, &v, 4); break; }
-        case FieldType::kFloat32: { float v = static_cast<float>(value); std::memcpy(p, &v, 4); break; }
-        case FieldType::kFloat64: std::memcpy(p, &value, 8); break;
-        default: break;
+        case FieldType::kInt8: {
+          int8_t v = static_cast<int8_t>(value);
+          std::memcpy(p, &v, 1);
+          break;
+        }
+        case FieldType::kUint8: {
+          uint8_t v = static_cast<uint8_t>(value);
+          std::memcpy(p, &v, 1);
+          break;
+        }
+        case FieldType::kInt16: {
+          int16_t v = static_cast<int16_t>(value);
+          std::memcpy(p, &v, 2);
+          break;
+        }
+        case FieldType::kUint16: {
+          uint16_t v = static_cast<uint16_t>(value);
+          std::memcpy(p, &v, 2);
+          break;
+        }
+        case FieldType::kInt32: {
+          int32_t v = static_cast<int32_t>(value);
+          std::memcpy(p, &v, 4);
+          break;
+        }
+        case FieldType::kUint32: {
+          uint32_t v = static_cast<uint32_t>(value);
+          std::memcpy(p, &v, 4);
+          break;
+        }
+        case FieldType::kFloat32: {
+          float v = static_cast<float>(value);
+          std::memcpy(p, &v, 4);
+          break;
+        }
+        case FieldType::kFloat64:
+          std::memcpy(p, &value, 8);
+          break;
+        default:
+          break;
       }
     }
   }
@@ -211,31 +256,57 @@ void write_ply(const fs::path& path, const PointCloud& cloud, const ScanWriteOpt
   w.text("element vertex ").integer(static_cast<long long>(packed.num_points)).text("\n");
   for (const auto& f : packed.fields) {
     const char* type = ply_name(f.type);
-    if (!type) throw IoError(file + ": PLY cannot store field '" + f.name + "' as " + to_string(f.type));
+    if (!type)
+      throw IoError(file + ": PLY cannot store field '" + f.name + "' as " + to_string(f.type));
     w.text("property ").text(type).text(" ").text(f.name).text("\n");
   }
   w.text("end_header\n");
   if (!ascii) {
     w.text(std::string_view(reinterpret_cast<const char*>(packed.data.data()), packed.data.size()));
   } else {
-    const PackedCloudView view = packed.view();
     for (size_t i = 0; i < packed.num_points; ++i) {
       for (size_t f = 0; f < packed.fields.size(); ++f) {
         const uint8_t* p = packed.data.data() + i * packed.point_step + packed.fields[f].offset;
         double value = 0;
         switch (packed.fields[f].type) {
-          case FieldType::kFloat32: { float v; std::memcpy(&v, p, 4); value = v; break; }
-          case FieldType::kFloat64: std::memcpy(&value, p, 8); break;
-          case FieldType::kUint16: { uint16_t v; std::memcpy(&v, p, 2); value = v; break; }
-          case FieldType::kUint32: { uint32_t v; std::memcpy(&v, p, 4); value = v; break; }
-          case FieldType::kInt32: { int32_t v; std::memcpy(&v, p, 4); value = v; break; }
-          default: { uint8_t v; std::memcpy(&v, p, 1); value = v; break; }
+          case FieldType::kFloat32: {
+            float v;
+            std::memcpy(&v, p, 4);
+            value = v;
+            break;
+          }
+          case FieldType::kFloat64:
+            std::memcpy(&value, p, 8);
+            break;
+          case FieldType::kUint16: {
+            uint16_t v;
+            std::memcpy(&v, p, 2);
+            value = v;
+            break;
+          }
+          case FieldType::kUint32: {
+            uint32_t v;
+            std::memcpy(&v, p, 4);
+            value = v;
+            break;
+          }
+          case FieldType::kInt32: {
+            int32_t v;
+            std::memcpy(&v, p, 4);
+            value = v;
+            break;
+          }
+          default: {
+            uint8_t v;
+            std::memcpy(&v, p, 1);
+            value = v;
+            break;
+          }
         }
         w.text(f ? " " : "").number(value);
       }
       w.text("\n");
     }
-    (void)view;
   }
   w.close();
 }

@@ -14,7 +14,8 @@ enum class Format { kPcd, kPly };
 
 Format format_of(const fs::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   if (ext == ".pcd") return Format::kPcd;
   if (ext == ".ply") return Format::kPly;
   throw IoError(path.string() + ": unknown scan format '" + ext + "' (expected .pcd or .ply)");
@@ -27,12 +28,16 @@ ScanFileInfo read_scan_info(const fs::path& path) {
 }
 
 PointCloud read_scan_file(const fs::path& path, TimeNs t_ns, const ScanReadOptions& options) {
-  return format_of(path) == Format::kPcd ? read_pcd(path, t_ns, options) : read_ply(path, t_ns, options);
+  return format_of(path) == Format::kPcd ? read_pcd(path, t_ns, options)
+                                         : read_ply(path, t_ns, options);
 }
 
-void write_scan_file(const fs::path& path, const PointCloud& cloud, const ScanWriteOptions& options) {
-  if (format_of(path) == Format::kPcd) write_pcd(path, cloud, options);
-  else write_ply(path, cloud, options);
+void write_scan_file(const fs::path& path, const PointCloud& cloud,
+                     const ScanWriteOptions& options) {
+  if (format_of(path) == Format::kPcd)
+    write_pcd(path, cloud, options);
+  else
+    write_ply(path, cloud, options);
 }
 
 }  // namespace keel::io

@@ -37,9 +37,11 @@ void write_scan_file(const std::filesystem::path& path, const PointCloud& cloud,
 // Per format (read_scan_file dispatches on the extension).
 ScanFileInfo read_pcd_info(const std::filesystem::path& path);
 PointCloud read_pcd(const std::filesystem::path& path, TimeNs t_ns, const ScanReadOptions& options);
-void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const ScanWriteOptions& options);
+void write_pcd(const std::filesystem::path& path, const PointCloud& cloud,
+               const ScanWriteOptions& options);
 ScanFileInfo read_ply_info(const std::filesystem::path& path);
 PointCloud read_ply(const std::filesystem::path& path, TimeNs t_ns, const ScanReadOptions& options);
-void write_ply(const std::filesystem::path& path, const PointCloud& cloud, const ScanWriteOptions& options);
+void write_ply(const std::filesystem::path& path, const PointCloud& cloud,
+               const ScanWriteOptions& options);
 
 }  // namespace keel::io

@@ -45,7 +45,8 @@ DvlRangesSeries read_dvl_ranges_csv(const std::filesystem::path& path) {
     DvlRangesSample s;
     s.t_ns = csv.time(0);
     csv.check_increasing(s.t_ns);
-    for (size_t beam = 0; beam < 4; ++beam) s.range_m[beam] = csv.number(1 + beam, /*allow_nan=*/true);
+    for (size_t beam = 0; beam < 4; ++beam)
+      s.range_m[beam] = csv.number(1 + beam, /*allow_nan=*/true);
     out.push_back(s);
   }
   return out;

@@ -10,11 +10,11 @@
 
 namespace keel::io {
 
-ImuSeries read_imu_csv(const std::filesystem::path& path);              // t,wx,wy,wz,ax,ay,az
-DvlSeries read_dvl_csv(const std::filesystem::path& path);              // t,vx,vy,vz[,valid]
-DvlRangesSeries read_dvl_ranges_csv(const std::filesystem::path& path); // t,r0,r1,r2,r3
-DepthSeries read_depth_csv(const std::filesystem::path& path);          // t,depth
-ServoSeries read_servo_csv(const std::filesystem::path& path);          // t,angle
+ImuSeries read_imu_csv(const std::filesystem::path& path);               // t,wx,wy,wz,ax,ay,az
+DvlSeries read_dvl_csv(const std::filesystem::path& path);               // t,vx,vy,vz[,valid]
+DvlRangesSeries read_dvl_ranges_csv(const std::filesystem::path& path);  // t,r0,r1,r2,r3
+DepthSeries read_depth_csv(const std::filesystem::path& path);           // t,depth
+ServoSeries read_servo_csv(const std::filesystem::path& path);           // t,angle
 
 void write_imu_csv(const std::filesystem::path& path, const ImuSeries& samples);
 // Writes the `valid` column when `with_valid` (or when any sample is invalid).

@@ -13,8 +13,8 @@ namespace keel::io {
 
 struct ImuSample {
   TimeNs t_ns = 0;
-  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();   // body rate in the IMU frame
-  Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();   // specific force (+9.81 z at rest)
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();  // body rate in the IMU frame
+  Eigen::Vector3d accel_m_s2 = Eigen::Vector3d::Zero();  // specific force (+9.81 z at rest)
 };
 
 struct DvlSample {

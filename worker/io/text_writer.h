@@ -19,8 +19,8 @@ class TextWriter {
   TextWriter& operator=(const TextWriter&) = delete;
 
   TextWriter& text(std::string_view s);
-  TextWriter& number(double value);   // shortest text that reads back to the same double
-  TextWriter& seconds(TimeNs t_ns);   // "1700000000.123456789"
+  TextWriter& number(double value);  // shortest text that reads back to the same double
+  TextWriter& seconds(TimeNs t_ns);  // "1700000000.123456789"
   TextWriter& integer(long long value);
   void close();  // flushes; throws IoError naming the file on failure
 

@@ -19,8 +19,8 @@ using nlohmann::json;
 using proto::SensorType;
 
 struct IngestOptions {
-  double gap_factor = 2.5;       // a gap is an interval longer than gap_factor nominal periods
-  double rate_tolerance = 0.2;   // measured rate off nominal by more than this: a warning
+  double gap_factor = 2.5;      // a gap is an interval longer than gap_factor nominal periods
+  double rate_tolerance = 0.2;  // measured rate off nominal by more than this: a warning
 
   static IngestOptions from_json(const json& options) {
     IngestOptions o;
@@ -29,8 +29,10 @@ struct IngestOptions {
     r.reject_unknown({"gap_factor", "rate_tolerance"});
     o.gap_factor = r.optional<double>("gap_factor", o.gap_factor);
     o.rate_tolerance = r.optional<double>("rate_tolerance", o.rate_tolerance);
-    if (!(o.gap_factor > 1.0)) throw proto::ContractError("options.ingest.gap_factor: expected > 1");
-    if (!(o.rate_tolerance > 0.0)) throw proto::ContractError("options.ingest.rate_tolerance: expected > 0");
+    if (!(o.gap_factor > 1.0))
+      throw proto::ContractError("options.ingest.gap_factor: expected > 1");
+    if (!(o.rate_tolerance > 0.0))
+      throw proto::ContractError("options.ingest.rate_tolerance: expected > 0");
     return o;
   }
 };
@@ -47,7 +49,8 @@ json stamp_report(const std::vector<TimeNs>& stamps, double nominal_rate_hz,
   r["t_first_s"] = ns_to_seconds(stamps.front());
   r["t_last_s"] = ns_to_seconds(stamps.back());
   r["duration_s"] = duration_s;
-  const double measured = duration_s > 0.0 ? static_cast<double>(stamps.size() - 1) / duration_s : 0.0;
+  const double measured =
+      duration_s > 0.0 ? static_cast<double>(stamps.size() - 1) / duration_s : 0.0;
   r["rate_hz_measured"] = measured;
   if (nominal_rate_hz > 0.0) {
     r["rate_hz_nominal"] = nominal_rate_hz;
@@ -60,12 +63,14 @@ json stamp_report(const std::vector<TimeNs>& stamps, double nominal_rate_hz,
       longest_s = std::max(longest_s, dt);
     }
     r["gaps"] = {{"threshold_s", threshold_s}, {"count", gaps}, {"longest_interval_s", longest_s}};
-    if (stamps.size() > 1 && std::abs(measured - nominal_rate_hz) > options.rate_tolerance * nominal_rate_hz)
+    if (stamps.size() > 1 &&
+        std::abs(measured - nominal_rate_hz) > options.rate_tolerance * nominal_rate_hz)
       warnings.push_back(name + ": measured rate " + std::to_string(measured) + " Hz, nominal " +
                          std::to_string(nominal_rate_hz) + " Hz");
     if (gaps > 0)
       warnings.push_back(name + ": " + std::to_string(gaps) + " gaps longer than " +
-                         std::to_string(threshold_s) + " s (longest " + std::to_string(longest_s) + " s)");
+                         std::to_string(threshold_s) + " s (longest " + std::to_string(longest_s) +
+                         " s)");
   }
   return r;
 }
@@ -100,14 +105,16 @@ class IngestStage : public Stage {
     json sensors = json::object();
     const size_t units = manifest.sensors.size() + manifest.trajectories.size() + 1;
     size_t done = 0;
-    auto progress = [&](double within) { context.progress((done + within) / static_cast<double>(units)); };
+    auto progress = [&](double within) {
+      context.progress((done + within) / static_cast<double>(units));
+    };
 
     for (const auto& sensor : manifest.sensors) {
       context.check_canceled();
-      sensors[sensor.name] = sensor_report(reader, sensor, options, context, warnings,
-                                           [&](double f) { progress(f); });
-      context.log("ingest: " + sensor.name + " (" + proto::to_string(sensor.type) + "): " +
-                  std::to_string(sensors[sensor.name]["count"].get<size_t>()) + " records");
+      sensors[sensor.name] =
+          sensor_report(reader, sensor, options, context, warnings, [&](double f) { progress(f); });
+      context.log("ingest: " + sensor.name + " (" + proto::to_string(sensor.type) +
+                  "): " + std::to_string(sensors[sensor.name]["count"].get<size_t>()) + " records");
       ++done;
       progress(0.0);
     }
@@ -133,7 +140,8 @@ class IngestStage : public Stage {
           {"world_frame", manifest.world_frame},
           {"bag", manifest.bag.empty() ? json(nullptr) : json(manifest.bag)},
           {"cad_mesh", manifest.cad_mesh.empty() ? json(nullptr) : json(manifest.cad_mesh)},
-          {"ground_truth", manifest.ground_truth.empty() ? json(nullptr) : json(manifest.ground_truth)}}},
+          {"ground_truth",
+           manifest.ground_truth.empty() ? json(nullptr) : json(manifest.ground_truth)}}},
         {"sensors", sensors},
         {"trajectories", trajectories},
         {"loop_closures", loops.size()},
@@ -147,20 +155,28 @@ class IngestStage : public Stage {
                             const IngestOptions& options, StageContext& context, json& warnings,
                             Progress&& progress) {
     json r;
-    if (sensor.is_scans()) r = scans_report(reader, sensor, options, context, warnings, progress);
-    else if (sensor.is_images()) r = images_report(reader, sensor, options, context, warnings, progress);
-    else r = stream_report(reader, sensor, options, warnings);
+    if (sensor.is_scans())
+      r = scans_report(reader, sensor, options, context, warnings, progress);
+    else if (sensor.is_images())
+      r = images_report(reader, sensor, options, context, warnings, progress);
+    else
+      r = stream_report(reader, sensor, options, warnings);
     json out = {{"type", proto::to_string(sensor.type)},
-                {"source", !sensor.topic.empty() ? "topic " + sensor.topic
-                           : !sensor.file.empty() ? sensor.file
-                           : !sensor.scans.empty() ? sensor.scans : sensor.images}};
+                {"source", !sensor.topic.empty()   ? "topic " + sensor.topic
+                           : !sensor.file.empty()  ? sensor.file
+                           : !sensor.scans.empty() ? sensor.scans
+                                                   : sensor.images}};
     out.update(r);
     std::string extrinsic = "none";
-    if (sensor.T_body_sensor) extrinsic = "mission.yaml";
-    else if (reader.extrinsic(sensor.name)) extrinsic = "tf_static";
+    if (sensor.T_body_sensor)
+      extrinsic = "mission.yaml";
+    else if (reader.extrinsic(sensor.name))
+      extrinsic = "tf_static";
     out["extrinsic"] = extrinsic;
-    if (extrinsic == "none" && sensor.type != SensorType::kServo && sensor.type != SensorType::kDepth)
-      warnings.push_back(sensor.name + ": no T_body_sensor (neither in mission.yaml nor /tf_static)");
+    if (extrinsic == "none" && sensor.type != SensorType::kServo &&
+        sensor.type != SensorType::kDepth)
+      warnings.push_back(sensor.name +
+                         ": no T_body_sensor (neither in mission.yaml nor /tf_static)");
     return out;
   }
 
@@ -169,11 +185,14 @@ class IngestStage : public Stage {
     std::vector<TimeNs> stamps;
     json extra = json::object();
     switch (s.type) {
-      case SensorType::kImu: stamps = io::stamps_of(reader.read_imu(s.name)); break;
+      case SensorType::kImu:
+        stamps = io::stamps_of(reader.read_imu(s.name));
+        break;
       case SensorType::kDvl: {
         const auto samples = reader.read_dvl(s.name);
         stamps = io::stamps_of(samples);
-        extra["invalid"] = std::count_if(samples.begin(), samples.end(), [](const auto& x) { return !x.valid; });
+        extra["invalid"] =
+            std::count_if(samples.begin(), samples.end(), [](const auto& x) { return !x.valid; });
         break;
       }
       case SensorType::kDvlRanges: {
@@ -185,9 +204,14 @@ class IngestStage : public Stage {
         extra["beam_returns_missing"] = missing;
         break;
       }
-      case SensorType::kDepth: stamps = io::stamps_of(reader.read_depth(s.name)); break;
-      case SensorType::kServo: stamps = io::stamps_of(reader.read_servo(s.name)); break;
-      default: break;
+      case SensorType::kDepth:
+        stamps = io::stamps_of(reader.read_depth(s.name));
+        break;
+      case SensorType::kServo:
+        stamps = io::stamps_of(reader.read_servo(s.name));
+        break;
+      default:
+        break;
     }
     json r = stamp_report(stamps, s.rate_hz, options, s.name, warnings);
     r.update(extra);
@@ -221,12 +245,13 @@ class IngestStage : public Stage {
     json r = stamp_report(stamps, s.rate_hz, options, s.name, warnings);
     r["points"] = {{"total", points_total}, {"per_scan", points.to_json()}};
     if (s.point_time) {
-      r["time_field"] = {{"field", s.point_time->field},
-                         {"unit", proto::to_string(s.point_time->unit)},
-                         {"reference", proto::to_string(s.point_time->reference)},
-                         {"span_s", time_span.to_json()},
-                         {"offset_min_s", time_offset.count ? json(time_offset.min) : json(nullptr)},
-                         {"offset_max_s", time_offset.count ? json(time_offset.max) : json(nullptr)}};
+      r["time_field"] = {
+          {"field", s.point_time->field},
+          {"unit", proto::to_string(s.point_time->unit)},
+          {"reference", proto::to_string(s.point_time->reference)},
+          {"span_s", time_span.to_json()},
+          {"offset_min_s", time_offset.count ? json(time_offset.min) : json(nullptr)},
+          {"offset_max_s", time_offset.count ? json(time_offset.max) : json(nullptr)}};
     }
     return r;
   }
@@ -245,10 +270,10 @@ class IngestStage : public Stage {
       if (!source->next(frame, /*decode=*/false)) break;
       stamps.push_back(frame.t_ns);
       if (s.camera && (frame.width != s.camera->width || frame.height != s.camera->height))
-        throw std::runtime_error(source->current_source() + ": image is " + std::to_string(frame.width) +
-                                 "x" + std::to_string(frame.height) + ", camera '" + s.name +
-                                 "' in mission.yaml is " + std::to_string(s.camera->width) + "x" +
-                                 std::to_string(s.camera->height));
+        throw std::runtime_error(
+            source->current_source() + ": image is " + std::to_string(frame.width) + "x" +
+            std::to_string(frame.height) + ", camera '" + s.name + "' in mission.yaml is " +
+            std::to_string(s.camera->width) + "x" + std::to_string(s.camera->height));
       const json size = {frame.width, frame.height, frame.channels, frame.bit_depth};
       if (std::find(sizes.begin(), sizes.end(), size) == sizes.end()) sizes.push_back(size);
       if (total > 0) progress(static_cast<double>(stamps.size()) / static_cast<double>(total));
@@ -266,7 +291,8 @@ class IngestStage : public Stage {
       stamps.push_back(trajectory[i].t_ns);
       if (i > 0)
         path_length_m += (trajectory[i].T_world_body.translation() -
-                          trajectory[i - 1].T_world_body.translation()).norm();
+                          trajectory[i - 1].T_world_body.translation())
+                             .norm();
     }
     json r = stamp_report(stamps, 0.0, options, "trajectories." + name, warnings);
     r["path_length_m"] = path_length_m;

@@ -4,10 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "worker/pipeline/stage.h"
-#ifdef KEEL_HAVE_INGEST_STAGE
 #include "worker/pipeline/ingest_stage.h"
-#endif
+#include "worker/pipeline/stage.h"
 
 namespace keel::pipeline {
 
@@ -20,9 +18,7 @@ struct StageEntry {
 
 const std::vector<StageEntry>& entries() {
   static const std::vector<StageEntry> table = {
-#ifdef KEEL_HAVE_INGEST_STAGE
       {"ingest", make_ingest_stage},
-#endif
   };
   return table;
 }

@@ -16,6 +16,10 @@ struct DegeneracyOptions {
   // deviation exceeds 0.5 m (translation) or 0.1 rad (rotation).
   double min_eigenvalue_translation = 1.0 / (0.5 * 0.5);  // 1/m^2
   double min_eigenvalue_rotation = 1.0 / (0.1 * 0.1);     // 1/rad^2
+  // Relative test: a direction whose eigenvalue is below this fraction of the block's largest
+  // is degenerate too. Scan-matching Hessians grow with the number of points, so noisy normals
+  // alone lift a corridor's axis above any fixed threshold; its condition number does not.
+  double min_eigenvalue_ratio = 1e-2;
 };
 
 struct DegeneracyReport {
@@ -28,7 +32,7 @@ struct DegeneracyReport {
 };
 
 // Eigen-decomposes the translation and rotation diagonal blocks of `information` ([t, phi]
-// order) and flags eigenvalues under the thresholds.
+// order) and flags eigenvalues under max(absolute threshold, ratio * largest eigenvalue).
 DegeneracyReport analyze_degeneracy(const Matrix6d& information,
                                     const DegeneracyOptions& options = {});
 

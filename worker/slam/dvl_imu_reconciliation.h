@@ -22,7 +22,8 @@ struct ReconcileOptions {
 // t_{l-1} <= t_k <= t_l, the DVL velocity linearly interpolated at t_k is paired with the gyro
 // sample (Eq. (19)) and rotated into the IMU frame with R_imu_dvl (the rotation of T_B,B_o).
 // IMU samples before the first or after the last valid DVL sample, or inside a gap longer than
-// max_dvl_gap_s, produce nothing. Samples flagged invalid are dropped first.
+// max_dvl_gap_s, produce nothing; an IMU sample stamped exactly like a DVL sample takes that
+// sample's velocity. Samples flagged invalid are dropped first.
 //
 // The paper's listing advances D_{l-1} to the first DVL sample passed, which is only right when
 // at most one DVL sample falls between two IMU samples; here the bracketing pair is always the

@@ -18,18 +18,16 @@ inline TriangleMesh make_icosphere(int level, double radius = 1.0,
                                    const Eigen::Vector3d& center = Eigen::Vector3d::Zero()) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   TriangleMesh mesh;
-  for (const auto& v : {Eigen::Vector3d(-1, t, 0), Eigen::Vector3d(1, t, 0),
-                        Eigen::Vector3d(-1, -t, 0), Eigen::Vector3d(1, -t, 0),
-                        Eigen::Vector3d(0, -1, t), Eigen::Vector3d(0, 1, t),
-                        Eigen::Vector3d(0, -1, -t), Eigen::Vector3d(0, 1, -t),
-                        Eigen::Vector3d(t, 0, -1), Eigen::Vector3d(t, 0, 1),
-                        Eigen::Vector3d(-t, 0, -1), Eigen::Vector3d(-t, 0, 1)}) {
+  for (const auto& v :
+       {Eigen::Vector3d(-1, t, 0), Eigen::Vector3d(1, t, 0), Eigen::Vector3d(-1, -t, 0),
+        Eigen::Vector3d(1, -t, 0), Eigen::Vector3d(0, -1, t), Eigen::Vector3d(0, 1, t),
+        Eigen::Vector3d(0, -1, -t), Eigen::Vector3d(0, 1, -t), Eigen::Vector3d(t, 0, -1),
+        Eigen::Vector3d(t, 0, 1), Eigen::Vector3d(-t, 0, -1), Eigen::Vector3d(-t, 0, 1)}) {
     mesh.vertices.push_back(v.normalized());
   }
-  mesh.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  mesh.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<int, int>, int> midpoints;
     auto midpoint = [&](int a, int b) {
@@ -127,12 +125,22 @@ inline TriangleMesh make_uv_ellipsoid(int n_lon, int n_lat, const Eigen::Vector3
   return mesh;
 }
 
+// A prism over the triangle (0,0) (1,0) (0.5,2) in the xz-plane, y in [0, 1]: its top edge
+// has a 28 degree dihedral angle, where one face's normal gives the wrong side for points
+// just outside (the case angle-weighted pseudonormals exist for).
+inline TriangleMesh make_sharp_wedge() {
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, 0, 2}, {0, 1, 0}, {1, 1, 0}, {0.5, 1, 2}};
+  mesh.faces = {{0, 1, 2}, {3, 5, 4}, {0, 3, 4}, {0, 4, 1},
+                {1, 4, 5}, {1, 5, 2}, {0, 2, 5}, {0, 5, 3}};
+  return mesh;
+}
+
 // True when p is strictly inside a closed convex outward-oriented mesh.
 inline bool inside_convex(const TriangleMesh& mesh, const Eigen::Vector3d& p) {
   for (const auto& f : mesh.faces) {
     const Eigen::Vector3d& a = mesh.vertices[f[0]];
-    const Eigen::Vector3d n =
-        (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a);
+    const Eigen::Vector3d n = (mesh.vertices[f[1]] - a).cross(mesh.vertices[f[2]] - a);
     if ((p - a).dot(n) >= 0) return false;
   }
   return true;

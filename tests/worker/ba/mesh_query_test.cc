@@ -39,15 +39,16 @@ Eigen::Vector3d brute_closest_on_triangle(const Eigen::Vector3d& p, const Eigen:
 double brute_distance(const TriangleMesh& mesh, const Eigen::Vector3d& p) {
   double best = std::numeric_limits<double>::infinity();
   for (const auto& f : mesh.faces) {
-    const Eigen::Vector3d x = brute_closest_on_triangle(p, mesh.vertices[f[0]], mesh.vertices[f[1]],
-                                                        mesh.vertices[f[2]]);
+    const Eigen::Vector3d x =
+        brute_closest_on_triangle(p, mesh.vertices[f[0]], mesh.vertices[f[1]], mesh.vertices[f[2]]);
     best = std::min(best, (p - x).norm());
   }
   return best;
 }
 
 // Moeller-Trumbore over all faces: nearest t in [0, max_range] (unit direction).
-std::optional<std::pair<double, int>> brute_raycast(const TriangleMesh& mesh, const Eigen::Vector3d& o,
+std::optional<std::pair<double, int>> brute_raycast(const TriangleMesh& mesh,
+                                                    const Eigen::Vector3d& o,
                                                     const Eigen::Vector3d& d, double max_range) {
   std::optional<std::pair<double, int>> best;
   for (size_t f = 0; f < mesh.faces.size(); ++f) {
@@ -82,10 +83,13 @@ std::vector<Solid> solids() {
                       return testing::inside_convex(sphere, p);
                     }});
   TriangleMesh box = testing::make_box({-1, -0.5, 0}, {2, 0.5, 0.25});
-  result.push_back({"box", box, [box](const Eigen::Vector3d& p) {
-                      return testing::inside_convex(box, p);
-                    }});
+  result.push_back(
+      {"box", box, [box](const Eigen::Vector3d& p) { return testing::inside_convex(box, p); }});
   result.push_back({"l_prism", testing::make_l_prism(), testing::inside_l_prism});
+  TriangleMesh wedge = testing::make_sharp_wedge();
+  result.push_back({"sharp_wedge", wedge, [wedge](const Eigen::Vector3d& p) {
+                      return testing::inside_convex(wedge, p);
+                    }});
   return result;
 }
 
@@ -105,17 +109,21 @@ std::vector<Eigen::Vector3d> queries_near(const TriangleMesh& mesh, std::mt19937
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d jitter(noise(rng), noise(rng), noise(rng));
     const auto& f = mesh.faces[face(rng)];
+    const int c = static_cast<int>(rng() % 3);
+    const Eigen::Vector3d& a = mesh.vertices[f[c]];
+    const Eigen::Vector3d& b = mesh.vertices[f[(c + 1) % 3]];
     switch (i % 3) {
       case 0:
-        queries.push_back(lo - margin + (hi - lo + 2 * margin).cwiseProduct(
-                                            Eigen::Vector3d(unit(rng), unit(rng), unit(rng))));
+        queries.push_back(
+            lo - margin +
+            (hi - lo + 2 * margin).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng))));
         break;
       case 1:
-        queries.push_back(mesh.vertices[f[0]] + jitter);
+        queries.push_back(a + jitter);
         break;
       default: {
         const double t = unit(rng);
-        queries.push_back((1 - t) * mesh.vertices[f[0]] + t * mesh.vertices[f[1]] + jitter);
+        queries.push_back((1 - t) * a + t * b + jitter);
       }
     }
   }
@@ -158,6 +166,10 @@ TEST(MeshQuery, ClosestPointAndSignMatchBruteForceAndSolid) {
   std::mt19937 rng(42);
   for (const Solid& solid : solids()) {
     SCOPED_TRACE(solid.name);
+    // The analytic solid agrees with the mesh's orientation.
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& v : solid.mesh.vertices) centroid += v / solid.mesh.vertices.size();
+    ASSERT_TRUE(solid.inside(centroid) || solid.name == "l_prism");
     const MeshQuery query(solid.mesh);
     int on_edges = 0, on_vertices = 0, checked_signs = 0;
     for (const Eigen::Vector3d& p : queries_near(solid.mesh, rng, 3000)) {
@@ -167,8 +179,9 @@ TEST(MeshQuery, ClosestPointAndSignMatchBruteForceAndSolid) {
       ASSERT_NEAR((result.point - p).norm(), expected, 1e-9);
       // The point lies on the face it names.
       const auto& f = solid.mesh.faces[result.face];
-      const Eigen::Vector3d on_face = brute_closest_on_triangle(
-          result.point, solid.mesh.vertices[f[0]], solid.mesh.vertices[f[1]], solid.mesh.vertices[f[2]]);
+      const Eigen::Vector3d on_face =
+          brute_closest_on_triangle(result.point, solid.mesh.vertices[f[0]],
+                                    solid.mesh.vertices[f[1]], solid.mesh.vertices[f[2]]);
       ASSERT_LT((on_face - result.point).norm(), 1e-9);
       on_edges += result.feature == MeshFeature::kEdge;
       on_vertices += result.feature == MeshFeature::kVertex;

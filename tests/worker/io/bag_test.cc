@@ -26,8 +26,8 @@ std::filesystem::path make_bag(const TempDir& dir) {
   return bag;
 }
 
-#define MAKE_BAG_OR_SKIP(dir, bag)                                                   \
-  const auto bag = make_bag(dir);                                                    \
+#define MAKE_BAG_OR_SKIP(dir, bag) \
+  const auto bag = make_bag(dir);  \
   if (bag.empty()) GTEST_SKIP() << "/usr/bin/python3 with python3-rosbag unavailable"
 
 TEST(Bag, ListsTopicsWithTypesAndCounts) {
@@ -67,8 +67,9 @@ TEST(Bag, ImuDvlAndTrajectoriesFollowTheirClosedForms) {
   ASSERT_EQ(keyframes.size(), 3u);
   EXPECT_EQ(keyframes[2].t_ns, kT0 + 2000000000LL);
   EXPECT_EQ(keyframes[2].T_world_body.translation().y(), 2.0);
-  expect_error([&] { reader.read_imu("/slam/odom"); },
-               {"mission.bag", "topic '/slam/odom' holds nav_msgs/Odometry", "expected sensor_msgs/Imu"});
+  expect_error(
+      [&] { reader.read_imu("/slam/odom"); },
+      {"mission.bag", "topic '/slam/odom' holds nav_msgs/Odometry", "expected sensor_msgs/Imu"});
 }
 
 TEST(Bag, PointCloudsStreamWithOusterNanosecondTimes) {
@@ -76,7 +77,8 @@ TEST(Bag, PointCloudsStreamWithOusterNanosecondTimes) {
   MAKE_BAG_OR_SKIP(dir, bag);
   BagReader reader(bag);
   ScanReadOptions options;
-  options.point_time = proto::PointTimeSpec{"t", proto::TimeUnit::kNanoseconds, proto::TimeReference::kScanStart};
+  options.point_time =
+      proto::PointTimeSpec{"t", proto::TimeUnit::kNanoseconds, proto::TimeReference::kScanStart};
   options.sweep_period_s = 0.1;
   auto scans = reader.open_scans("/lidar/points", options);
   ASSERT_EQ(scans->size(), 5u);
@@ -145,8 +147,9 @@ TEST(Bag, MissingTopicNamesTopicAndTheBagsTopics) {
   TempDir dir;
   MAKE_BAG_OR_SKIP(dir, bag);
   BagReader reader(bag);
-  expect_error([&] { reader.read_imu("/imu/raw"); },
-               {"mission.bag", "no topic '/imu/raw'", "/imu/data (sensor_msgs/Imu)", "/lidar/points"});
+  expect_error(
+      [&] { reader.read_imu("/imu/raw"); },
+      {"mission.bag", "no topic '/imu/raw'", "/imu/data (sensor_msgs/Imu)", "/lidar/points"});
 }
 
 TEST(Bag, TruncatedBagIsNamed) {
@@ -158,11 +161,14 @@ TEST(Bag, TruncatedBagIsNamed) {
 
 std::string bag_mission_yaml(const std::string& imu_topic) {
   return "keel_mission: 1\nname: bag-mission\nbag: mission.bag\nsensors:\n"
-         "  - {name: imu, type: imu, topic: " + imu_topic + ", rate_hz: 200}\n"
+         "  - {name: imu, type: imu, topic: " +
+         imu_topic +
+         ", rate_hz: 200}\n"
          "  - {name: dvl, type: dvl, topic: /dvl/twist, rate_hz: 20}\n"
          "  - name: lidar\n    type: lidar\n    topic: /lidar/points\n    rate_hz: 10\n"
          "    point_time: {field: t, unit: ns}\n"
-         "  - {name: optical, type: camera, topic: /cam/image, frame_id: lidar_optical, rate_hz: 20,\n"
+         "  - {name: optical, type: camera, topic: /cam/image, frame_id: lidar_optical, rate_hz: "
+         "20,\n"
          "     camera: {model: pinhole, width: 4, height: 3, fx: 2, fy: 2, cx: 2, cy: 1.5}}\n"
          "trajectories:\n  odometry: {topic: /slam/odom}\n  map: {topic: /slam/keyframes}\n";
 }

@@ -49,7 +49,8 @@ TEST(DracoCodec, PointCloudErrorWithinQuantizationBoundAndEqualToReported) {
     DracoOptions options;
     options.position_bits = bits;
     options.field_bits = 0;  // ids and density lossless
-    const DracoEncoded encoded = encode_draco_point_cloud(points, {id_field(kPoints), density}, options);
+    const DracoEncoded encoded =
+        encode_draco_point_cloud(points, {id_field(kPoints), density}, options);
     const DracoPointCloud decoded = decode_draco_point_cloud(encoded.bytes);
     ASSERT_EQ(decoded.positions.size(), kPoints);
     const ScalarField* ids = find_field(decoded.fields, "id");
@@ -61,7 +62,8 @@ TEST(DracoCodec, PointCloudErrorWithinQuantizationBoundAndEqualToReported) {
     for (size_t k = 0; k < kPoints; ++k) {
       const int i = static_cast<int>(ids->values[k]);
       ASSERT_TRUE(i >= 0 && i < static_cast<int>(kPoints) && seen.insert(i).second);
-      max_error = std::max<double>(max_error, (decoded.positions[k] - points[i]).cast<double>().norm());
+      max_error =
+          std::max<double>(max_error, (decoded.positions[k] - points[i]).cast<double>().norm());
       EXPECT_EQ(dens->values[k], density.values[i]);
     }
     const double range = 25.0;  // x spans [-5, 20]
@@ -82,7 +84,8 @@ TEST(DracoCodec, QuantizedFieldsStayWithinTheirStep) {
   for (size_t i = 0; i < kPoints; ++i) deviation.values.push_back(u(rng));
   DracoOptions options;
   options.field_bits = 12;  // ids 0..1999 keep |error| <= 1999 / 4095 / 2 < 0.5
-  const DracoEncoded encoded = encode_draco_point_cloud(points, {id_field(kPoints), deviation}, options);
+  const DracoEncoded encoded =
+      encode_draco_point_cloud(points, {id_field(kPoints), deviation}, options);
   const DracoPointCloud decoded = decode_draco_point_cloud(encoded.bytes);
   const ScalarField* ids = find_field(decoded.fields, "id");
   const ScalarField* dev = find_field(decoded.fields, "deviation");
@@ -130,7 +133,8 @@ TEST(DracoCodec, MeshRoundTripKeepsTopologyAndBoundsError) {
     for (size_t k = 0; k < decoded.mesh.vertices.size(); ++k) {
       original[k] = static_cast<int>(ids->values[k]);
       ASSERT_TRUE(original[k] >= 0 && original[k] < static_cast<int>(n));
-      max_error = std::max(max_error, (decoded.mesh.vertices[k] - mesh.vertices[original[k]]).norm());
+      max_error =
+          std::max(max_error, (decoded.mesh.vertices[k] - mesh.vertices[original[k]]).norm());
       EXPECT_EQ(dev->values[k], deviation.values[original[k]]);
     }
     TriangleMesh remapped = mesh;
@@ -190,7 +194,8 @@ TEST(DracoCodec, FilesDecodeWithDracoDecoderCli) {
                                 (dir / (name + ".log")).string() + " 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
   }
-  std::ifstream map_in(dir / "map.ply", std::ios::binary), hull_in(dir / "hull.ply", std::ios::binary);
+  std::ifstream map_in(dir / "map.ply", std::ios::binary),
+      hull_in(dir / "hull.ply", std::ios::binary);
   const std::string map_ply((std::istreambuf_iterator<char>(map_in)), {});
   const std::string hull_ply((std::istreambuf_iterator<char>(hull_in)), {});
   EXPECT_EQ(ply_count(map_ply, "vertex"), 500);

@@ -59,7 +59,8 @@ TEST(IngestStage, ReportsCountsRatesGapsPointsAndPaths) {
   EXPECT_EQ(r["trajectories"]["map"]["count"], 3);
 
   bool gap_warned = false;
-  for (const auto& w : r["warnings"]) gap_warned = gap_warned || w.get<std::string>().find("imu: 1 gaps") == 0;
+  for (const auto& w : r["warnings"])
+    gap_warned = gap_warned || w.get<std::string>().find("imu: 1 gaps") == 0;
   EXPECT_TRUE(gap_warned) << r["warnings"].dump();
   ASSERT_FALSE(progress.empty());
   EXPECT_EQ(progress.back(), 1.0);
@@ -72,14 +73,16 @@ TEST(IngestStage, BadBundleFailsNamingTheFileAndCancelStops) {
   io::testing::write_text(dir / "dvl.csv", "t,vx,vy,vz\n1.0,0,0,0\n0.5,0,0,0\n");
   StageContext context;
   context.mission_dir = dir.path();
-  io::testing::expect_error([&] { make_ingest_stage()->run(context); }, {"dvl.csv:3:", "decreasing"});
+  io::testing::expect_error([&] { make_ingest_stage()->run(context); },
+                            {"dvl.csv:3:", "decreasing"});
 
   io::testing::write_bundle(dir.path());
   context.canceled = [] { return true; };
   EXPECT_THROW(make_ingest_stage()->run(context), Canceled);
   context.canceled = [] { return false; };
   context.options = {{"gap_factr", 3}};
-  io::testing::expect_error([&] { make_ingest_stage()->run(context); }, {"options.ingest.gap_factr: unknown field"});
+  io::testing::expect_error([&] { make_ingest_stage()->run(context); },
+                            {"options.ingest.gap_factr: unknown field"});
 }
 
 TEST(IngestStage, ImageSizeDifferentFromTheCameraModelIsAnError) {
@@ -89,7 +92,8 @@ TEST(IngestStage, ImageSizeDifferentFromTheCameraModelIsAnError) {
   io::write_png(dir / "cam0" / "img_1.png", image);
   StageContext context;
   context.mission_dir = dir.path();
-  io::testing::expect_error([&] { make_ingest_stage()->run(context); }, {"img_1.png", "9x6", "8x6"});
+  io::testing::expect_error([&] { make_ingest_stage()->run(context); },
+                            {"img_1.png", "9x6", "8x6"});
 }
 
 }  // namespace

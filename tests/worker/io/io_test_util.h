@@ -45,7 +45,8 @@ void expect_error(F&& f, std::initializer_list<std::string> needles) {
   } catch (const std::exception& e) {
     const std::string message = e.what();
     for (const auto& needle : needles)
-      EXPECT_NE(message.find(needle), std::string::npos) << "'" << needle << "' not in: " << message;
+      EXPECT_NE(message.find(needle), std::string::npos)
+          << "'" << needle << "' not in: " << message;
   }
 }
 

@@ -53,10 +53,10 @@ TEST(MeshCheck, FindsPlantedNonManifoldEdgeAndDegenerateTriangles) {
 
 TEST(MeshCheck, BoundaryDuplicatesOrientationAndUnusedVertices) {
   TriangleMesh mesh = testing::make_box({0, 0, 0}, {1, 1, 1});
-  mesh.faces.erase(mesh.faces.begin());            // opens a hole: 3 boundary edges
-  mesh.faces.push_back(mesh.faces.back());         // a duplicate face
-  std::swap(mesh.faces[3][1], mesh.faces[3][2]);   // flips one face: its 3 edges disagree
-  mesh.vertices.emplace_back(7, 7, 7);             // belongs to no face
+  mesh.faces.erase(mesh.faces.begin());           // opens a hole: 3 boundary edges
+  mesh.faces.push_back(mesh.faces.back());        // a duplicate face
+  std::swap(mesh.faces[3][1], mesh.faces[3][2]);  // flips one face: its 3 edges disagree
+  mesh.vertices.emplace_back(7, 7, 7);            // belongs to no face
   const MeshCheckReport report = check_mesh(mesh);
   EXPECT_EQ(report.boundary_edges, 3u);
   EXPECT_EQ(report.duplicate_faces, 1u);

@@ -71,7 +71,8 @@ std::string ply_ascii_cube(bool with_extras) {
     if (with_extras) out << " " << 10 * i << " " << 20 * i << " " << 30 * i << " 0.5";
     out << "\n";
   }
-  for (const auto& q : kQuads) out << "4 " << q[0] << " " << q[1] << " " << q[2] << " " << q[3] << "\n";
+  for (const auto& q : kQuads)
+    out << "4 " << q[0] << " " << q[1] << " " << q[2] << " " << q[3] << "\n";
   if (with_extras) out << "0 7\n";
   return out.str();
 }
@@ -303,13 +304,16 @@ TEST(MeshReaderErrors, PlyTruncated) {
 
 TEST(MeshReaderErrors, PlyHostileCountsDoNotAllocate) {
   const auto dir = scratch_dir();
-  std::string binary = replace(ply_binary_cube(false), "element vertex 8", "element vertex 99999999");
+  std::string binary =
+      replace(ply_binary_cube(false), "element vertex 8", "element vertex 99999999");
   expect_error(write_file(dir / "a.ply", binary), "truncated binary data: element 'vertex'");
-  std::string huge = replace(ply_binary_cube(false), "element vertex 8", "element vertex 9000000000");
+  std::string huge =
+      replace(ply_binary_cube(false), "element vertex 8", "element vertex 9000000000");
   expect_error(write_file(dir / "b.ply", huge), "too many");
   // A face list claiming 200 corners in a file that has fewer bytes left.
   std::string ascii = replace(ply_ascii_cube(false), "4 0 2 3 1", "200 0 2 3 1");
-  expect_error(write_file(dir / "c.ply", ascii), ":19: list 'vertex_indices' has an impossible length 200");
+  expect_error(write_file(dir / "c.ply", ascii),
+               ":19: list 'vertex_indices' has an impossible length 200");
 }
 
 TEST(MeshReaderErrors, PlyIndexOutOfRange) {
@@ -347,10 +351,12 @@ TEST(MeshReaderErrors, PlyNoFacesAndBadHeaders) {
                "no x, y and z");
   expect_error(write_file(dir / "e.ply", replace(ply_ascii_cube(false), "3 0.5 2\n", "3 0.5\n")),
                ":12: too few values");
-  expect_error(write_file(dir / "f.ply", replace(ply_ascii_cube(false), "3 0.5 2\n", "3 0.5 2 9\n")),
-               ":12: expected 3 values, got 4");
-  expect_error(write_file(dir / "g.ply", replace(ply_ascii_cube(false), "3 0.5 2\n", "3 0.5 two\n")),
-               ":12: property 'z': expected a number, got 'two'");
+  expect_error(
+      write_file(dir / "f.ply", replace(ply_ascii_cube(false), "3 0.5 2\n", "3 0.5 2 9\n")),
+      ":12: expected 3 values, got 4");
+  expect_error(
+      write_file(dir / "g.ply", replace(ply_ascii_cube(false), "3 0.5 2\n", "3 0.5 two\n")),
+      ":12: property 'z': expected a number, got 'two'");
 }
 
 TEST(MeshReaderErrors, ObjBadInput) {
@@ -381,7 +387,8 @@ TEST(MeshReaderErrors, StlBadInput) {
   expect_error(write_file(dir / "a.stl", binary.substr(0, binary.size() - 10)),
                "truncated or corrupt binary STL: the header declares 12 triangles (684 bytes) but "
                "the file has 674 bytes");
-  expect_error(write_file(dir / "b.stl", stl_binary_cube("binary").substr(0, 50)), "shorter than the 84-byte header");
+  expect_error(write_file(dir / "b.stl", stl_binary_cube("binary").substr(0, 50)),
+               "shorter than the 84-byte header");
   std::string nan_stl = binary;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(&nan_stl[84 + 3 * 50 + 12 + 4], &nan, 4);  // triangle 3, first corner y

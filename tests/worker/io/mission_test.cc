@@ -23,7 +23,8 @@ std::string replace(std::string text, const std::string& from, const std::string
 }
 
 TEST(YamlJson, ScalarsFollowTheCoreSchema) {
-  const auto j = yaml_to_json("a: 1\nb: 2.5\nc: '3'\nd: true\ne: ~\nf: [1, x]\ng: 1e-3\nh: -7\n", "t.yaml");
+  const auto j =
+      yaml_to_json("a: 1\nb: 2.5\nc: '3'\nd: true\ne: ~\nf: [1, x]\ng: 1e-3\nh: -7\n", "t.yaml");
   EXPECT_TRUE(j["a"].is_number_integer());
   EXPECT_EQ(j["b"].get<double>(), 2.5);
   EXPECT_TRUE(j["c"].is_string());
@@ -36,7 +37,8 @@ TEST(YamlJson, ScalarsFollowTheCoreSchema) {
 
 TEST(YamlJson, SyntaxErrorsAndDuplicateKeysNameLine) {
   expect_error([] { yaml_to_json("a: 1\nb: [1, 2\n", "m.yaml"); }, {"m.yaml:"});
-  expect_error([] { yaml_to_json("a: 1\nb: 2\na: 3\n", "m.yaml"); }, {"m.yaml:3:", "duplicate key 'a'"});
+  expect_error([] { yaml_to_json("a: 1\nb: 2\na: 3\n", "m.yaml"); },
+               {"m.yaml:3:", "duplicate key 'a'"});
 }
 
 TEST(Manifest, DefaultsAreSeedTableOneAndRoundTrip) {
@@ -45,9 +47,9 @@ TEST(Manifest, DefaultsAreSeedTableOneAndRoundTrip) {
   EXPECT_EQ(m.name, "test-bundle");
   EXPECT_EQ(m.body_frame, "base_link");
   ASSERT_EQ(m.sensors.size(), 4u);
-  EXPECT_EQ(m.sensors[0].noise.imu.gyro_noise_density, 5.7e-4);   // seed 000 Table I
+  EXPECT_EQ(m.sensors[0].noise.imu.gyro_noise_density, 5.7e-4);  // seed 000 Table I
   EXPECT_EQ(m.sensors[0].noise.imu.accel_random_walk, 2.4e-6);
-  EXPECT_EQ(m.sensors[1].noise.dvl.velocity_sigma_rel, 2.0e-3);   // given in the yaml
+  EXPECT_EQ(m.sensors[1].noise.dvl.velocity_sigma_rel, 2.0e-3);  // given in the yaml
   EXPECT_EQ(m.sensors[1].noise.dvl.bias_random_walk_rel, 1.0e-4);
   EXPECT_EQ(m.sensors[2].noise.range.range_sigma, 0.01);
   EXPECT_EQ(m.sensors[2].point_time->unit, proto::TimeUnit::kSeconds);
@@ -62,18 +64,28 @@ TEST(Manifest, ErrorsNameTheFieldPath) {
   auto parse = [](const std::string& yaml) {
     proto::MissionManifest::from_json(yaml_to_json(yaml, "mission.yaml"));
   };
-  expect_error([&] { parse(replace(base, "rotation_xyzw: [0, 0, 0, 1]}\n  - name: cam0", "rotation_xyzw: [0, 0, 1]}\n  - name: cam0")); },
-               {"sensors[2].T_body_sensor.rotation_xyzw", "expected 4 numbers, got 3"});
-  expect_error([&] { parse(replace(base, "rate_hz: 20\n    T_body", "rate_hz: fast\n    T_body")); },
-               {"sensors[1].rate_hz", "expected number, got string"});
-  expect_error([&] { parse(replace(base, "    file: dvl.csv\n", "    file: dvl.csv\n    colour: red\n")); },
-               {"sensors[1].colour: unknown field"});
-  expect_error([&] { parse(replace(base, "name: test-bundle\n", "")); }, {"name: missing required field"});
-  expect_error([&] { parse(replace(base, "noise: {velocity_sigma_rel", "noise: {gyro_noise_density")); },
-               {"sensors[1].noise.gyro_noise_density: unknown field"});
-  expect_error([&] { parse(replace(base, "    file: dvl.csv\n", "    file: dvl.csv\n    topic: /dvl\n")); },
-               {"sensors[1]", "exactly one of file, scans, images, topic"});
-  expect_error([&] { parse(replace(base, "name: dvl\n", "name: imu\n")); }, {"sensors[1].name", "repeated"});
+  expect_error(
+      [&] {
+        parse(replace(base, "rotation_xyzw: [0, 0, 0, 1]}\n  - name: cam0",
+                      "rotation_xyzw: [0, 0, 1]}\n  - name: cam0"));
+      },
+      {"sensors[2].T_body_sensor.rotation_xyzw", "expected 4 numbers, got 3"});
+  expect_error(
+      [&] { parse(replace(base, "rate_hz: 20\n    T_body", "rate_hz: fast\n    T_body")); },
+      {"sensors[1].rate_hz", "expected number, got string"});
+  expect_error(
+      [&] { parse(replace(base, "    file: dvl.csv\n", "    file: dvl.csv\n    colour: red\n")); },
+      {"sensors[1].colour: unknown field"});
+  expect_error([&] { parse(replace(base, "name: test-bundle\n", "")); },
+               {"name: missing required field"});
+  expect_error(
+      [&] { parse(replace(base, "noise: {velocity_sigma_rel", "noise: {gyro_noise_density")); },
+      {"sensors[1].noise.gyro_noise_density: unknown field"});
+  expect_error(
+      [&] { parse(replace(base, "    file: dvl.csv\n", "    file: dvl.csv\n    topic: /dvl\n")); },
+      {"sensors[1]", "exactly one of file, scans, images, topic"});
+  expect_error([&] { parse(replace(base, "name: dvl\n", "name: imu\n")); },
+               {"sensors[1].name", "repeated"});
   expect_error([&] { parse(replace(base, "unit: s,", "unit: seconds,")); },
                {"sensors[2].point_time.unit", "unknown time unit 'seconds'"});
 }
@@ -115,9 +127,10 @@ TEST(Mission, UnknownSensorTypeNamesFieldAndKnownTypes) {
 TEST(Mission, BadQuaternionNamesField) {
   TempDir dir;
   testing::write_bundle(dir.path());
-  write_text(dir / "mission.yaml",
-             replace(testing::bundle_yaml(), "translation: [0, 0, -0.3], rotation_xyzw: [0, 0, 0, 1]",
-                     "translation: [0, 0, -0.3], rotation_xyzw: [0, 0, 0.5, 1]"));
+  write_text(
+      dir / "mission.yaml",
+      replace(testing::bundle_yaml(), "translation: [0, 0, -0.3], rotation_xyzw: [0, 0, 0, 1]",
+              "translation: [0, 0, -0.3], rotation_xyzw: [0, 0, 0.5, 1]"));
   expect_error([&] { load_mission(dir.path()); },
                {"sensors[1].T_body_sensor.rotation_xyzw", "unit quaternion", "|q| = 1.118"});
 }
@@ -125,8 +138,10 @@ TEST(Mission, BadQuaternionNamesField) {
 TEST(Mission, PathsMayNotLeaveTheBundleAndMissingManifestIsNamed) {
   TempDir dir;
   testing::write_bundle(dir.path());
-  write_text(dir / "mission.yaml", replace(testing::bundle_yaml(), "file: imu.csv", "file: ../../etc/passwd"));
-  expect_error([&] { load_mission(dir.path()); }, {"sensors[0].file", "relative path inside the bundle"});
+  write_text(dir / "mission.yaml",
+             replace(testing::bundle_yaml(), "file: imu.csv", "file: ../../etc/passwd"));
+  expect_error([&] { load_mission(dir.path()); },
+               {"sensors[0].file", "relative path inside the bundle"});
   expect_error([&] { load_mission(dir / "nowhere"); }, {"mission.yaml: not found"});
 }
 

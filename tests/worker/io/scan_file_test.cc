@@ -34,7 +34,8 @@ PointCloud make_sweep(size_t n) {
   return cloud;
 }
 
-ScanReadOptions read_options(TimeUnit unit, TimeReference reference, const std::string& field = "time") {
+ScanReadOptions read_options(TimeUnit unit, TimeReference reference,
+                             const std::string& field = "time") {
   ScanReadOptions o;
   o.point_time = PointTimeSpec{field, unit, reference};
   o.sweep_period_s = 0.1;
@@ -65,17 +66,28 @@ struct Case {
 
 TEST(ScanFile, RoundTripsEveryEncodingAndTimeConvention) {
   const Case cases[] = {
-      {"a.pcd", ScanEncoding::kAscii, FieldType::kFloat32, TimeUnit::kSeconds, TimeReference::kScanStart, 1e-7},
-      {"b.pcd", ScanEncoding::kBinary, FieldType::kFloat32, TimeUnit::kSeconds, TimeReference::kScanStart, 0},
-      {"c.pcd", ScanEncoding::kBinaryCompressed, FieldType::kFloat32, TimeUnit::kSeconds, TimeReference::kScanStart, 0},
-      {"d.pcd", ScanEncoding::kBinary, FieldType::kUint32, TimeUnit::kNanoseconds, TimeReference::kScanStart, 1e-9},
-      {"e.pcd", ScanEncoding::kBinary, FieldType::kFloat64, TimeUnit::kSeconds, TimeReference::kAbsolute, 1e-6},
-      {"f.pcd", ScanEncoding::kBinary, FieldType::kUint64, TimeUnit::kNanoseconds, TimeReference::kAbsolute, 1e-9},
-      {"g.pcd", ScanEncoding::kAscii, FieldType::kFloat64, TimeUnit::kMicroseconds, TimeReference::kScanStart, 1e-9},
-      {"h.ply", ScanEncoding::kAscii, FieldType::kFloat32, TimeUnit::kSeconds, TimeReference::kScanStart, 1e-7},
-      {"i.ply", ScanEncoding::kBinary, FieldType::kFloat32, TimeUnit::kSeconds, TimeReference::kScanStart, 0},
-      {"j.ply", ScanEncoding::kBinary, FieldType::kUint32, TimeUnit::kNanoseconds, TimeReference::kScanStart, 1e-9},
-      {"k.ply", ScanEncoding::kBinary, FieldType::kFloat64, TimeUnit::kSeconds, TimeReference::kAbsolute, 1e-6},
+      {"a.pcd", ScanEncoding::kAscii, FieldType::kFloat32, TimeUnit::kSeconds,
+       TimeReference::kScanStart, 1e-7},
+      {"b.pcd", ScanEncoding::kBinary, FieldType::kFloat32, TimeUnit::kSeconds,
+       TimeReference::kScanStart, 0},
+      {"c.pcd", ScanEncoding::kBinaryCompressed, FieldType::kFloat32, TimeUnit::kSeconds,
+       TimeReference::kScanStart, 0},
+      {"d.pcd", ScanEncoding::kBinary, FieldType::kUint32, TimeUnit::kNanoseconds,
+       TimeReference::kScanStart, 1e-9},
+      {"e.pcd", ScanEncoding::kBinary, FieldType::kFloat64, TimeUnit::kSeconds,
+       TimeReference::kAbsolute, 1e-6},
+      {"f.pcd", ScanEncoding::kBinary, FieldType::kUint64, TimeUnit::kNanoseconds,
+       TimeReference::kAbsolute, 1e-9},
+      {"g.pcd", ScanEncoding::kAscii, FieldType::kFloat64, TimeUnit::kMicroseconds,
+       TimeReference::kScanStart, 1e-9},
+      {"h.ply", ScanEncoding::kAscii, FieldType::kFloat32, TimeUnit::kSeconds,
+       TimeReference::kScanStart, 1e-7},
+      {"i.ply", ScanEncoding::kBinary, FieldType::kFloat32, TimeUnit::kSeconds,
+       TimeReference::kScanStart, 0},
+      {"j.ply", ScanEncoding::kBinary, FieldType::kUint32, TimeUnit::kNanoseconds,
+       TimeReference::kScanStart, 1e-9},
+      {"k.ply", ScanEncoding::kBinary, FieldType::kFloat64, TimeUnit::kSeconds,
+       TimeReference::kAbsolute, 1e-6},
   };
   TempDir dir;
   const PointCloud sweep = make_sweep(1000);
@@ -87,7 +99,8 @@ TEST(ScanFile, RoundTripsEveryEncodingAndTimeConvention) {
     EXPECT_EQ(info.num_points, 1000u);
     ASSERT_EQ(info.fields.size(), 6u);
     EXPECT_EQ(info.fields[5].type, c.time_type);
-    const PointCloud read = read_scan_file(dir / c.name, kStamp, read_options(c.unit, c.reference, "t"));
+    const PointCloud read =
+        read_scan_file(dir / c.name, kStamp, read_options(c.unit, c.reference, "t"));
     EXPECT_EQ(read.t_ns, kStamp);
     expect_same(sweep, read, c.tolerance + 1e-9);
   }
@@ -100,7 +113,8 @@ TEST(ScanFile, HandWrittenOusterStylePcdNanoseconds) {
              "WIDTH 4\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\nDATA ascii\n"
              "1 2 3 0\n4 5 6 50000000\nnan nan nan 60000000\n7 8 9 99999999\n");
   // The NaN point is dropped.
-  const PointCloud c = read_scan_file(dir / "o.pcd", 0, read_options(TimeUnit::kNanoseconds, TimeReference::kScanStart, "t"));
+  const PointCloud c = read_scan_file(
+      dir / "o.pcd", 0, read_options(TimeUnit::kNanoseconds, TimeReference::kScanStart, "t"));
   ASSERT_EQ(c.size(), 3u);
   EXPECT_EQ(c.xyz[1], Eigen::Vector3f(4, 5, 6));
   EXPECT_FLOAT_EQ(c.time_s[1], 0.05f);
@@ -113,25 +127,52 @@ TEST(ScanFile, WrongDeclaredUnitIsNamedWithWhatWasFound) {
   const PointCloud sweep = make_sweep(100);
   // Ouster-style uint32 ns, declared as seconds: offsets up to 1e8 s.
   write_scan_file(dir / "ns.pcd", sweep,
-                  {ScanEncoding::kBinary, PointTimeEncoding{{"t", TimeUnit::kNanoseconds, TimeReference::kScanStart}, FieldType::kUint32}});
-  expect_error([&] { read_scan_file(dir / "ns.pcd", kStamp, read_options(TimeUnit::kSeconds, TimeReference::kScanStart, "t")); },
-               {"ns.pcd", "field 't'", "declared unit s", "1e+08", "beyond 10 sweep periods", "fit unit ns"});
+                  {ScanEncoding::kBinary,
+                   PointTimeEncoding{{"t", TimeUnit::kNanoseconds, TimeReference::kScanStart},
+                                     FieldType::kUint32}});
+  expect_error(
+      [&] {
+        read_scan_file(dir / "ns.pcd", kStamp,
+                       read_options(TimeUnit::kSeconds, TimeReference::kScanStart, "t"));
+      },
+      {"ns.pcd", "field 't'", "declared unit s", "1e+08", "beyond 10 sweep periods",
+       "fit unit ns"});
   // Velodyne-style float seconds, declared as ns: a 0.1 s sweep would span 0.1 ns.
   write_scan_file(dir / "s.pcd", sweep,
-                  {ScanEncoding::kBinary, PointTimeEncoding{{"t", TimeUnit::kSeconds, TimeReference::kScanStart}, FieldType::kFloat32}});
-  expect_error([&] { read_scan_file(dir / "s.pcd", kStamp, read_options(TimeUnit::kNanoseconds, TimeReference::kScanStart, "t")); },
-               {"s.pcd", "field 't'", "declared unit ns", "fit unit s"});
+                  {ScanEncoding::kBinary,
+                   PointTimeEncoding{{"t", TimeUnit::kSeconds, TimeReference::kScanStart},
+                                     FieldType::kFloat32}});
+  expect_error(
+      [&] {
+        read_scan_file(dir / "s.pcd", kStamp,
+                       read_options(TimeUnit::kNanoseconds, TimeReference::kScanStart, "t"));
+      },
+      {"s.pcd", "field 't'", "declared unit ns", "fit unit s"});
   // Offsets declared absolute.
-  expect_error([&] { read_scan_file(dir / "s.pcd", kStamp, read_options(TimeUnit::kSeconds, TimeReference::kAbsolute, "t")); },
-               {"s.pcd", "reference absolute", "reference scan_start?"});
+  expect_error(
+      [&] {
+        read_scan_file(dir / "s.pcd", kStamp,
+                       read_options(TimeUnit::kSeconds, TimeReference::kAbsolute, "t"));
+      },
+      {"s.pcd", "reference absolute", "reference scan_start?"});
   // Absolute stamps declared as offsets.
-  write_scan_file(dir / "abs.pcd", sweep,
-                  {ScanEncoding::kBinary, PointTimeEncoding{{"t", TimeUnit::kSeconds, TimeReference::kAbsolute}, FieldType::kFloat64}});
-  expect_error([&] { read_scan_file(dir / "abs.pcd", kStamp, read_options(TimeUnit::kSeconds, TimeReference::kScanStart, "t")); },
-               {"abs.pcd", "reference absolute?"});
+  write_scan_file(
+      dir / "abs.pcd", sweep,
+      {ScanEncoding::kBinary, PointTimeEncoding{{"t", TimeUnit::kSeconds, TimeReference::kAbsolute},
+                                                FieldType::kFloat64}});
+  expect_error(
+      [&] {
+        read_scan_file(dir / "abs.pcd", kStamp,
+                       read_options(TimeUnit::kSeconds, TimeReference::kScanStart, "t"));
+      },
+      {"abs.pcd", "reference absolute?"});
   // A missing time field names the fields present.
-  expect_error([&] { read_scan_file(dir / "abs.pcd", kStamp, read_options(TimeUnit::kSeconds, TimeReference::kScanStart, "time")); },
-               {"abs.pcd", "no per-point time field 'time'", "x y z intensity ring t"});
+  expect_error(
+      [&] {
+        read_scan_file(dir / "abs.pcd", kStamp,
+                       read_options(TimeUnit::kSeconds, TimeReference::kScanStart, "time"));
+      },
+      {"abs.pcd", "no per-point time field 'time'", "x y z intensity ring t"});
 }
 
 void truncate_file(const std::filesystem::path& path, size_t remove_bytes) {
@@ -161,7 +202,8 @@ TEST(ScanFile, TruncatedPlyIsNamed) {
   const PointCloud sweep = make_sweep(500);
   write_scan_file(dir / "b.ply", sweep, {ScanEncoding::kBinary, std::nullopt});
   truncate_file(dir / "b.ply", 10);
-  expect_error([&] { read_scan_file(dir / "b.ply", 0); }, {"b.ply", "truncated PLY", "500 vertices"});
+  expect_error([&] { read_scan_file(dir / "b.ply", 0); },
+               {"b.ply", "truncated PLY", "500 vertices"});
   write_scan_file(dir / "a.ply", sweep, {ScanEncoding::kAscii, std::nullopt});
   truncate_file(dir / "a.ply", 200);
   expect_error([&] { read_scan_file(dir / "a.ply", 0); }, {"a.ply:"});
@@ -169,7 +211,9 @@ TEST(ScanFile, TruncatedPlyIsNamed) {
   expect_error([&] { read_scan_file(dir / "h.ply", 0); }, {"h.ply", "no end_header"});
   write_text(dir / "big.ply", "ply\nformat binary_big_endian 1.0\nelement vertex 1\nend_header\n");
   expect_error([&] { read_scan_file(dir / "big.ply", 0); }, {"big.ply:2:", "binary_big_endian"});
-  write_text(dir / "x.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 oops\n");
+  write_text(dir / "x.ply",
+             "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float "
+             "y\nproperty float z\nend_header\n1 2 oops\n");
   expect_error([&] { read_scan_file(dir / "x.ply", 0); }, {"x.ply:8:", "property 'z'", "oops"});
 }
 
@@ -180,7 +224,10 @@ TEST(ScanFile, ScanFolderReaderStreamsInIndexOrder) {
     PointCloud c = make_sweep(10 + k);
     c.t_ns = kStamp + k * 100000000LL;
     const auto path = dir / ("s" + std::to_string(k) + (k % 2 ? ".ply" : ".pcd"));
-    write_scan_file(path, c, {ScanEncoding::kBinary, PointTimeEncoding{{"time", TimeUnit::kSeconds, TimeReference::kScanStart}, FieldType::kFloat32}});
+    write_scan_file(path, c,
+                    {ScanEncoding::kBinary,
+                     PointTimeEncoding{{"time", TimeUnit::kSeconds, TimeReference::kScanStart},
+                                       FieldType::kFloat32}});
     index.push_back({c.t_ns, path, 0});
   }
   write_folder_index(dir.path(), index);
@@ -199,10 +246,13 @@ TEST(ScanFile, ScanFolderReaderStreamsInIndexOrder) {
   expect_error([&] { ScanFolderReader(dir.path(), {}); }, {"index.csv:3:", "'gone.pcd' not found"});
 }
 
-std::filesystem::path shared(const char* name) { return std::filesystem::path(KEEL_SHARED_DIR) / "data" / name; }
+std::filesystem::path shared(const char* name) {
+  return std::filesystem::path(KEEL_SHARED_DIR) / "data" / name;
+}
 
 TEST(ScanFile, RealVelodyneSweep) {
-  if (!std::filesystem::exists(shared("test_scan_vlp16.pcd"))) GTEST_SKIP() << "shared/data/test_scan_vlp16.pcd absent";
+  if (!std::filesystem::exists(shared("test_scan_vlp16.pcd")))
+    GTEST_SKIP() << "shared/data/test_scan_vlp16.pcd absent";
   const ScanFileInfo info = read_scan_info(shared("test_scan_vlp16.pcd"));
   EXPECT_EQ(info.num_points, 25760u);
   EXPECT_EQ(info.format, "pcd ascii");
@@ -233,8 +283,12 @@ TEST(ScanFile, StanfordBunny) {
   EXPECT_EQ(c.size(), 397u);
   EXPECT_FALSE(c.has_time());
   EXPECT_NEAR(c.xyz[0].x(), 0.0054215998f, 1e-9);
-  expect_error([&] { read_scan_file(shared("bun0.pcd"), 0, read_options(TimeUnit::kSeconds, TimeReference::kScanStart)); },
-               {"bun0.pcd", "no per-point time field 'time'", "normal_x"});
+  expect_error(
+      [&] {
+        read_scan_file(shared("bun0.pcd"), 0,
+                       read_options(TimeUnit::kSeconds, TimeReference::kScanStart));
+      },
+      {"bun0.pcd", "no per-point time field 'time'", "normal_x"});
 }
 
 }  // namespace

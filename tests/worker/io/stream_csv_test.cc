@@ -36,7 +36,8 @@ TEST(StreamCsv, ImuRoundTripKeepsExactStampsAndValues) {
 
 TEST(StreamCsv, HandWrittenImuParsesExactly) {
   TempDir dir;
-  write_text(dir / "imu.csv", "t,wx,wy,wz,ax,ay,az\n12.000000001,1,2,3,4,5,6\r\n12.5,-1e-3,0,0,0,0,9.81\n");
+  write_text(dir / "imu.csv",
+             "t,wx,wy,wz,ax,ay,az\n12.000000001,1,2,3,4,5,6\r\n12.5,-1e-3,0,0,0,0,9.81\n");
   const ImuSeries read = read_imu_csv(dir / "imu.csv");
   ASSERT_EQ(read.size(), 2u);
   EXPECT_EQ(read[0].t_ns, 12000000001LL);
@@ -47,7 +48,8 @@ TEST(StreamCsv, HandWrittenImuParsesExactly) {
 
 TEST(StreamCsv, DvlValidColumnAndRoundTrip) {
   TempDir dir;
-  write_text(dir / "dvl.csv", "t,vx,vy,vz,valid\n1.0,0.5,0,0,1\n1.05,nan,nan,nan,0\n1.1,0.4,0.1,0,1\n");
+  write_text(dir / "dvl.csv",
+             "t,vx,vy,vz,valid\n1.0,0.5,0,0,1\n1.05,nan,nan,nan,0\n1.1,0.4,0.1,0,1\n");
   const DvlSeries read = read_dvl_csv(dir / "dvl.csv");
   ASSERT_EQ(read.size(), 3u);
   EXPECT_TRUE(read[0].valid);
@@ -88,7 +90,8 @@ TEST(StreamCsv, DepthAndServoRoundTrip) {
 
 TEST(StreamCsv, NonMonotonicTimestampNamesFileAndLine) {
   TempDir dir;
-  write_text(dir / "imu.csv", "t,wx,wy,wz,ax,ay,az\n1.0,0,0,0,0,0,0\n1.2,0,0,0,0,0,0\n1.1,0,0,0,0,0,0\n");
+  write_text(dir / "imu.csv",
+             "t,wx,wy,wz,ax,ay,az\n1.0,0,0,0,0,0,0\n1.2,0,0,0,0,0,0\n1.1,0,0,0,0,0,0\n");
   expect_error([&] { read_imu_csv(dir / "imu.csv"); }, {"imu.csv:4:", "decreasing", "line 3"});
 }
 
@@ -101,7 +104,8 @@ TEST(StreamCsv, DuplicateTimestampNamesFileAndLine) {
 TEST(StreamCsv, NanWhereNotAllowedNamesColumnAndLine) {
   TempDir dir;
   write_text(dir / "imu.csv", "t,wx,wy,wz,ax,ay,az\n1.0,0,0,0,0,0,0\n1.1,0,0,0,nan,0,0\n");
-  expect_error([&] { read_imu_csv(dir / "imu.csv"); }, {"imu.csv:3:", "column 'ax'", "finite", "nan"});
+  expect_error([&] { read_imu_csv(dir / "imu.csv"); },
+               {"imu.csv:3:", "column 'ax'", "finite", "nan"});
   write_text(dir / "servo.csv", "t,angle\n1.0,inf\n");
   expect_error([&] { read_servo_csv(dir / "servo.csv"); }, {"servo.csv:2:", "column 'angle'"});
   write_text(dir / "r.csv", "t,r0,r1,r2,r3\n0.0,1.5,inf,1.7,1.8\n");
@@ -111,7 +115,8 @@ TEST(StreamCsv, NanWhereNotAllowedNamesColumnAndLine) {
 TEST(StreamCsv, WrongColumnCountNamesLine) {
   TempDir dir;
   write_text(dir / "dvl.csv", "t,vx,vy,vz\n1.0,0,0,0\n1.1,0,0\n");
-  expect_error([&] { read_dvl_csv(dir / "dvl.csv"); }, {"dvl.csv:3:", "expected 4 columns", "found 3"});
+  expect_error([&] { read_dvl_csv(dir / "dvl.csv"); },
+               {"dvl.csv:3:", "expected 4 columns", "found 3"});
 }
 
 TEST(StreamCsv, WrongHeaderShowsExpectedAndFound) {
@@ -135,8 +140,9 @@ TEST(LoopClosures, RoundTripAndErrors) {
   LoopClosure loop;
   loop.t_i_ns = 100000000000;
   loop.t_j_ns = 160000000001;
-  loop.T_body_i_body_j = make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ())),
-                                   Eigen::Vector3d(1, 2, 3));
+  loop.T_body_i_body_j =
+      make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ())),
+                Eigen::Vector3d(1, 2, 3));
   loop.sigma_t_m = 0.05;
   loop.sigma_r_rad = 0.01;
   write_loop_closures(dir / "loops.csv", {loop});
@@ -145,7 +151,8 @@ TEST(LoopClosures, RoundTripAndErrors) {
   EXPECT_EQ(read[0].t_j_ns, loop.t_j_ns);
   EXPECT_TRUE(read[0].T_body_i_body_j.isApprox(loop.T_body_i_body_j, 1e-12));
   EXPECT_EQ(read[0].sigma_t_m, 0.05);
-  write_text(dir / "bad.csv", "t_i,t_j,x,y,z,qx,qy,qz,qw,sigma_t,sigma_r\n1,2,0,0,0,0,0,0,2,0.1,0.1\n");
+  write_text(dir / "bad.csv",
+             "t_i,t_j,x,y,z,qx,qy,qz,qw,sigma_t,sigma_r\n1,2,0,0,0,0,0,0,2,0.1,0.1\n");
   expect_error([&] { read_loop_closures(dir / "bad.csv"); }, {"bad.csv:2:", "|q| = 2"});
 }
 

@@ -18,13 +18,13 @@ namespace keel::io::testing {
 constexpr TimeNs kT0 = 1700000000000000000LL;
 
 struct BundleFigures {
-  size_t imu_samples = 401;       // 200 Hz over 2 s
-  size_t imu_dropped = 0;         // samples removed to make one gap
-  size_t dvl_samples = 41;        // 20 Hz over 2 s
-  size_t scans = 5;               // 10 Hz
+  size_t imu_samples = 401;           // 200 Hz over 2 s
+  size_t imu_dropped = 0;             // samples removed to make one gap
+  size_t dvl_samples = 41;            // 20 Hz over 2 s
+  size_t scans = 5;                   // 10 Hz
   size_t points_per_scan_base = 100;  // scan k has base + 10 k points
   size_t images = 3;
-  size_t odometry_poses = 21;     // 10 Hz, moving 1 m/s along x
+  size_t odometry_poses = 21;  // 10 Hz, moving 1 m/s along x
 };
 
 inline std::string bundle_yaml() {
@@ -73,7 +73,8 @@ inline BundleFigures write_bundle(const std::filesystem::path& dir, bool imu_gap
   if (imu_gap) f.imu_dropped = 50;
   write_imu_csv(dir / "imu.csv", imu);
   DvlSeries dvl;
-  for (size_t i = 0; i < f.dvl_samples; ++i) dvl.push_back({kT0 + static_cast<TimeNs>(i) * 50000000, {1, 0, 0}, true});
+  for (size_t i = 0; i < f.dvl_samples; ++i)
+    dvl.push_back({kT0 + static_cast<TimeNs>(i) * 50000000, {1, 0, 0}, true});
   write_dvl_csv(dir / "dvl.csv", dvl);
 
   std::filesystem::create_directories(dir / "lidar_h");
@@ -83,7 +84,8 @@ inline BundleFigures write_bundle(const std::filesystem::path& dir, bool imu_gap
     const size_t n = f.points_per_scan_base + 10 * k;
     for (size_t i = 0; i < n; ++i) {
       cloud.xyz.emplace_back(static_cast<float>(i), static_cast<float>(k), 1.0f);
-      cloud.time_s.push_back(0.1f * static_cast<float>(i) / static_cast<float>(n - 1));  // span 0.1 s
+      cloud.time_s.push_back(0.1f * static_cast<float>(i) /
+                             static_cast<float>(n - 1));  // span 0.1 s
     }
     cloud.t_ns = kT0 + static_cast<TimeNs>(k) * 100000000;
     const std::string name = "scan_" + std::to_string(k) + (k % 2 ? ".ply" : ".pcd");
@@ -113,7 +115,8 @@ inline BundleFigures write_bundle(const std::filesystem::path& dir, bool imu_gap
   Trajectory odometry, map;
   for (size_t i = 0; i < f.odometry_poses; ++i) {
     const TimeNs t = kT0 + static_cast<TimeNs>(i) * 100000000;
-    odometry.push_back({t, make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.1 * i, 0, 0))});
+    odometry.push_back(
+        {t, make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.1 * i, 0, 0))});
     if (i % 10 == 0) map.push_back(odometry.back());
   }
   write_tum(dir / "odometry.tum", odometry);

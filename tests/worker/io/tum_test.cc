@@ -16,7 +16,8 @@ TEST(Tum, RoundTripKeepsPosesAndStamps) {
   Trajectory written;
   for (int i = 0; i < 50; ++i) {
     const Eigen::Quaterniond q(Eigen::AngleAxisd(0.1 * i, Eigen::Vector3d(1, 2, 3).normalized()));
-    written.push_back({1700000000000000001LL + i * 100000000LL, make_pose(q, Eigen::Vector3d(i, -0.5 * i, 0.25))});
+    written.push_back({1700000000000000001LL + i * 100000000LL,
+                       make_pose(q, Eigen::Vector3d(i, -0.5 * i, 0.25))});
   }
   write_tum(dir / "t.tum", written);
   const Trajectory read = read_tum(dir / "t.tum");
@@ -30,7 +31,8 @@ TEST(Tum, RoundTripKeepsPosesAndStamps) {
 TEST(Tum, HandWrittenLinesWithCommentsAndTabs) {
   TempDir dir;
   // 90 degrees about z: q = (0, 0, sin 45, cos 45), written with few digits (normalised on read).
-  write_text(dir / "t.tum", "# t x y z qx qy qz qw\n\n1.5 1 2 3 0 0 0 1\n2.0\t4 5 6\t0 0 0.7071 0.7071\n");
+  write_text(dir / "t.tum",
+             "# t x y z qx qy qz qw\n\n1.5 1 2 3 0 0 0 1\n2.0\t4 5 6\t0 0 0.7071 0.7071\n");
   const Trajectory read = read_tum(dir / "t.tum");
   ASSERT_EQ(read.size(), 2u);
   EXPECT_EQ(read[0].t_ns, 1500000000LL);
@@ -53,7 +55,8 @@ TEST(Tum, NanUnsortedAndShortLinesNameLine) {
   write_text(dir / "unsorted.tum", "# c\n2.0 0 0 0 0 0 0 1\n1.0 0 0 0 0 0 0 1\n");
   expect_error([&] { read_tum(dir / "unsorted.tum"); }, {"unsorted.tum:3:", "decreasing"});
   write_text(dir / "short.tum", "1.0 0 0 0 0 0 1\n");
-  expect_error([&] { read_tum(dir / "short.tum"); }, {"short.tum:1:", "expected 8 values", "found 7"});
+  expect_error([&] { read_tum(dir / "short.tum"); },
+               {"short.tum:1:", "expected 8 values", "found 7"});
 }
 
 }  // namespace

@@ -33,11 +33,21 @@ TEST(Degeneracy, FlagsASmallEigenvalueAlongARotatedAxisAndRemovesOnlyIt) {
   EXPECT_NEAR(across.dot(r.well_conditioned_information.block<3, 3>(0, 0) * across), 1e4, 1e-6);
 }
 
+TEST(Degeneracy, RelativeTestCatchesAWeakAxisAboveTheAbsoluteThreshold) {
+  Matrix6d info = Matrix6d::Identity() * 1e6;
+  info(0, 0) = 5e3;  // sigma 1.4 cm: fine in absolute terms, but 200x weaker than y and z
+  EXPECT_TRUE(analyze_degeneracy(info).degenerate);
+  DegeneracyOptions absolute_only;
+  absolute_only.min_eigenvalue_ratio = 0.0;
+  EXPECT_FALSE(analyze_degeneracy(info, absolute_only).degenerate);
+}
+
 TEST(Degeneracy, RotationThresholdIsSeparate) {
   Matrix6d info = Matrix6d::Identity() * 1e4;
+  info.diagonal().tail<3>().setConstant(300.0);
   info(5, 5) = 50.0;  // yaw sigma 0.14 rad > 0.1 rad
   EXPECT_TRUE(analyze_degeneracy(info).degenerate);
-  info(5, 5) = 200.0;  // 0.07 rad
+  info(5, 5) = 200.0;  // 0.07 rad, within the ratio of the other rotation axes
   EXPECT_FALSE(analyze_degeneracy(info).degenerate);
 }
 

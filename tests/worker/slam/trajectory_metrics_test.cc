@@ -122,16 +122,20 @@ TEST(Rpe, IsZeroForAGloballyMovedCopyAndSeesALocalJump) {
   const RpeResult r = relative_pose_error(ref, est, o);
   EXPECT_EQ(r.pairs.size(), 19u);
   EXPECT_LT(r.translation_m.max, 1e-9);
-  // A jump X after index 9: only the pair (9, 10) sees it, with error X exactly.
+  // A jump X between indices 9 and 10 (est_k = ref_9 X ref_9^-1 ref_k for k >= 10): only the
+  // pair (9, 10) sees it, with E = d^-1 X d, d = ref_9^-1 ref_10.
   Pose3 X = Pose3::Identity();
   X.translation() = Eigen::Vector3d(0.3, 0.0, 0.4);
   X.linear() = so3_exp(Eigen::Vector3d(0, 0.1, 0));
   std::vector<Pose3> jumped = ref;
-  for (size_t k = 10; k < jumped.size(); ++k) jumped[k] = ref[k] * X;
+  for (size_t k = 10; k < jumped.size(); ++k) jumped[k] = ref[9] * X * ref[9].inverse() * ref[k];
+  const Pose3 d = ref[9].inverse() * ref[10];
+  const double expected = (d.inverse() * X * d).translation().norm();
   const RpeResult j = relative_pose_error(ref, jumped, o);
-  EXPECT_NEAR(j.translation_m.max, 0.5, 1e-9);
+  EXPECT_NEAR(j.translation_m.max, expected, 1e-9);
   EXPECT_NEAR(j.rotation_deg.max, 0.1 * 180 / M_PI, 1e-9);
-  EXPECT_NEAR(j.translation_m.mean, 0.5 / 19, 1e-9);
+  EXPECT_NEAR(j.translation_m.mean, expected / 19, 1e-9);
+  EXPECT_NEAR(j.translation_m.min, 0.0, 1e-9);
   o.delta = 5;
   EXPECT_EQ(relative_pose_error(ref, est, o).pairs.size(), 3u);  // (0,5) (5,10) (10,15)
   o.all_pairs = true;
@@ -151,7 +155,8 @@ TEST(Rpe, MetreDeltasFollowThePath) {
   const RpeResult r = relative_pose_error(line, line, o);
   // Kept indices 4, 8, 12, 16, 20 -> 4 pairs (evo's filter_pairs_by_path).
   ASSERT_EQ(r.pairs.size(), 4u);
-  EXPECT_EQ(r.pairs.front(), std::make_pair<size_t, size_t>(4, 8));
+  EXPECT_EQ(r.pairs.front().first, 4u);
+  EXPECT_EQ(r.pairs.front().second, 8u);
   o.all_pairs = true;
   EXPECT_EQ(relative_pose_error(line, line, o).pairs.size(), 17u);  // i = 0..16, j = i + 4
 }

@@ -1,0 +1,185 @@
+#include "worker/mapping/map_builder.h"
+
+#include <optional>
+#include <stdexcept>
+
+#include "worker/mapping/cloud_ops.h"
+#include "worker/mapping/voxel_accumulator.h"
+
+namespace keel::mapping {
+
+struct MapBuilder::SensorState {
+  SensorMapOptions options;
+  SensorMapStats stats;
+  PointCloud batch;  // the current intermediary map, in W (Eq. (22))
+  int batch_scans = 0;
+  PointCloud map;  // the sensor's map in W (the final map after finish())
+  // Set when the final chain starts with a voxel grid: the map is kept as voxel sums.
+  std::optional<VoxelAccumulator> voxel_map;
+};
+
+namespace {
+
+void add_steps(StageStats& stage, const std::vector<FilterStep>& steps) {
+  ++stage.applications;
+  if (stage.steps.empty()) {
+    stage.steps = steps;
+    return;
+  }
+  for (size_t i = 0; i < steps.size(); ++i) {
+    stage.steps[i].points_in += steps[i].points_in;
+    stage.steps[i].points_out += steps[i].points_out;
+  }
+}
+
+void check_stage_filters(const SensorMapOptions& options, const std::string& sensor) {
+  if (options.intermediary_filters.has_dror() || options.final_filters.has_dror()) {
+    throw std::invalid_argument("map filters of sensor '" + sensor +
+                                "': DROR needs the scan origin and may only be a scan filter");
+  }
+}
+
+bool starts_with_voxel_grid(const FilterChain& chain) {
+  return !chain.empty() && std::holds_alternative<VoxelGridFilter>(chain.filters.front());
+}
+
+}  // namespace
+
+MapBuilder::MapBuilder(const TransformTree& tree, MapBuilderOptions options)
+    : tree_(tree), options_(std::move(options)) {
+  if (options_.scans_per_intermediary < 1) {
+    throw std::invalid_argument("map.scans_per_intermediary (N_I): expected >= 1, got " +
+                                std::to_string(options_.scans_per_intermediary));
+  }
+  check_stage_filters(options_.default_sensor, "(default)");
+  for (const auto& [sensor, sensor_options] : options_.sensors) {
+    check_stage_filters(sensor_options, sensor);
+  }
+}
+
+MapBuilder::~MapBuilder() = default;
+
+MapBuilder::SensorState& MapBuilder::state_for(const std::string& sensor) {
+  auto found = states_.find(sensor);
+  if (found != states_.end()) return *found->second;
+  auto state = std::make_unique<SensorState>();
+  const auto listed = options_.sensors.find(sensor);
+  state->options = listed != options_.sensors.end() ? listed->second : options_.default_sensor;
+  if (starts_with_voxel_grid(state->options.final_filters)) {
+    state->voxel_map.emplace(
+        std::get<VoxelGridFilter>(state->options.final_filters.filters.front()).leaf_m);
+  }
+  return *states_.emplace(sensor, std::move(state)).first->second;
+}
+
+const MapBuilder::SensorState& MapBuilder::existing_state(const std::string& sensor) const {
+  const auto found = states_.find(sensor);
+  if (found == states_.end()) {
+    throw std::invalid_argument("map builder: no scans of sensor '" + sensor + "'");
+  }
+  return *found->second;
+}
+
+void MapBuilder::add_scan(const std::string& sensor, PointCloud scan) {
+  if (finished_) throw std::logic_error("map builder: add_scan after finish()");
+  check_field_sizes(scan, ("scan of sensor '" + sensor + "'").c_str());
+  tree_.T_body_sensor(sensor);  // an unknown sensor is an error, not a skipped scan
+  SensorState& state = state_for(sensor);
+  ++state.stats.scans;
+  state.stats.points_in += scan.size();
+  state.stats.non_finite_points += remove_non_finite(scan);
+
+  // Motion compensation into the sensor frame at the scan stamp (Sec. VI-A2).
+  Pose3 T_world_sensor;
+  try {
+    if (state.options.deskew) {
+      T_world_sensor = deskew_scan(tree_, sensor, scan, options_.deskew);
+    } else {
+      T_world_sensor = tree_.T_world_sensor(sensor, scan.t_ns);
+    }
+  } catch (const std::out_of_range&) {
+    if (!options_.skip_scans_outside_trajectory) throw;
+    ++state.stats.scans_outside_trajectory;
+    return;
+  }
+  // Per-point offsets refer to this scan's stamp; a world map mixes stamps, so they go.
+  scan.time_s.clear();
+
+  // Stage 1: filters on the scan in its sensor frame (crop box about the sensor, DROR).
+  add_steps(state.stats.scan_stage,
+            apply_filter_chain(state.options.scan_filters, scan, options_.threads));
+  // Eq. (20) -> W V_{WS_i,K_j}.
+  transform_points(scan, T_world_sensor);
+  scan.frame = "world";
+  append_points(state.batch, scan);
+  if (++state.batch_scans >= options_.scans_per_intermediary) flush_intermediary(state);
+}
+
+void MapBuilder::flush_intermediary(SensorState& state) {
+  if (state.batch_scans == 0) return;
+  // Stage 2 on the intermediary map of Eq. (22).
+  add_steps(state.stats.intermediary_stage,
+            apply_filter_chain(state.options.intermediary_filters, state.batch,
+                               options_.threads));
+  ++state.stats.intermediary_maps;
+  if (state.voxel_map) {
+    state.voxel_map->add(state.batch);
+  } else {
+    append_points(state.map, state.batch);
+  }
+  state.batch = PointCloud{};  // release the batch's memory
+  state.batch_scans = 0;
+}
+
+void MapBuilder::finish() {
+  if (finished_) return;
+  finished_ = true;
+  for (auto& [sensor, state_ptr] : states_) {
+    SensorState& state = *state_ptr;
+    flush_intermediary(state);  // the last, partial intermediary map
+    // Stage 3 on the sensor's map.
+    FilterChain rest = state.options.final_filters;
+    std::vector<FilterStep> steps;
+    if (state.voxel_map) {
+      // The first filter (the voxel grid) already ran as the map streamed in.
+      state.map = state.voxel_map->centroids();
+      steps.push_back(FilterStep{"voxel_grid", state.voxel_map->points_added(), state.map.size()});
+      state.voxel_map.reset();
+      rest.filters.erase(rest.filters.begin());
+    }
+    state.map.frame = "world";
+    const std::vector<FilterStep> rest_steps =
+        apply_filter_chain(rest, state.map, options_.threads);
+    steps.insert(steps.end(), rest_steps.begin(), rest_steps.end());
+    add_steps(state.stats.final_stage, steps);
+    state.stats.points_out = state.map.size();
+  }
+}
+
+std::vector<std::string> MapBuilder::sensors() const {
+  std::vector<std::string> names;
+  for (const auto& [sensor, state] : states_) names.push_back(sensor);
+  return names;
+}
+
+const PointCloud& MapBuilder::sensor_map(const std::string& sensor) const {
+  if (!finished_) throw std::logic_error("map builder: sensor_map before finish()");
+  return existing_state(sensor).map;
+}
+
+const SensorMapStats& MapBuilder::stats(const std::string& sensor) const {
+  return existing_state(sensor).stats;
+}
+
+PointCloud MapBuilder::combined_map() const {
+  if (!finished_) throw std::logic_error("map builder: combined_map before finish()");
+  PointCloud combined;
+  combined.frame = "world";
+  size_t total = 0;
+  for (const auto& [sensor, state] : states_) total += state->map.size();
+  combined.xyz.reserve(total);
+  for (const auto& [sensor, state] : states_) append_points(combined, state->map);
+  return combined;
+}
+
+}  // namespace keel::mapping

@@ -1,0 +1,71 @@
+// Map quality metrics of seed 000 Sec. VI-C (Table V), per point over the neighbourhood
+// V_k^N = the N map points within r of v_k (v_k itself included), r = 0.25 m by default:
+//   surface density = N / (pi r^2)                                              Eq. (23)
+//   roughness       = distance of v_k to the least-squares plane of its         Eq. (24)
+//                     neighbours, v_k excluded (as CloudCompare's roughness; needs 3 others)
+//   planarity       = (l2 - l3) / l1, l1 >= l2 >= l3 the eigenvalues of          Eq. (25)
+//                     Sigma_k = 1/N sum (v_n - v_bar)(v_n - v_bar)^T about v_bar = med(v_n)  Eq. (26)
+// v_bar: the paper calls med(.) the medoid; an exact medoid (the member minimising the summed
+// distance to the others) costs O(N^2) per point, and inspection maps hold thousands of points
+// within 0.25 m, so v_bar here is the coordinate-wise median (element of rank floor(N/2) per
+// axis), the robust centre the paper's med(.) denotes at O(N) cost.
+// Neighbour search: PCL's KdTreeFLANN; points are processed in parallel over `threads`.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <vector>
+
+#include "worker/core/point_cloud.h"
+
+namespace keel::mapping {
+
+struct MapMetricsOptions {
+  double radius_m = 0.25;  // Table V
+  int threads = 2;
+  // 0: every point is a query point. Otherwise at most this many, evenly strided over the map
+  // (neighbours always come from the whole map), to bound report time on huge maps.
+  size_t max_query_points = 0;
+  int histogram_bins = 20;
+};
+
+// Per query point; NaN where a metric is undefined (roughness with < 3 other neighbours,
+// planarity with a degenerate neighbourhood).
+struct PointMetrics {
+  std::vector<size_t> query_index;  // into the map
+  std::vector<float> surface_density;
+  std::vector<float> roughness;
+  std::vector<float> planarity;
+};
+
+struct Distribution {
+  size_t count = 0;      // defined values
+  size_t undefined = 0;  // NaN values left out
+  double mean = 0.0, std = 0.0, min = 0.0, max = 0.0;
+  double p05 = 0.0, p25 = 0.0, median = 0.0, p75 = 0.0, p95 = 0.0;  // linear interpolation
+  std::vector<double> histogram_edges;  // bins + 1 edges from min to max
+  std::vector<size_t> histogram_counts;
+};
+
+struct MapMetrics {
+  size_t points = 0;
+  size_t query_points = 0;
+  double radius_m = 0.0;
+  Distribution surface_density;  // points / m^2
+  Distribution roughness;        // m
+  Distribution planarity;        // [0, 1]
+};
+
+// Throws std::invalid_argument for a non-positive radius or non-finite points.
+PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
+                                   const MapMetricsOptions& options = {});
+Distribution summarize(const std::vector<float>& values, int histogram_bins);
+MapMetrics compute_map_metrics(const PointCloud& map, const MapMetricsOptions& options = {});
+
+nlohmann::json to_json(const Distribution& distribution);
+nlohmann::json to_json(const MapMetrics& metrics);
+
+}  // namespace keel::mapping

@@ -1,0 +1,67 @@
+// ROR and DROR of Table III, seed 000, on a PCL kd-tree, parallel over `threads`.
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "worker/mapping/cloud_ops.h"
+#include "worker/mapping/filters.h"
+#include "worker/mapping/parallel_for.h"
+#include "worker/mapping/radius_search.h"
+
+namespace keel::mapping {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void check_positive(double value, const char* what) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    throw std::invalid_argument(std::string(what) + ": expected a positive number, got " +
+                                std::to_string(value));
+  }
+}
+
+}  // namespace
+
+double dror_search_radius(const DrorFilter& filter, double r_xy_m) {
+  const double alpha_rad = filter.alpha_deg * kPi / 180.0;
+  return std::max(filter.beta * alpha_rad * r_xy_m, filter.sr_min_m);
+}
+
+size_t apply_radius_outlier(const RadiusOutlierFilter& filter, PointCloud& cloud, int threads) {
+  check_positive(filter.radius_m, "ror.radius");
+  if (filter.min_neighbors < 0) throw std::invalid_argument("ror.min_neighbors: expected >= 0");
+  if (cloud.empty() || filter.min_neighbors == 0) return 0;
+  const RadiusSearch search(cloud.xyz);
+  // The count includes the point itself, hence min_neighbors + 1 (PCL's k = min_pts + 1).
+  const int needed = filter.min_neighbors + 1;
+  std::vector<uint8_t> keep(cloud.size());
+  parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
+    for (size_t n = begin; n < end; ++n) {
+      keep[n] = search.count_within(cloud.xyz[n], filter.radius_m, needed) >= needed;
+    }
+  });
+  return keep_points(cloud, keep);
+}
+
+size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads) {
+  check_positive(filter.beta, "dror.beta");
+  check_positive(filter.alpha_deg, "dror.alpha");
+  check_positive(filter.sr_min_m, "dror.sr_min");
+  if (filter.k_min < 0) throw std::invalid_argument("dror.k_min: expected >= 0");
+  if (cloud.empty() || filter.k_min <= 1) return 0;  // every point counts itself
+  const RadiusSearch search(cloud.xyz);
+  std::vector<uint8_t> keep(cloud.size());
+  parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
+    for (size_t n = begin; n < end; ++n) {
+      const Eigen::Vector3f& p = cloud.xyz[n];
+      const double r_xy = std::hypot(static_cast<double>(p.x()), static_cast<double>(p.y()));
+      const double radius = dror_search_radius(filter, r_xy);
+      keep[n] = search.count_within(p, radius, filter.k_min) >= filter.k_min;
+    }
+  });
+  return keep_points(cloud, keep);
+}
+
+}  // namespace keel::mapping

@@ -1,0 +1,35 @@
+// Fixed-radius neighbour queries over a point set, on PCL's KdTreeFLANN (FLANN kd-tree),
+// hidden behind a pimpl so PCL stays out of this header. Queries are const and may run
+// concurrently from several threads.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <vector>
+
+namespace keel::mapping {
+
+class RadiusSearch {
+ public:
+  // Copies the points (PCL keeps its own cloud). Points must be finite.
+  explicit RadiusSearch(const std::vector<Eigen::Vector3f>& points);
+  ~RadiusSearch();
+  RadiusSearch(const RadiusSearch&) = delete;
+  RadiusSearch& operator=(const RadiusSearch&) = delete;
+
+  // Number of indexed points p with |p - query| < radius_m (a query point that is itself
+  // indexed counts), capped at max_count when max_count > 0 (the search stops early).
+  // `radius_m` is the radius in metres (FLANN squares it internally; never pass r^2 or sqrt r).
+  int count_within(const Eigen::Vector3f& query, double radius_m, int max_count = 0) const;
+  // Indices (unsorted) of all indexed points with |p - query| < radius_m.
+  void within(const Eigen::Vector3f& query, double radius_m, std::vector<int>* indices,
+              std::vector<float>* squared_distances) const;
+  size_t size() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace keel::mapping
