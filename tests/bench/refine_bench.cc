@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   std::printf("%-12s ATE rmse %.3f m mean %.3f m max %.3f m\n", "odometry",
               odom.translation_m.rmse, odom.translation_m.mean, odom.translation_m.max);
   RefineOptions with_dvl;
+  if (argc > 2) with_dvl.covariances = static_cast<keel::slam::CovarianceScope>(std::atoi(argv[2]));
   report("with DVL", keel::slam::refine_trajectory(m.input, with_dvl), m.ground_truth);
   RefineOptions without_dvl;
   without_dvl.use_dvl = false;

@@ -121,7 +121,7 @@ class Cylinder : public Primitive {
                  double* t, Eigen::Vector3d* n) const override {
     const Eigen::Vector3d ol = R_.transpose() * (o - center_), dl = R_.transpose() * d;
     double best = kInf;
-    Eigen::Vector3d best_normal;
+    Eigen::Vector3d best_normal = Eigen::Vector3d::Zero();
     // Side: (ox + t dx)^2 + (oy + t dy)^2 = r^2, entering root.
     const double a = dl.x() * dl.x() + dl.y() * dl.y();
     if (a > 1e-15) {
@@ -180,7 +180,7 @@ class ReliefWall : public Primitive {
                  double* t, Eigen::Vector3d* n) const override {
     const Eigen::Vector3d ol = R_.transpose() * (o - g_.center), dl = R_.transpose() * d;
     double best = kInf;
-    Eigen::Vector3d best_local_normal;
+    Eigen::Vector3d best_local_normal = Eigen::Vector3d::Zero();
     int axis;
     double sign, th;
     // Wall body (the mortar plane y = 0 and its sides).
@@ -360,7 +360,7 @@ bool AnalyticScene::raycast(const Eigen::Vector3d& origin, const Eigen::Vector3d
   const Eigen::Vector3d inv(1.0 / dir.x(), 1.0 / dir.y(), 1.0 / dir.z());
   double best = t_max;
   int best_index = -1;
-  Eigen::Vector3d best_normal;
+  Eigen::Vector3d best_normal = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < primitives_.size(); ++i) {
     const Primitive& prim = *primitives_[i];
     if (!prim.bounds.isEmpty()) {  // coarse cull: ray against the world AABB

@@ -63,7 +63,7 @@ Trajectory simulate_map_poses(const PoseTable& truth, double duration_s, TimeNs 
   const Eigen::Vector3d axis =
       degenerate ? o.degenerate_axis_world.normalized() : Eigen::Vector3d::Zero();
   double axis_error = 0.0;
-  Eigen::Vector3d previous_position;
+  Eigen::Vector3d previous_position = Eigen::Vector3d::Zero();
   Trajectory out;
   for (int64_t t_ns : sample_times_ns(o.rate_hz, duration_s)) {
     Pose3 pose = truth.T_world_body(t_ns * 1e-9);

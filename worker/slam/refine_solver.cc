@@ -381,7 +381,8 @@ struct Covariances {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();
 };
 
-bool compute_covariances(ceres::Problem& problem, States& s, int num_threads, Covariances* out) {
+bool compute_covariances(ceres::Problem& problem, States& s, bool keyframes, int num_threads,
+                         Covariances* out) {
   const size_t n = s.pose.size();
   out->pose.assign(n, Matrix6d::Zero());
   out->bg.assign(n, Eigen::Matrix3d::Zero());
@@ -390,7 +391,7 @@ bool compute_covariances(ceres::Problem& problem, States& s, int num_threads, Co
   auto want = [&](const double* b) {
     if (!problem.IsParameterBlockConstant(const_cast<double*>(b))) blocks.emplace_back(b, b);
   };
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < n && keyframes; ++k) {
     want(s.pose[k].data());
     want(s.bg[k].data());
     want(s.ba[k].data());
@@ -409,7 +410,7 @@ bool compute_covariances(ceres::Problem& problem, States& s, int num_threads, Co
     cov.GetCovarianceBlockInTangentSpace(b, b, r.data());
     *m = r;
   };
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < n && keyframes; ++k) {
     if (!problem.IsParameterBlockConstant(s.pose[k].data())) {
       Eigen::Matrix<double, 6, 6, Eigen::RowMajor> r;
       cov.GetCovarianceBlockInTangentSpace(s.pose[k].data(), s.pose[k].data(), r.data());
@@ -533,9 +534,11 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
 
   // 6. Covariances of the last pass's problem.
   Covariances cov;
-  if (opt.compute_covariances) {
+  if (opt.covariances != CovarianceScope::kNone) {
     const Clock::time_point t_cov = Clock::now();
-    summary.covariance_ok = compute_covariances(graph->problem(), s, opt.num_threads, &cov);
+    summary.covariance_ok =
+        compute_covariances(graph->problem(), s, opt.covariances == CovarianceScope::kAll,
+                            opt.num_threads, &cov);
     summary.covariance_time_s = seconds_since(t_cov);
   }
 
@@ -548,7 +551,7 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
     kf[k].bias_gyro_radps = vec(s.bg[k]);
     kf[k].bias_accel_mps2 = vec(s.ba[k]);
     kf[k].bias_dvl_mps = vec(s.bv[k]);
-    if (summary.covariance_ok) {
+    if (summary.covariance_ok && opt.covariances == CovarianceScope::kAll) {
       kf[k].pose_covariance = body_pose_covariance(cov.pose[k], T_wi, T_imu_body);
       kf[k].bias_gyro_covariance = cov.bg[k];
       kf[k].bias_accel_covariance = cov.ba[k];

@@ -42,6 +42,13 @@ enum class DegeneracyHandling {
   kIgnore,                // flag, but keep the factor as it is
 };
 
+// Which marginal covariances to compute after the solve (Ceres covariance, SPARSE_QR).
+enum class CovarianceScope {
+  kNone,
+  kCalibration,  // s_d and the DVL-IMU extrinsic rotation only
+  kAll,          // also every keyframe's pose and biases (costs more than the solve)
+};
+
 struct RefineOptions {
   // Sensor models (seed 000 Table I).
   ImuNoise imu_noise;
@@ -91,7 +98,7 @@ struct RefineOptions {
   // Solve, re-preintegrate at the new biases / s_d / extrinsic, solve again: keeps the
   // first-order corrections of Eq. (27) and [27] Eq. (44) small.
   int relinearization_passes = 2;
-  bool compute_covariances = true;
+  CovarianceScope covariances = CovarianceScope::kAll;
 };
 
 struct RefineInput {

@@ -177,7 +177,7 @@ TEST(SlamMap, UsesTheScanNearestEachKeyframeVoxelized) {
   for (int s = 0; s <= 60; ++s) {
     PointCloud scan;
     scan.t_ns = seconds_to_ns(0.02 + 0.1 * s);  // 20 ms off the keyframes
-    for (int m = 0; m < 20; ++m) scan.xyz.emplace_back(10.0f + 0.001f * m, 0.05f, 0.05f);
+    for (int m = 0; m < 20; ++m) scan.xyz.emplace_back(10.05f + 0.001f * m, 0.05f, 0.05f);
     scan.intensity.assign(20, static_cast<float>(s));
     builder.add_scan(scan);
   }
@@ -186,7 +186,7 @@ TEST(SlamMap, UsesTheScanNearestEachKeyframeVoxelized) {
   ASSERT_EQ(map.size(), 5u);  // one voxel per keyframe scan
   for (size_t k = 0; k < map.size(); ++k) {
     // Keyframe k at t = k + 1 s sits at x = k + 1; its scan is the one 20 ms later.
-    EXPECT_NEAR(map.xyz[k].x(), 10.0095 + (k + 1.0), 1e-4);
+    EXPECT_NEAR(map.xyz[k].x(), 10.0595 + (k + 1.0), 1e-4);
     EXPECT_EQ(map.intensity[k], 10.0f * (k + 1));
   }
 }

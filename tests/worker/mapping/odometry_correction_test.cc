@@ -86,7 +86,7 @@ TEST(OdometryCorrection, RecoversInjectedCorrection) {
     EXPECT_LT(rotation_angle(p.T_world_body, expected), 1e-9);
   }
   expect_matches_truth(inside, 3e-3, 1e-4);
-  EXPECT_EQ(outside, 10u);  // 0.0 and 99.1 .. 100.0
+  EXPECT_EQ(outside, 11u);  // 0.0 before the first MAP pose, 99.1 .. 100.0 after the last
 }
 
 TEST(OdometryCorrection, DropsOdometryOutsideWhenAsked) {

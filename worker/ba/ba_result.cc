@@ -1,0 +1,25 @@
+#include "worker/ba/ba_result.h"
+
+#include <algorithm>
+
+namespace keel::ba {
+
+const BaModeResult* BaResult::find(BaMode mode) const {
+  const auto it = std::find_if(modes.begin(), modes.end(),
+                               [mode](const BaModeResult& r) { return r.mode == mode; });
+  return it == modes.end() ? nullptr : &*it;
+}
+
+std::vector<CameraFramePoint> landmarks_in_camera(const BaModeResult& result, int keyframe) {
+  std::vector<CameraFramePoint> points;
+  if (keyframe < 0 || keyframe >= static_cast<int>(result.T_world_camera.size())) return points;
+  const Pose3 T_camera_world = result.T_world_camera[keyframe].inverse();
+  for (size_t i = 0; i < result.landmarks.size(); ++i) {
+    const BaLandmark& l = result.landmarks[i];
+    if (std::find(l.keyframes.begin(), l.keyframes.end(), keyframe) == l.keyframes.end()) continue;
+    points.push_back({i, T_camera_world * l.position_world, l.signed_distance_m, l.lambda});
+  }
+  return points;
+}
+
+}  // namespace keel::ba

@@ -1,0 +1,87 @@
+// Output of model-assisted bundle adjustment: one BaModeResult per mode of Sec. 4, seed 001.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "worker/ba/ba_options.h"
+#include "worker/core/pose.h"
+
+namespace keel::ba {
+
+struct BaLandmark {
+  int64_t id = 0;  // FeatureTrack::landmark_id (the frontend numbers its tracks 0..n-1)
+  Eigen::Vector3d position_world = Eigen::Vector3d::Zero();  // l_i
+  // h(x_gM, l_i) of Eq. (5) at the final state: signed distance to the CAD mesh, positive
+  // outside (on the side the outward normals point to).
+  double signed_distance_m = 0;
+  // argmax of Eq. (7) at the final state: 1 = on the nominal model, 0 = foreign structure.
+  // In every mode this is the label the max-mixture would assign; `geva` optimised with
+  // lambda = 1 throughout and `naive` with no surface factor at all.
+  int lambda = 0;
+  std::vector<int> keyframes;  // keyframes observing it
+};
+
+// A landmark seen from one keyframe, in that keyframe's top camera frame (the input of
+// Algorithm 1, seed 001: f_x, f_y from here, d = |h|).
+struct CameraFramePoint {
+  size_t landmark = 0;  // index into BaModeResult::landmarks
+  Eigen::Vector3d point_camera = Eigen::Vector3d::Zero();
+  double signed_distance_m = 0;
+  int lambda = 0;
+};
+
+struct BaModeResult {
+  BaMode mode = BaMode::kProposed;
+  int iterations = 0;  // Ceres iterations (successful and unsuccessful steps)
+  double solve_time_s = 0;
+  double initial_cost = 0;  // Ceres cost, 0.5 * sum of squared whitened residuals
+  double final_cost = 0;
+  bool converged = false;
+  std::string termination;  // Ceres' message
+  // Fig. 16: fraction of landmarks with lambda = 1, at the initial state (index 0) and after
+  // each Ceres iteration. Empty for `naive` (no surface factors to label).
+  std::vector<double> lambda1_fraction_per_iteration;
+  // Fig. 18: measured minus predicted range (m) of every DVL beam used, at the start (after
+  // GICP) and at the end.
+  std::vector<double> dvl_residuals_initial_m;
+  std::vector<double> dvl_residuals_final_m;
+
+  std::vector<Pose3> T_world_vehicle;  // per keyframe, x_gv_i
+  std::vector<double> servo_angle_rad;  // per keyframe, theta_v_i_s_i
+  std::vector<Pose3> T_world_camera;    // per keyframe, top camera
+  Pose3 T_world_model = Pose3::Identity();   // x_gM
+  Pose3 T_servo_camera = Pose3::Identity();  // x_sc_T
+  std::vector<BaLandmark> landmarks;
+};
+
+struct BaFrontendStats {
+  bool ran = false;  // false when the problem carried ready-made tracks
+  int keyframe_pairs_matched = 0;
+  int keyframe_pairs_verified = 0;
+  int verified_matches = 0;
+  int tracks = 0;
+};
+
+struct BaResult {
+  BaFrontendStats frontend;
+  int tracks_in = 0;              // tracks handed to triangulation
+  int landmarks_triangulated = 0;  // tracks kept as landmarks
+  int dvl_ranges_in = 0;
+  int dvl_ranges_used = 0;  // after the gate of BaOptions::dvl_gate_m
+  bool gicp_ran = false;
+  bool gicp_converged = false;
+  double gicp_fitness = 0;  // PCL's mean squared correspondence distance (m^2)
+  Pose3 T_world_model_initial = Pose3::Identity();  // x_gM prior (GICP or the guess)
+  std::vector<BaModeResult> modes;  // in BaOptions::modes order
+
+  const BaModeResult* find(BaMode mode) const;
+};
+
+// Landmarks observed from keyframe `keyframe`, in its top camera frame.
+std::vector<CameraFramePoint> landmarks_in_camera(const BaModeResult& result, int keyframe);
+
+}  // namespace keel::ba

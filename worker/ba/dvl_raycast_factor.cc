@@ -1,0 +1,84 @@
+#include "worker/ba/dvl_raycast_factor.h"
+
+#include <ceres/autodiff_cost_function.h>
+
+#include <cmath>
+
+#include "worker/ba/jet_value.h"
+#include "worker/ba/pose_block.h"
+
+namespace keel::ba {
+namespace {
+
+// Beam origin and unit direction in the model frame for given variables.
+template <typename T>
+void beam_in_model(const ServoMount& mount, const DvlBeam& beam, const T* pose, const T* theta,
+                   const T* T_world_model, Vec3<T>& origin_model, Vec3<T>& direction_model) {
+  const Vec3<T> origin_world = mount.servo_to_world(pose, theta[0], beam.origin_servo.cast<T>());
+  const Vec3<T> direction_world =
+      mount.servo_direction_to_world(pose, theta[0], beam.direction_servo.cast<T>());
+  // H_g^M of Eq. (5): world -> model is x_gM^-1.
+  origin_model = inverse_transform_point(T_world_model, origin_world);
+  direction_model = block_rotation(T_world_model).normalized().conjugate() * direction_world;
+}
+
+// Range to the hit triangle's plane, differentiable in origin and direction; nullopt on a miss.
+template <typename T>
+std::optional<T> cast_range(const MeshQuery& mesh, const Vec3<T>& origin, const Vec3<T>& direction,
+                            double max_range_m) {
+  Ray ray;
+  ray.origin = jet_value(origin);
+  ray.direction = jet_value(direction);
+  ray.max_range_m = max_range_m;
+  const std::optional<RayHit> hit = mesh.raycast(ray);
+  if (!hit) return std::nullopt;
+  const Vec3<T> n = hit->face_normal.cast<T>();
+  const T n_dot_d = n.dot(direction);
+  if (std::abs(jet_value(n_dot_d)) < 1e-12) return std::nullopt;  // grazing: no range
+  return T(n.dot(hit->point.cast<T>() - origin) / n_dot_d);
+}
+
+struct DvlRaycast {
+  const MeshQuery* mesh;
+  ServoMount mount;
+  DvlBeam beam;
+  double sigma_m, max_range_m, gate_m;
+
+  template <typename T>
+  bool operator()(const T* pose, const T* theta, const T* T_world_model, T* residual) const {
+    Vec3<T> origin, direction;
+    beam_in_model(mount, beam, pose, theta, T_world_model, origin, direction);
+    const std::optional<T> range = cast_range(*mesh, origin, direction, max_range_m);
+    // Eq. (14): measured minus predicted, whitened.
+    residual[0] = range ? (T(beam.range_m) - *range) / T(sigma_m) : T(gate_m / sigma_m);
+    return true;
+  }
+};
+
+}  // namespace
+
+DvlBeam make_dvl_beam(const Pose3& T_servo_dvl, const Eigen::Vector3d& direction_dvl,
+                      double range_m) {
+  return DvlBeam{T_servo_dvl.translation(), T_servo_dvl.linear() * direction_dvl.normalized(),
+                 range_m};
+}
+
+ceres::CostFunction* make_dvl_raycast_factor(const MeshQuery& mesh, const ServoMount& mount,
+                                             const DvlBeam& beam, double sigma_m,
+                                             double max_range_m, double gate_m) {
+  return new ceres::AutoDiffCostFunction<DvlRaycast, 1, kPoseBlockSize, 1, kPoseBlockSize>(
+      new DvlRaycast{&mesh, mount, beam, sigma_m, max_range_m, gate_m});
+}
+
+std::optional<double> predict_dvl_range(const MeshQuery& mesh, const ServoMount& mount,
+                                        const DvlBeam& beam, const Pose3& T_world_vehicle,
+                                        double servo_angle_rad, const Pose3& T_world_model,
+                                        double max_range_m) {
+  const PoseBlock pose = to_pose_block(T_world_vehicle);
+  const PoseBlock model = to_pose_block(T_world_model);
+  Eigen::Vector3d origin, direction;
+  beam_in_model(mount, beam, pose.data(), &servo_angle_rad, model.data(), origin, direction);
+  return cast_range(mesh, origin, direction, max_range_m);
+}
+
+}  // namespace keel::ba

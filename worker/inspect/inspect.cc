@@ -1,0 +1,102 @@
+#include "worker/inspect/inspect.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "worker/ba/mesh_query.h"
+#include "worker/inspect/mesh_fusion.h"
+
+namespace keel::inspect {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void require(bool ok, const std::string& option, double value, const std::string& expected) {
+  if (!ok) {
+    throw std::invalid_argument("inspect options: " + option + " = " + std::to_string(value) +
+                                "; expected " + expected);
+  }
+}
+
+// is_visible() of Algorithm 2, line 3: the features each view observed.
+std::vector<std::vector<int>> visible_per_view(const InspectInput& input) {
+  std::vector<std::vector<int>> visible(input.T_world_camera.size());
+  for (size_t i = 0; i < input.landmarks.size(); ++i) {
+    for (const int view : input.landmarks[i].views) visible[view].push_back(static_cast<int>(i));
+  }
+  return visible;
+}
+
+std::vector<double> vertex_deviations(const TriangleMesh& prior, const TriangleMesh& remeshed,
+                                      const std::vector<int>& counts) {
+  std::vector<double> deviation(remeshed.vertices.size(), 0.0);
+  std::vector<int> moved;
+  std::vector<Eigen::Vector3d> queries;
+  for (size_t i = 0; i < counts.size(); ++i) {
+    if (counts[i] == 0) continue;
+    moved.push_back(static_cast<int>(i));
+    queries.push_back(remeshed.vertices[i]);
+  }
+  if (moved.empty()) return deviation;
+  const ba::MeshQuery prior_query(prior);
+  const std::vector<double> h = prior_query.signed_distances(queries);  // Eq. (5)
+  for (size_t k = 0; k < moved.size(); ++k) deviation[moved[k]] = h[k];
+  return deviation;
+}
+
+}  // namespace
+
+void validate(const InspectOptions& o) {
+  require(std::isfinite(o.tau_m) && o.tau_m >= 0.0, "tau_m", o.tau_m, "a finite value >= 0 m");
+  require(std::isfinite(o.dbscan_eps_m) && o.dbscan_eps_m > 0.0, "dbscan_eps_m", o.dbscan_eps_m,
+          "a finite radius > 0 m");
+  require(o.dbscan_min_pts >= 1, "dbscan_min_pts", o.dbscan_min_pts, "an integer >= 1");
+  require(std::isfinite(o.alpha_m) && o.alpha_m > 0.0, "alpha_m", o.alpha_m,
+          "a finite radius > 0 m");
+  require(std::isfinite(o.view_range_m) && o.view_range_m > 0.0, "view_range_m", o.view_range_m,
+          "a finite range > 0 m");
+  require(std::isfinite(o.max_behind_vertex_m) && o.max_behind_vertex_m >= 0.0,
+          "max_behind_vertex_m", o.max_behind_vertex_m, "a finite value >= 0 m");
+}
+
+InspectResult run_inspect(const InspectInput& input, const InspectOptions& options) {
+  validate(options);
+  validate(input);
+  InspectResult result;
+  InspectStats& stats = result.stats;
+  stats.num_views = static_cast<int>(input.T_world_camera.size());
+  const std::vector<std::vector<int>> visible = visible_per_view(input);
+
+  MeshFusion fusion(input.cad_in_world, options);       // line 1 of Algorithm 2
+  for (int view = 0; view < stats.num_views; ++view) {  // line 2
+    const Pose3& T_world_camera = input.T_world_camera[view];
+    auto start = Clock::now();
+    std::vector<DetectedShape> shapes =  // line 4: Algorithm 1
+        detect_shapes(view, T_world_camera, input.landmarks, visible[view], options);
+    stats.detect_s += seconds_since(start);
+    start = Clock::now();
+    stats.num_updates += fusion.fuse_view(T_world_camera, shapes);  // lines 5-14
+    stats.fuse_s += seconds_since(start);
+    if (!shapes.empty()) ++stats.num_views_with_shapes;
+    stats.num_detections += static_cast<int>(shapes.size());
+    for (DetectedShape& shape : shapes) result.detections.push_back(std::move(shape));
+  }
+  result.remeshed = fusion.mesh();  // line 16
+  result.vertex_update_count = fusion.update_counts();
+  for (const int n : result.vertex_update_count) stats.num_vertices_moved += n > 0 ? 1 : 0;
+
+  const auto start = Clock::now();
+  result.vertex_deviation_m =
+      vertex_deviations(input.cad_in_world, result.remeshed, result.vertex_update_count);
+  stats.deviation_s = seconds_since(start);
+  result.shapes = summarize_shapes(result.detections, input.landmarks);
+  return result;
+}
+
+}  // namespace keel::inspect

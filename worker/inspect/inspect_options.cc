@@ -1,0 +1,14 @@
+#include "worker/inspect/inspect_options.h"
+
+namespace keel::inspect {
+
+nlohmann::json InspectOptions::to_json() const {
+  return {{"tau_m", tau_m},
+          {"dbscan_eps_m", dbscan_eps_m},
+          {"dbscan_min_pts", dbscan_min_pts},
+          {"alpha_m", alpha_m},
+          {"view_range_m", view_range_m},
+          {"max_behind_vertex_m", max_behind_vertex_m}};
+}
+
+}  // namespace keel::inspect

@@ -1,0 +1,41 @@
+// The shapes list of shapes.json. Algorithm 1 (seed 001) finds shapes per camera view, so "a
+// single physical object on the hull will have multiple shapes associated with it" (section
+// 3.2); here detections that share a feature are merged into one object and summarised.
+#pragma once
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <vector>
+
+#include "worker/inspect/inspect_input.h"
+#include "worker/inspect/inspect_options.h"
+#include "worker/inspect/shape_detection.h"
+
+namespace keel::inspect {
+
+struct ShapeSummary {
+  int id = 0;  // 0..k-1, in the order of each object's first detection
+  // Over the object's features (the union of its detections' DBSCAN clusters), world frame:
+  Eigen::Vector3d centroid_world = Eigen::Vector3d::Zero();  // mean position
+  Eigen::Vector3d min_world = Eigen::Vector3d::Zero();       // axis-aligned bounds
+  Eigen::Vector3d max_world = Eigen::Vector3d::Zero();
+  double mean_deviation_m = 0.0;  // mean of h (Eq. 5), signed
+  double max_deviation_m = 0.0;   // the h of largest magnitude, signed
+  int num_landmarks = 0;
+  int num_detections = 0;  // per-view shapes merged into this object
+  std::vector<int> views;  // views whose Algorithm 1 detected it, ascending
+
+  Eigen::Vector3d extent_m() const { return max_world - min_world; }
+  nlohmann::json to_json() const;
+};
+
+// Merges detections that share at least one feature (transitively) and summarises each object.
+std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& detections,
+                                           const std::vector<Landmark>& landmarks);
+
+// The shapes.json document: {"options": ..., "shapes": [...]}.
+nlohmann::json shapes_to_json(const std::vector<ShapeSummary>& shapes,
+                              const InspectOptions& options);
+
+}  // namespace keel::inspect
