@@ -59,7 +59,8 @@ std::vector<T> parse_list(const nlohmann::json& body, const char* field, const s
   std::vector<T> out;
   for (size_t i = 0; i < body[field].size(); ++i) {
     try {
-      out.push_back(T::from_json(body[field][i], std::string(field) + "[" + std::to_string(i) + "]"));
+      out.push_back(
+          T::from_json(body[field][i], std::string(field) + "[" + std::to_string(i) + "]"));
     } catch (const proto::ContractError& e) {
       throw ApiCallError(0, "bad_response", what + ": unexpected answer: " + e.what());
     }
@@ -142,7 +143,8 @@ nlohmann::json parse_json_body(const HttpResult& result, const std::string& what
   if (result.status == 204 || result.body.empty()) return nlohmann::json();
   nlohmann::json body = nlohmann::json::parse(result.body, nullptr, /*allow_exceptions=*/false);
   if (body.is_discarded())
-    throw ApiCallError(0, "bad_response", what + ": answer is not JSON: " + result.body.substr(0, 200));
+    throw ApiCallError(0, "bad_response",
+                       what + ": answer is not JSON: " + result.body.substr(0, 200));
   return body;
 }
 
@@ -212,13 +214,15 @@ std::vector<proto::Artifact> ApiClient::list_artifacts(const std::string& job_id
 // --- worker API ---
 
 std::optional<proto::Lease> ApiClient::lease(const proto::LeaseRequest& request) {
-  const HttpResult result = request_or_throw("POST", "/v1/worker/lease", request.to_json().dump(), {});
+  const HttpResult result =
+      request_or_throw("POST", "/v1/worker/lease", request.to_json().dump(), {});
   if (result.status == 204) return std::nullopt;
   return parse_answer<proto::Lease>(parse_json_body(result, "POST /v1/worker/lease"),
                                     "POST /v1/worker/lease");
 }
 
-proto::HeartbeatReply ApiClient::heartbeat(const std::string& job_id, const proto::Heartbeat& beat) {
+proto::HeartbeatReply ApiClient::heartbeat(const std::string& job_id,
+                                           const proto::Heartbeat& beat) {
   const std::string target = "/v1/worker/jobs/" + encode_path(job_id) + "/heartbeat";
   return parse_answer<proto::HeartbeatReply>(post_json(target, beat.to_json()), "POST " + target);
 }
@@ -231,8 +235,9 @@ proto::Artifact ApiClient::register_artifact(const std::string& job_id,
 
 void ApiClient::complete_stage(const std::string& job_id, const std::string& stage,
                                const proto::StageCompletion& completion) {
-  post_json("/v1/worker/jobs/" + encode_path(job_id) + "/stages/" + encode_path(stage) + "/complete",
-            completion.to_json());
+  post_json(
+      "/v1/worker/jobs/" + encode_path(job_id) + "/stages/" + encode_path(stage) + "/complete",
+      completion.to_json());
 }
 
 proto::Job ApiClient::finish_job(const std::string& job_id, const proto::JobFinish& finish,

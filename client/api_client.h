@@ -24,10 +24,10 @@ namespace keel::client {
 struct ClientConfig {
   std::string url = "http://127.0.0.1:8080";  // http://host:port
   std::string token;
-  double timeout_s = 60.0;                   // deadline of one request
-  int64_t chunk_bytes = 16 << 20;            // upload chunk size
-  int retries = 5;                           // reconnect attempts on a dropped link (uploads, downloads)
-  double retry_backoff_s = 0.25;             // first pause after a failure; doubles, capped at 5 s
+  double timeout_s = 60.0;         // deadline of one request
+  int64_t chunk_bytes = 16 << 20;  // upload chunk size
+  int retries = 5;                 // reconnect attempts on a dropped link (uploads, downloads)
+  double retry_backoff_s = 0.25;   // first pause after a failure; doubles, capped at 5 s
 };
 
 // Body bytes moved by one ApiClient since its construction (tests check resume with these).
@@ -71,7 +71,8 @@ class ApiClient {
 
   // Raw request on a kept-alive connection (reconnects when the server closed it).
   // Does not throw on non-2xx; throws ApiCallError(0, "transport", ...) when unreachable.
-  HttpResult request(const std::string& method, const std::string& target, const std::string& body = "",
+  HttpResult request(const std::string& method, const std::string& target,
+                     const std::string& body = "",
                      const std::map<std::string, std::string>& headers = {});
   // JSON helpers: throw ApiCallError on non-2xx.
   nlohmann::json get_json(const std::string& target);
@@ -81,11 +82,16 @@ class ApiClient {
   // Uploads `file` resumably and returns its blob id (SHA-256). The upload id is remembered
   // in `state_dir` (keyed by the file's SHA-256 and size), so running it again after a
   // dropped link or a killed client resumes at the server's committed offset.
+  // `known_sha256` skips hashing the file first when the caller already knows its hash
+  // (the server still checks it on completion: a wrong one gives 422 sha256_mismatch).
+  // progress(offset, size) is called once at the start and after every committed chunk;
+  // an exception thrown from it ends the upload, leaving it resumable.
   std::string upload_file(const std::filesystem::path& file, const std::filesystem::path& state_dir,
-                          const ProgressFn& progress = {});
+                          const ProgressFn& progress = {}, const std::string& known_sha256 = "");
   // Downloads a GET target (artifact or blob) to `destination` with Range resume: bytes go
   // to `destination.part` first and it is renamed when complete and its SHA-256 matches
-  // `expected_sha256` (when given).
+  // `expected_sha256` (when given). A mismatch throws ApiCallError(0, "sha256_mismatch")
+  // and deletes the part, so the next attempt starts clean.
   void download(const std::string& target, const std::filesystem::path& destination,
                 const std::string& expected_sha256 = "", const ProgressFn& progress = {});
 
@@ -104,7 +110,8 @@ class ApiClient {
   // --- worker API ---
   std::optional<proto::Lease> lease(const proto::LeaseRequest& request);  // nullopt on 204
   proto::HeartbeatReply heartbeat(const std::string& job_id, const proto::Heartbeat& beat);
-  proto::Artifact register_artifact(const std::string& job_id, const proto::ArtifactRegistration& reg);
+  proto::Artifact register_artifact(const std::string& job_id,
+                                    const proto::ArtifactRegistration& reg);
   void complete_stage(const std::string& job_id, const std::string& stage,
                       const proto::StageCompletion& completion);
   proto::Job finish_job(const std::string& job_id, const proto::JobFinish& finish, bool succeeded);
@@ -116,8 +123,8 @@ class ApiClient {
                               const std::map<std::string, std::string>& headers);
   std::optional<int64_t> upload_offset(const std::string& upload_id);
   std::string create_upload(const std::string& name, int64_t size);
-  HttpResult put_chunk(const std::string& upload_id, const char* data, int64_t first,
-                       int64_t size, int64_t total);
+  HttpResult put_chunk(const std::string& upload_id, const char* data, int64_t first, int64_t size,
+                       int64_t total);
   bool blob_exists(const std::string& sha256);
   // One GET attempt appending to `part`; returns false when the part had to be restarted.
   bool download_once(const std::string& target, const std::filesystem::path& part,

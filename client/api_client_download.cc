@@ -102,9 +102,9 @@ bool ApiClient::download_once(const std::string& target, const fs::path& part,
     const auto range = parse_content_range(content_range);
     if (!range || range->first != offset) {
       connection_->close();
-      throw ApiCallError(0, "bad_response", what + ": 206 with Content-Range '" + content_range +
-                                                "', expected it to start at " +
-                                                std::to_string(offset));
+      throw ApiCallError(0, "bad_response",
+                         what + ": 206 with Content-Range '" + content_range +
+                             "', expected it to start at " + std::to_string(offset));
     }
     start = offset;
     total = range->total;
@@ -148,8 +148,9 @@ void ApiClient::download(const std::string& target, const fs::path& destination,
       if (e.status() != 0 || e.code() != "transport") throw;
       if (part_size(part) > before) failures = 0;  // progress was made: a new run of failures
       if (++failures > config_.retries)
-        throw ApiCallError(0, "transport", std::string(e.what()) + " (gave up after " +
-                                               std::to_string(failures) + " attempts)");
+        throw ApiCallError(
+            0, "transport",
+            std::string(e.what()) + " (gave up after " + std::to_string(failures) + " attempts)");
       pause_before_retry(failures);
     }
   }

@@ -116,8 +116,9 @@ HttpResult ApiClient::put_chunk(const std::string& upload_id, const char* data, 
   const std::string target = connection_->target("/v1/uploads/" + upload_id);
   // span_body sends straight from the chunk buffer: no copy into a string.
   http::request<http::span_body<const char>> req{http::verb::put, target, 11};
-  connection_->prepare(req, {{"Content-Type", "application/octet-stream"},
-                             {"Content-Range", content_range_header(first, first + size - 1, total)}});
+  connection_->prepare(req,
+                       {{"Content-Type", "application/octet-stream"},
+                        {"Content-Range", content_range_header(first, first + size - 1, total)}});
   req.body() = boost::beast::span<const char>(data, static_cast<size_t>(size));
   req.prepare_payload();
   http::response<http::string_body> response = connection_->exchange(req);
@@ -134,12 +135,15 @@ HttpResult ApiClient::put_chunk(const std::string& upload_id, const char* data, 
 }
 
 std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_dir,
-                                   const ProgressFn& progress) {
+                                   const ProgressFn& progress, const std::string& known_sha256) {
   std::error_code ec;
   const auto size_or_error = fs::file_size(file, ec);
   if (ec) throw file_error(file, "cannot read: " + ec.message());
   const int64_t size = static_cast<int64_t>(size_or_error);
-  const std::string sha = storage::sha256_file(file);
+  if (!known_sha256.empty() && !proto::is_sha256_hex(known_sha256))
+    throw std::invalid_argument("upload_file: known_sha256 '" + known_sha256 +
+                                "' is not 64 lowercase hex digits");
+  const std::string sha = known_sha256.empty() ? storage::sha256_file(file) : known_sha256;
   fs::create_directories(state_dir, ec);
   if (ec) throw file_error(state_dir, "cannot create upload state folder: " + ec.message());
   const fs::path state_file = state_dir / ("upload-" + sha + "-" + std::to_string(size) + ".id");
@@ -168,8 +172,9 @@ std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_d
   int failures = 0;
   auto fail_once = [&](const std::string& why) {
     if (++failures > config_.retries)
-      throw ApiCallError(0, "transport", "upload of " + file.string() + " failed " +
-                                             std::to_string(failures) + " times in a row: " + why);
+      throw ApiCallError(0, "transport",
+                         "upload of " + file.string() + " failed " + std::to_string(failures) +
+                             " times in a row: " + why);
     pause_before_retry(failures);
   };
   while (*offset < size) {
@@ -222,8 +227,9 @@ std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_d
       post_json("/v1/uploads/" + upload_id + "/complete", nlohmann::json{{"sha256", sha}});
   const std::string blob = done.value("blob", "");
   if (blob != sha)
-    throw ApiCallError(0, "bad_response", "POST /v1/uploads/" + upload_id + "/complete: blob '" +
-                                              blob + "' differs from the file's SHA-256 " + sha);
+    throw ApiCallError(0, "bad_response",
+                       "POST /v1/uploads/" + upload_id + "/complete: blob '" + blob +
+                           "' differs from the file's SHA-256 " + sha);
   fs::remove(state_file, ec);
   return blob;
 }

@@ -20,7 +20,8 @@ namespace {
 constexpr size_t kCopyBufferBytes = 1 << 20;
 
 bool is_inside(const fs::path& candidate, const fs::path& root) {
-  const auto [root_end, ignored] = std::mismatch(root.begin(), root.end(), candidate.begin(), candidate.end());
+  const auto [root_end, ignored] =
+      std::mismatch(root.begin(), root.end(), candidate.begin(), candidate.end());
   return root_end == root.end();
 }
 
@@ -39,10 +40,12 @@ BundleEntry make_entry(const fs::directory_entry& item, const fs::path& root) {
     const fs::path target = fs::weakly_canonical(item.path(), ec);
     if (ec || !is_inside(target, root))
       throw LocalFileError(item.path().string() + ": symlink points outside the mission folder (" +
-                           fs::read_symlink(item.path(), ec).string() + "); copy the file in instead");
+                           fs::read_symlink(item.path(), ec).string() +
+                           "); copy the file in instead");
     if (fs::is_directory(target, ec))
-      throw LocalFileError(item.path().string() +
-                           ": symlinked folders are not archived; replace the link with the folder");
+      throw LocalFileError(
+          item.path().string() +
+          ": symlinked folders are not archived; replace the link with the folder");
     if (!fs::is_regular_file(target, ec))
       throw LocalFileError(item.path().string() + ": symlink to a missing or special file");
     entry.source = target;
@@ -71,7 +74,8 @@ struct EntryDeleter {
 
 void check(int rc, archive* a, const fs::path& tar_file) {
   if (rc != ARCHIVE_OK)
-    throw LocalFileError(tar_file.string() + ": " + (archive_error_string(a) ? archive_error_string(a) : "libarchive error"));
+    throw LocalFileError(tar_file.string() + ": " +
+                         (archive_error_string(a) ? archive_error_string(a) : "libarchive error"));
 }
 
 // Streams one file into the archive; its size must match what the header announced.
@@ -135,7 +139,8 @@ void write_bundle_tar(const fs::path& folder, const fs::path& tar_file) {
 fs::path write_bundle_to_cache(const fs::path& folder, const fs::path& cache_dir) {
   std::error_code ec;
   fs::create_directories(cache_dir, ec);
-  if (ec) throw LocalFileError(cache_dir.string() + ": cannot create cache folder: " + ec.message());
+  if (ec)
+    throw LocalFileError(cache_dir.string() + ": cannot create cache folder: " + ec.message());
   const fs::path tmp = cache_dir / ("bundle-" + std::to_string(::getpid()) + ".tar.tmp");
   try {
     write_bundle_tar(folder, tmp);

@@ -26,11 +26,11 @@ struct FileSettings {
   std::optional<std::string> token_file;
 };
 
-std::optional<std::string> string_key(const YAML::Node& root, const char* key, const fs::path& file) {
+std::optional<std::string> string_key(const YAML::Node& root, const char* key,
+                                      const fs::path& file) {
   const YAML::Node node = root[key];
   if (!node) return std::nullopt;
-  if (!node.IsScalar())
-    throw LocalFileError(file.string() + ": " + key + ": expected a string");
+  if (!node.IsScalar()) throw LocalFileError(file.string() + ": " + key + ": expected a string");
   return node.as<std::string>();
 }
 
@@ -43,7 +43,8 @@ FileSettings read_config_file(const fs::path& file) {
   }
   FileSettings out;
   if (root.IsNull()) return out;
-  if (!root.IsMap()) throw LocalFileError(file.string() + ": expected a map of url/token/token_file");
+  if (!root.IsMap())
+    throw LocalFileError(file.string() + ": expected a map of url/token/token_file");
   for (const auto& item : root) {
     const std::string key = item.first.as<std::string>();
     if (key != "url" && key != "token" && key != "token_file")

@@ -8,10 +8,10 @@
 
 namespace keel::client {
 
-void add_submit_command(CLI::App& app, CliContext& context);   // commands_submit.cc
-void add_job_commands(CLI::App& app, CliContext& context);     // jobs, status, cancel, retry
-void add_watch_commands(CLI::App& app, CliContext& context);   // watch, log
-void add_fetch_command(CLI::App& app, CliContext& context);    // fetch
-void add_mission_commands(CLI::App& app, CliContext& context); // missions, reprocess
+void add_submit_command(CLI::App& app, CliContext& context);    // commands_submit.cc
+void add_job_commands(CLI::App& app, CliContext& context);      // jobs, status, cancel, retry
+void add_watch_commands(CLI::App& app, CliContext& context);    // watch, log
+void add_fetch_command(CLI::App& app, CliContext& context);     // fetch
+void add_mission_commands(CLI::App& app, CliContext& context);  // missions, reprocess
 
 }  // namespace keel::client

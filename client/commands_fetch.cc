@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "client/commands.h"
-#include "client/progress_bar.h"
 #include "client/http_url.h"
+#include "client/progress_bar.h"
 
 namespace keel::client {
 
@@ -33,12 +33,14 @@ std::vector<proto::Artifact> select(const std::vector<proto::Artifact>& all,
   if (names.empty()) return all;
   std::vector<proto::Artifact> out;
   for (const auto& name : names) {
-    const auto it = std::find_if(all.begin(), all.end(), [&](const auto& a) { return a.name == name; });
+    const auto it =
+        std::find_if(all.begin(), all.end(), [&](const auto& a) { return a.name == name; });
     if (it == all.end()) {
       std::string known;
       for (const auto& a : all) known += (known.empty() ? "" : ", ") + a.name;
-      throw ApiCallError(404, "not_found", "job " + job + " has no artifact '" + name +
-                                               "' (it has: " + (known.empty() ? "none" : known) + ")");
+      throw ApiCallError(404, "not_found",
+                         "job " + job + " has no artifact '" + name +
+                             "' (it has: " + (known.empty() ? "none" : known) + ")");
     }
     out.push_back(*it);
   }
@@ -57,7 +59,8 @@ int run_fetch(CliContext& context, const FetchArgs& args) {
     ProgressFn progress;
     if (!args.quiet)
       progress = [&](int64_t done, int64_t total) { bar.update(done, total, monotonic_seconds()); };
-    api.download("/v1/artifacts/" + url_encode(artifact.id), destination, artifact.sha256, progress);
+    api.download("/v1/artifacts/" + url_encode(artifact.id), destination, artifact.sha256,
+                 progress);
     if (!args.quiet) bar.finish(monotonic_seconds());
     std::printf("%s\n", destination.string().c_str());
     std::fflush(stdout);
@@ -69,7 +72,8 @@ int run_fetch(CliContext& context, const FetchArgs& args) {
 
 void add_fetch_command(CLI::App& app, CliContext& context) {
   auto args = std::make_shared<FetchArgs>();
-  CLI::App* cmd = app.add_subcommand("fetch", "Download a job's artifacts (resumable, SHA-256 checked)");
+  CLI::App* cmd =
+      app.add_subcommand("fetch", "Download a job's artifacts (resumable, SHA-256 checked)");
   cmd->add_option("job", args->job_id, "Job id")->required();
   cmd->add_option("--artifact", args->names, "Artifact name to fetch (repeatable; default: all)");
   cmd->add_option("-o,--output", args->out_dir, "Folder to write the artifacts into")->required();

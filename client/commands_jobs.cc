@@ -51,7 +51,8 @@ void add_job_commands(CLI::App& app, CliContext& context) {
   auto args = std::make_shared<JobArgs>();
 
   CLI::App* jobs = app.add_subcommand("jobs", "List jobs, newest first");
-  jobs->add_option("--state", args->state, "Only jobs in this state (queued, running, succeeded, failed, canceled)");
+  jobs->add_option("--state", args->state,
+                   "Only jobs in this state (queued, running, succeeded, failed, canceled)");
   jobs->callback([&context, args] { context.exit_code = run_jobs(context, *args); });
 
   CLI::App* status = app.add_subcommand("status", "Show one job");
@@ -63,7 +64,8 @@ void add_job_commands(CLI::App& app, CliContext& context) {
   cancel->add_option("job", args->job_id, "Job id")->required();
   cancel->callback([&context, args] { context.exit_code = run_cancel(context, *args); });
 
-  CLI::App* retry = app.add_subcommand("retry", "Queue a failed or canceled job again (finished stages are kept)");
+  CLI::App* retry = app.add_subcommand(
+      "retry", "Queue a failed or canceled job again (finished stages are kept)");
   retry->add_option("job", args->job_id, "Job id")->required();
   retry->callback([&context, args] { context.exit_code = run_retry(context, *args); });
 }

@@ -35,7 +35,8 @@ int run_reprocess(CliContext& context, const MissionArgs& args) {
   request.stages = proto::parse_stage_list(args.stages);
   for (const auto& assignment : args.assignments)
     proto::apply_option_assignment(request.options, assignment);
-  for (const proto::Job& job : context.api().reprocess(request)) std::printf("%s\n", job.id.c_str());
+  for (const proto::Job& job : context.api().reprocess(request))
+    std::printf("%s\n", job.id.c_str());
   return 0;
 }
 
@@ -45,17 +46,19 @@ void add_mission_commands(CLI::App& app, CliContext& context) {
   auto list_args = std::make_shared<MissionArgs>();
   CLI::App* missions = app.add_subcommand("missions", "List stored missions");
   missions->add_option("--prefix", list_args->prefix, "Only missions whose name starts with this");
-  missions->callback([&context, list_args] { context.exit_code = run_missions(context, *list_args); });
+  missions->callback(
+      [&context, list_args] { context.exit_code = run_missions(context, *list_args); });
 
   auto args = std::make_shared<MissionArgs>();
-  CLI::App* reprocess =
-      app.add_subcommand("reprocess", "Start new jobs on stored missions (nothing is uploaded again)");
+  CLI::App* reprocess = app.add_subcommand(
+      "reprocess", "Start new jobs on stored missions (nothing is uploaded again)");
   reprocess->add_option("--mission", args->mission_ids, "Mission id (repeatable)");
   reprocess->add_option("--prefix", args->prefix, "Missions whose name starts with this");
   reprocess->add_flag("--all", args->all, "Every stored mission");
   reprocess->add_option("--stages", args->stages, "Comma-separated stages to run")
       ->default_str(kDefaultStages);
-  reprocess->add_option("--set", args->assignments, "Stage option, stage.option=value (repeatable)");
+  reprocess->add_option("--set", args->assignments,
+                        "Stage option, stage.option=value (repeatable)");
   reprocess->callback([&context, args] { context.exit_code = run_reprocess(context, *args); });
 }
 

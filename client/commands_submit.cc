@@ -48,14 +48,16 @@ int run_submit(CliContext& context, const SubmitArgs& args) {
 void add_submit_command(CLI::App& app, CliContext& context) {
   auto args = std::make_shared<SubmitArgs>();
   CLI::App* cmd = app.add_subcommand("submit", "Upload a mission folder and start a job on it");
-  cmd->add_option("mission-dir", args->mission_dir, "Mission folder holding mission.yaml")->required();
+  cmd->add_option("mission-dir", args->mission_dir, "Mission folder holding mission.yaml")
+      ->required();
   cmd->add_option("--cad", args->cad, "CAD mesh of the structure (PLY, OBJ, STL, OFF)");
   cmd->add_option("--stages", args->stages, "Comma-separated stages to run")
       ->default_str(kDefaultStages);
   cmd->add_option("--set", args->assignments, "Stage option, stage.option=value (repeatable)");
   cmd->add_option("--name", args->name, "Mission name (default: mission.yaml's name)");
-  cmd->add_option("--cache-dir", args->cache_dir,
-                  "Folder for bundle tars and upload state (default $XDG_CACHE_HOME/keel or ~/.cache/keel)");
+  cmd->add_option(
+      "--cache-dir", args->cache_dir,
+      "Folder for bundle tars and upload state (default $XDG_CACHE_HOME/keel or ~/.cache/keel)");
   cmd->add_flag("--wait", args->wait, "Watch the job until it ends; exit code tells how it ended");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress output on stderr");
   cmd->callback([&context, args] { context.exit_code = run_submit(context, *args); });

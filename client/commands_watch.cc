@@ -43,7 +43,8 @@ void add_watch_commands(CLI::App& app, CliContext& context) {
   auto args = std::make_shared<WatchArgs>();
 
   CLI::App* watch = app.add_subcommand(
-      "watch", "Follow a job until it ends: stage, progress and new log lines (exit 4 failed, 5 canceled)");
+      "watch",
+      "Follow a job until it ends: stage, progress and new log lines (exit 4 failed, 5 canceled)");
   watch->add_option("job", args->job_id, "Job id")->required();
   watch->add_option("--interval", args->interval_s, "Seconds between polls")
       ->check(CLI::PositiveNumber);

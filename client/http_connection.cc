@@ -43,7 +43,9 @@ bool HttpConnection::ensure_open(const std::string& what) {
     net::ip::tcp::resolver resolver(ioc_);
     beast::error_code ec;
     endpoints_ = resolver.resolve(url_.host, url_.port, ec);
-    if (ec) throw ApiCallError(0, "transport", what + ": cannot resolve " + url_.host + ": " + ec.message());
+    if (ec)
+      throw ApiCallError(0, "transport",
+                         what + ": cannot resolve " + url_.host + ": " + ec.message());
   }
   stream_.expires_after(timeout());
   beast::error_code result = net::error::would_block;

@@ -21,7 +21,8 @@ BaseUrl parse_base_url(const std::string& url) {
     rest.resize(slash);
     while (!out.path_prefix.empty() && out.path_prefix.back() == '/') out.path_prefix.pop_back();
   }
-  if (rest.find('@') != std::string::npos) fail("credentials in the URL are not supported; use a token");
+  if (rest.find('@') != std::string::npos)
+    fail("credentials in the URL are not supported; use a token");
   std::string host = rest;
   if (!rest.empty() && rest.front() == '[') {  // [IPv6]:port
     const size_t close = rest.find(']');
@@ -38,7 +39,8 @@ BaseUrl parse_base_url(const std::string& url) {
   if (host.empty()) fail("missing host");
   if (out.port.empty()) fail("empty port");
   for (char c : out.port)
-    if (!std::isdigit(static_cast<unsigned char>(c))) fail("port '" + out.port + "' is not a number");
+    if (!std::isdigit(static_cast<unsigned char>(c)))
+      fail("port '" + out.port + "' is not a number");
   const long port = std::stol(out.port);
   if (port < 1 || port > 65535) fail("port " + out.port + " outside 1..65535");
   out.host = host;

@@ -87,7 +87,8 @@ std::string format_job_status(const proto::Job& job) {
     out += " (" + job.stage + " " + percent(job.progress) + ")";
   out += "\n";
   out += "stages:    " + join(job.stages, ", ") + "\n";
-  out += "completed: " + (job.completed_stages.empty() ? "-" : join(job.completed_stages, ", ")) + "\n";
+  out += "completed: " + (job.completed_stages.empty() ? "-" : join(job.completed_stages, ", ")) +
+         "\n";
   for (const auto& [stage, seconds] : job.stage_seconds)
     out += "  " + stage + ": " + seconds_text(seconds) + "\n";
   if (!job.options.empty()) out += "options:   " + job.options.dump() + "\n";

@@ -39,7 +39,8 @@ int run(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   } catch (const ApiCallError& e) {
     if (e.status() > 0) {
-      std::fprintf(stderr, "keel: server refused (%d %s): %s\n", e.status(), e.code().c_str(), e.what());
+      std::fprintf(stderr, "keel: server refused (%d %s): %s\n", e.status(), e.code().c_str(),
+                   e.what());
     } else {
       std::fprintf(stderr, "keel: %s: %s\n", e.code().c_str(), e.what());
     }

@@ -26,9 +26,9 @@ struct TransferRate {
 };
 
 struct ProgressBarOptions {
-  bool terminal = false;          // redraw one line ('\r') instead of printing lines
-  double line_interval_s = 5.0;   // plain-line mode: at most one line per interval
-  int width = 30;                 // characters of the bar itself (terminal mode)
+  bool terminal = false;         // redraw one line ('\r') instead of printing lines
+  double line_interval_s = 5.0;  // plain-line mode: at most one line per interval
+  int width = 30;                // characters of the bar itself (terminal mode)
 };
 
 class ProgressBar {

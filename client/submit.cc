@@ -17,14 +17,17 @@ namespace {
 
 // Uploads one file with a progress bar on stderr.
 std::string upload_with_progress(ApiClient& api, const fs::path& file, const std::string& label,
-                                 const fs::path& state_dir, bool show_progress) {
+                                 const fs::path& state_dir, bool show_progress,
+                                 const std::string& known_sha256 = "") {
   ProgressBarOptions bar_options;
   bar_options.terminal = is_terminal(stderr);
   ProgressBar bar(label, bar_options);
   ProgressFn progress;
   if (show_progress)
-    progress = [&bar](int64_t done, int64_t total) { bar.update(done, total, monotonic_seconds()); };
-  const std::string blob = api.upload_file(file, state_dir, progress);
+    progress = [&bar](int64_t done, int64_t total) {
+      bar.update(done, total, monotonic_seconds());
+    };
+  const std::string blob = api.upload_file(file, state_dir, progress, known_sha256);
   if (show_progress) bar.finish(monotonic_seconds());
   return blob;
 }
@@ -57,7 +60,8 @@ std::string mission_name_of(const fs::path& mission_dir) {
     throw LocalFileError(manifest.string() + ": not found (a mission folder holds mission.yaml)");
   try {
     const YAML::Node root = YAML::LoadFile(manifest.string());
-    if (root.IsMap() && root["name"] && root["name"].IsScalar()) return root["name"].as<std::string>();
+    if (root.IsMap() && root["name"] && root["name"].IsScalar())
+      return root["name"].as<std::string>();
   } catch (const YAML::Exception& e) {
     throw LocalFileError(manifest.string() + ": " + e.what());
   }
@@ -76,21 +80,24 @@ SubmitResult submit_mission(ApiClient& api, const SubmitOptions& options) {
 
   const fs::path state_dir = options.cache_dir / "uploads";
   const fs::path tar = write_bundle_to_cache(options.mission_dir, options.cache_dir / "bundles");
-  result.bundle_blob =
-      upload_with_progress(api, tar, "bundle " + name, state_dir, options.show_progress);
+  // The cached tar is named after its SHA-256: no second hashing pass.
+  result.bundle_blob = upload_with_progress(api, tar, "bundle " + name, state_dir,
+                                            options.show_progress, tar.stem().string());
   fs::remove(tar, ec);  // the server has it; a re-run rebuilds the same bytes
   if (!options.cad_file.empty())
-    result.cad_blob = upload_with_progress(api, options.cad_file,
-                                           "cad " + options.cad_file.filename().string(), state_dir,
-                                           options.show_progress);
+    result.cad_blob =
+        upload_with_progress(api, options.cad_file, "cad " + options.cad_file.filename().string(),
+                             state_dir, options.show_progress);
 
-  proto::MissionRequest mission_request{name, result.bundle_blob, result.cad_blob,
-                                        options.cad_file.empty() ? "" : options.cad_file.filename().string()};
+  proto::MissionRequest mission_request{
+      name, result.bundle_blob, result.cad_blob,
+      options.cad_file.empty() ? "" : options.cad_file.filename().string()};
   result.mission = find_or_create_mission(api, mission_request);
 
   proto::JobRequest job_request{result.mission.id, options.stages, options.options};
-  result.job = api.create_job(job_request, submit_idempotency_key(result.bundle_blob, result.cad_blob,
-                                                                  options.stages, options.options));
+  result.job = api.create_job(
+      job_request,
+      submit_idempotency_key(result.bundle_blob, result.cad_blob, options.stages, options.options));
   return result;
 }
 

@@ -9,7 +9,7 @@ packages=(
   # product libraries (see DESIGN.md "Layers")
   libboost-dev libboost-system-dev libboost-filesystem-dev libboost-regex-dev
   libboost-iostreams-dev libboost-program-options-dev libboost-thread-dev
-  libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev
+  libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev libnanoflann-dev
   libdraco-dev draco libsqlite3-dev nlohmann-json3-dev libcli11-dev
   libspdlog-dev libyaml-cpp-dev libssl-dev libarchive-dev
   # ROS1 bags without ROS (PLATFORM-NOTES.md)

@@ -323,6 +323,8 @@ nlohmann::json SensorSpec::to_json() const {
   if (range_m) j["range_m"] = *range_m;
   if (!beams.empty()) j["beams"] = beams;
   if (camera) j["camera"] = camera->to_json();
+  if (axis) j["axis"] = *axis;
+  if (!mounted_on.empty()) j["mounted_on"] = mounted_on;
   return j;
 }
 
@@ -330,7 +332,8 @@ SensorSpec SensorSpec::from_json(const nlohmann::json& value, const std::string&
   static const std::regex kNamePattern("[A-Za-z0-9_]+");
   FieldReader r(value, path);
   r.reject_unknown({"name", "type", "file", "scans", "images", "topic", "frame_id", "rate_hz",
-                    "T_body_sensor", "noise", "point_time", "range_m", "beams", "camera"});
+                    "T_body_sensor", "noise", "point_time", "range_m", "beams", "camera",
+                    "axis", "mounted_on"});
   SensorSpec s;
   s.name = r.required<std::string>("name");
   check_name(s.name, r.child("name"), "[A-Za-z0-9_]+", kNamePattern);
@@ -378,6 +381,18 @@ SensorSpec SensorSpec::from_json(const nlohmann::json& value, const std::string&
   } else if (r.has("camera")) {
     throw ContractError(r.child("camera") + ": only camera sensors have intrinsics");
   }
+  if (r.has("axis")) {
+    if (s.type != SensorType::kServo)
+      throw ContractError(r.child("axis") + ": only servo sensors have a rotation axis");
+    const auto a = fixed_numbers<3>(r.at("axis"), r.child("axis"));
+    const double norm = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    if (std::abs(norm - 1.0) > 1e-3)
+      throw ContractError(r.child("axis") + ": expected a unit vector, |a| = " + std::to_string(norm));
+    s.axis = std::array<double, 3>{a[0] / norm, a[1] / norm, a[2] / norm};
+  }
+  s.mounted_on = r.optional<std::string>("mounted_on", "");
+  if (!s.mounted_on.empty() && s.type == SensorType::kServo)
+    throw ContractError(r.child("mounted_on") + ": a servo cannot ride another servo");
   return s;
 }
 
@@ -465,6 +480,15 @@ MissionManifest MissionManifest::from_json(const nlohmann::json& value, const st
     if (!s.topic.empty() && m.bag.empty())
       throw ContractError(item + ".topic: a topic needs `bag:` at the top level");
     m.sensors.push_back(std::move(s));
+  }
+  // A tray sensor must name a servo of this mission (checked once all sensors are known).
+  for (size_t i = 0; i < m.sensors.size(); ++i) {
+    const SensorSpec& s = m.sensors[i];
+    if (s.mounted_on.empty()) continue;
+    const SensorSpec* servo = m.find_sensor(s.mounted_on);
+    if (!servo || servo->type != SensorType::kServo)
+      throw ContractError(r.child("sensors") + "[" + std::to_string(i) + "].mounted_on: '" +
+                          s.mounted_on + "' is not a servo sensor of this mission");
   }
 
   if (r.has("trajectories")) {

@@ -122,6 +122,10 @@ struct SensorSpec {
   std::optional<std::array<double, 2>> range_m;  // scan sensors and dvl_ranges: [min, max]
   std::vector<std::array<double, 3>> beams;      // dvl_ranges: 4 unit vectors (DVL frame)
   std::optional<CameraSpec> camera;              // cameras (required for them)
+  // Servo trays (seed 001's HAUV): a servo's rotation axis in its own frame, and, on a sensor
+  // riding the tray, the servo's name. T_body_sensor is then the extrinsic at angle 0.
+  std::optional<std::array<double, 3>> axis;  // servo only; default [0, 0, 1]
+  std::string mounted_on;                     // name of a servo sensor, or empty
 
   bool is_stream() const { return !file.empty(); }
   bool is_scans() const;   // scans folder, or a scan-type sensor on a bag topic

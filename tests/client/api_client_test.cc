@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "fake_http_server.h"
-#include "temp_dir.h"
 #include "storage/sha256.h"
+#include "temp_dir.h"
 
 namespace keel::client {
 namespace {
@@ -47,7 +47,8 @@ std::string header(const FakeRequest& request, const char* name) {
 }
 
 TEST(ApiClient, SendsBearerTokenAndReusesTheConnection) {
-  FakeHttpServer server([](const FakeRequest&) { return FakeReply{http_reply(200, R"({"jobs":[]})")}; });
+  FakeHttpServer server(
+      [](const FakeRequest&) { return FakeReply{http_reply(200, R"({"jobs":[]})")}; });
   {
     ApiClient client(config_for(server));
     EXPECT_TRUE(client.list_jobs().empty());
@@ -93,7 +94,8 @@ TEST(ApiClient, PostAfterAnIdleCloseUsesANewConnection) {
 
 TEST(ApiClient, NonSuccessCarriesTheServersCodeAndMessage) {
   FakeHttpServer server([](const FakeRequest&) {
-    return FakeReply{http_reply(404, R"({"error":{"code":"not_found","message":"job j9 not found"}})")};
+    return FakeReply{
+        http_reply(404, R"({"error":{"code":"not_found","message":"job j9 not found"}})")};
   });
   ApiClient client(config_for(server));
   try {
@@ -105,7 +107,8 @@ TEST(ApiClient, NonSuccessCarriesTheServersCodeAndMessage) {
     EXPECT_STREQ(e.what(), "job j9 not found");
   }
   // A non-JSON error body still gives the status and a code derived from it.
-  FakeHttpServer plain([](const FakeRequest&) { return FakeReply{http_reply(502, "bad gateway")}; });
+  FakeHttpServer plain(
+      [](const FakeRequest&) { return FakeReply{http_reply(502, "bad gateway")}; });
   ApiClient plain_client(config_for(plain));
   try {
     plain_client.get_json("/v1/jobs");
@@ -160,7 +163,8 @@ TEST(ApiClient, DeadlineEndsARequestTheServerNeverAnswers) {
 }
 
 TEST(ApiClient, LeaseReturnsNulloptOn204) {
-  FakeHttpServer server([](const FakeRequest&) { return FakeReply{"HTTP/1.1 204 No Content\r\n\r\n"}; });
+  FakeHttpServer server(
+      [](const FakeRequest&) { return FakeReply{"HTTP/1.1 204 No Content\r\n\r\n"}; });
   ApiClient client(config_for(server));
   EXPECT_FALSE(client.lease(proto::LeaseRequest{"host:1", 30}).has_value());
 }
@@ -188,7 +192,8 @@ struct UploadScript {
     const std::string method(request.method_string());
     if (method == "HEAD" && target == "/v1/uploads/u1")
       return FakeReply{"HTTP/1.1 200 OK\r\nUpload-Offset: " + std::to_string(committed.size()) +
-                       "\r\nUpload-Length: " + std::to_string(size) + "\r\nContent-Length: 0\r\n\r\n"};
+                       "\r\nUpload-Length: " + std::to_string(size) +
+                       "\r\nContent-Length: 0\r\n\r\n"};
     if (method == "HEAD") return FakeReply{"HTTP/1.1 404 X\r\nContent-Length: 0\r\n\r\n"};
     if (method == "POST" && target == "/v1/uploads") {
       size = nlohmann::json::parse(request.body())["size"].get<int64_t>();
@@ -206,8 +211,8 @@ struct UploadScript {
     }
     if (method == "POST" && target == "/v1/uploads/u1/complete") {
       const std::string sha = storage::sha256_bytes(committed);
-      return FakeReply{http_reply(200, R"({"blob":")" + sha + R"(","size":)" +
-                                           std::to_string(committed.size()) + "}")};
+      return FakeReply{http_reply(
+          200, R"({"blob":")" + sha + R"(","size":)" + std::to_string(committed.size()) + "}")};
     }
     return FakeReply{http_reply(500, "unexpected " + method + " " + target)};
   }
@@ -231,8 +236,9 @@ TEST(ApiClientUpload, SendsChunksWithContentRangesAndCompletes) {
     ClientConfig config = config_for(server);
     config.chunk_bytes = 4;
     ApiClient client(config);
-    const std::string blob = client.upload_file(dir.path() / "f.bin", dir.path() / "state",
-                                                [&](int64_t d, int64_t t) { reports.emplace_back(d, t); });
+    const std::string blob =
+        client.upload_file(dir.path() / "f.bin", dir.path() / "state",
+                           [&](int64_t d, int64_t t) { reports.emplace_back(d, t); });
     EXPECT_EQ(blob, storage::sha256_bytes(bytes));
     EXPECT_EQ(client.stats().upload_body_bytes, 10);
   }
@@ -240,7 +246,8 @@ TEST(ApiClientUpload, SendsChunksWithContentRangesAndCompletes) {
   // 10 bytes in 4-byte chunks: [0,3], [4,7], [8,9].
   EXPECT_EQ(content_ranges(server.requests()),
             (std::vector<std::string>{"bytes 0-3/10", "bytes 4-7/10", "bytes 8-9/10"}));
-  EXPECT_EQ(reports, (std::vector<std::pair<int64_t, int64_t>>{{0, 10}, {4, 10}, {8, 10}, {10, 10}}));
+  EXPECT_EQ(reports,
+            (std::vector<std::pair<int64_t, int64_t>>{{0, 10}, {4, 10}, {8, 10}, {10, 10}}));
   EXPECT_TRUE(fs::is_empty(dir.path() / "state")) << "the state file must be deleted when done";
 }
 
@@ -259,15 +266,18 @@ TEST(ApiClientUpload, DroppedLinkAndOffsetMismatchResumeAtTheServersOffset) {
     ClientConfig config = config_for(server);
     config.chunk_bytes = 256;
     ApiClient client(config);
-    EXPECT_EQ(client.upload_file(dir.path() / "f.bin", dir.path() / "state"), storage::sha256_bytes(bytes));
+    EXPECT_EQ(client.upload_file(dir.path() / "f.bin", dir.path() / "state"),
+              storage::sha256_bytes(bytes));
   }
   EXPECT_EQ(script.committed, bytes);
-  EXPECT_EQ(content_ranges(server.requests()),
-            (std::vector<std::string>{"bytes 0-255/1000", "bytes 256-511/1000", "bytes 256-511/1000",
-                                      "bytes 512-767/1000", "bytes 768-999/1000", "bytes 768-999/1000"}));
+  EXPECT_EQ(
+      content_ranges(server.requests()),
+      (std::vector<std::string>{"bytes 0-255/1000", "bytes 256-511/1000", "bytes 256-511/1000",
+                                "bytes 512-767/1000", "bytes 768-999/1000", "bytes 768-999/1000"}));
   int offset_queries = 0;
   for (const auto& r : server.requests())
-    offset_queries += r.method() == boost::beast::http::verb::head && r.target() == "/v1/uploads/u1";
+    offset_queries +=
+        r.method() == boost::beast::http::verb::head && r.target() == "/v1/uploads/u1";
   EXPECT_EQ(offset_queries, 1);
 }
 
@@ -301,15 +311,15 @@ TEST(ApiClientDownload, CutLinkResumesWithRangeFromThePartSize) {
   FakeHttpServer server([&](const FakeRequest& r) {
     const std::string range(r["Range"]);
     if (range.empty()) {  // full answer announced, half sent, link cut
-      return FakeReply{"HTTP/1.1 200 OK\r\nContent-Length: " + std::to_string(bytes.size()) + "\r\n\r\n" +
-                           bytes.substr(0, cut),
+      return FakeReply{"HTTP/1.1 200 OK\r\nContent-Length: " + std::to_string(bytes.size()) +
+                           "\r\n\r\n" + bytes.substr(0, cut),
                        /*close_after=*/true};
     }
     const size_t from = std::stoul(range.substr(6));
-    return FakeReply{"HTTP/1.1 206 Partial Content\r\nContent-Range: bytes " + std::to_string(from) + "-" +
-                     std::to_string(bytes.size() - 1) + "/" + std::to_string(bytes.size()) +
-                     "\r\nContent-Length: " + std::to_string(bytes.size() - from) + "\r\n\r\n" +
-                     bytes.substr(from)};
+    return FakeReply{"HTTP/1.1 206 Partial Content\r\nContent-Range: bytes " +
+                     std::to_string(from) + "-" + std::to_string(bytes.size() - 1) + "/" +
+                     std::to_string(bytes.size()) + "\r\nContent-Length: " +
+                     std::to_string(bytes.size() - from) + "\r\n\r\n" + bytes.substr(from)};
   });
   int64_t last_done = 0;
   {

@@ -34,9 +34,13 @@ std::vector<TarItem> read_tar(const fs::path& tar) {
   std::vector<TarItem> items;
   archive_entry* entry;
   while (archive_read_next_header(a, &entry) == ARCHIVE_OK) {
-    TarItem item{archive_entry_pathname(entry), archive_entry_filetype(entry) == AE_IFDIR,
-                 static_cast<int>(archive_entry_perm(entry)), archive_entry_mtime(entry),
-                 archive_entry_uid(entry), archive_entry_gid(entry), ""};
+    TarItem item{archive_entry_pathname(entry),
+                 archive_entry_filetype(entry) == AE_IFDIR,
+                 static_cast<int>(archive_entry_perm(entry)),
+                 archive_entry_mtime(entry),
+                 archive_entry_uid(entry),
+                 archive_entry_gid(entry),
+                 ""};
     char buffer[4096];
     la_ssize_t n;
     while ((n = archive_read_data(a, buffer, sizeof(buffer))) > 0) item.content.append(buffer, n);
@@ -58,8 +62,8 @@ void write_mission(const fs::path& root, bool reversed) {
   int i = 0;
   for (const auto& [name, content] : files) {
     write_file(root / name, content);
-    fs::last_write_time(root / name, fs::file_time_type::clock::now() -
-                                         std::chrono::hours(reversed ? 100 + i : i));
+    fs::last_write_time(
+        root / name, fs::file_time_type::clock::now() - std::chrono::hours(reversed ? 100 + i : i));
     fs::permissions(root / name, reversed ? fs::perms(0600) : fs::perms(0664));
     ++i;
   }
@@ -115,7 +119,8 @@ TEST(BundleTar, SymlinkLeavingTheFolderIsRefused) {
     FAIL() << "expected LocalFileError";
   } catch (const LocalFileError& e) {
     EXPECT_NE(std::string(e.what()).find("link.txt"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("outside the mission folder"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("outside the mission folder"), std::string::npos)
+        << e.what();
   }
   // A relative link climbing out is refused too.
   fs::remove(dir.path() / "m" / "link.txt");
@@ -151,7 +156,8 @@ TEST(BundleTar, CacheCopyIsNamedAfterItsContent) {
   EXPECT_EQ(first.extension(), ".tar");
   EXPECT_EQ(first.stem().string().size(), 64u);
   int files = 0;
-  for (const auto& item : fs::directory_iterator(dir.path() / "cache")) files += item.is_regular_file();
+  for (const auto& item : fs::directory_iterator(dir.path() / "cache"))
+    files += item.is_regular_file();
   EXPECT_EQ(files, 1) << "no temporary files left behind";
 }
 

@@ -110,11 +110,13 @@ TEST_F(CliConfigTest, BadInputNamesTheFile) {
     resolve_cli_config({}, env.lookup());
     FAIL() << "expected LocalFileError";
   } catch (const LocalFileError& e) {
-    EXPECT_NE(std::string(e.what()).find("config.yaml: unknown key 'tokn'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("config.yaml: unknown key 'tokn'"), std::string::npos)
+        << e.what();
   }
   env.vars["KEEL_TOKEN_FILE"] = (home.path() / "nope").string();
-  EXPECT_THROW(resolve_cli_config({}, FakeEnv{{{"KEEL_TOKEN_FILE", env.vars["KEEL_TOKEN_FILE"]}}}.lookup()),
-               LocalFileError);
+  EXPECT_THROW(
+      resolve_cli_config({}, FakeEnv{{{"KEEL_TOKEN_FILE", env.vars["KEEL_TOKEN_FILE"]}}}.lookup()),
+      LocalFileError);
 }
 
 TEST(CliCacheDir, XdgCacheHomeThenHome) {

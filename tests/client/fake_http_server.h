@@ -18,17 +18,19 @@
 namespace keel::client::testing {
 
 struct FakeReply {
-  std::string raw;            // status line, headers and (part of) the body
-  bool close_after = false;   // close the connection after writing `raw`
-  bool no_answer = false;     // read the request but never answer (until the client leaves)
+  std::string raw;           // status line, headers and (part of) the body
+  bool close_after = false;  // close the connection after writing `raw`
+  bool no_answer = false;    // read the request but never answer (until the client leaves)
 };
 
 using FakeRequest = boost::beast::http::request<boost::beast::http::string_body>;
 
 // "HTTP/1.1 <status> X\r\nContent-Length: n\r\n<extra>\r\n<body>"
-inline std::string http_reply(int status, const std::string& body, const std::string& extra_headers = "") {
-  return "HTTP/1.1 " + std::to_string(status) + " X\r\nContent-Length: " + std::to_string(body.size()) +
-         "\r\n" + extra_headers + "\r\n" + body;
+inline std::string http_reply(int status, const std::string& body,
+                              const std::string& extra_headers = "") {
+  return "HTTP/1.1 " + std::to_string(status) +
+         " X\r\nContent-Length: " + std::to_string(body.size()) + "\r\n" + extra_headers + "\r\n" +
+         body;
 }
 
 class FakeHttpServer {
@@ -50,7 +52,9 @@ class FakeHttpServer {
     thread_.join();
   }
 
-  std::string url() const { return "http://127.0.0.1:" + std::to_string(acceptor_.local_endpoint().port()); }
+  std::string url() const {
+    return "http://127.0.0.1:" + std::to_string(acceptor_.local_endpoint().port());
+  }
 
   std::vector<FakeRequest> requests() {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -40,8 +40,8 @@ TEST(HttpRanges, ParsesContentRange) {
   const auto unknown_total = parse_content_range("bytes 0-9/*");
   ASSERT_TRUE(unknown_total);
   EXPECT_EQ(unknown_total->total, -1);
-  for (const char* bad : {"", "bytes", "bytes 5-4/10", "bytes 0-10/10", "bits 0-1/2", "bytes -1-2/3",
-                          "bytes 0-1", "bytes */*", "bytes 1-2/3x", "bytes 0-/10"})
+  for (const char* bad : {"", "bytes", "bytes 5-4/10", "bytes 0-10/10", "bits 0-1/2",
+                          "bytes -1-2/3", "bytes 0-1", "bytes */*", "bytes 1-2/3x", "bytes 0-/10"})
     EXPECT_FALSE(parse_content_range(bad)) << bad;
 }
 
@@ -57,8 +57,8 @@ TEST(HttpUrl, ParsesBaseUrls) {
   const BaseUrl c = parse_base_url("http://[::1]:9000");
   EXPECT_EQ(c.host, "::1");
   EXPECT_EQ(c.port, "9000");
-  for (const char* bad : {"https://h:1", "h:1", "http://", "http://h:", "http://h:99999", "http://h:x1",
-                          "http://u:p@h:1"})
+  for (const char* bad : {"https://h:1", "h:1", "http://", "http://h:", "http://h:99999",
+                          "http://h:x1", "http://u:p@h:1"})
     EXPECT_THROW(parse_base_url(bad), std::invalid_argument) << bad;
 }
 

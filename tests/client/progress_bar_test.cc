@@ -44,7 +44,8 @@ TEST(ProgressBar, RendersBytesRateAndEta) {
   ProgressBar bar("bundle m1", ProgressBarOptions{}, stderr);
   bar.update(0, 48 * mib, 100.0);  // start: nothing done
   // 12 MiB in 3 s = 4 MiB/s; 36 MiB left = 9 s.
-  EXPECT_EQ(bar.render(12 * mib, 48 * mib, 103.0), "bundle m1  12.0 MiB / 48.0 MiB  25%  4.00 MiB/s  ETA 0:09");
+  EXPECT_EQ(bar.render(12 * mib, 48 * mib, 103.0),
+            "bundle m1  12.0 MiB / 48.0 MiB  25%  4.00 MiB/s  ETA 0:09");
   ProgressBarOptions terminal;
   terminal.terminal = true;
   terminal.width = 10;

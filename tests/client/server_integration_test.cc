@@ -62,9 +62,10 @@ class ServerIntegration : public ::testing::Test {
   // A minimal mission folder the server accepts (a tar holding mission.yaml).
   fs::path make_mission(const std::string& name) {
     const fs::path root = dir_.path() / name;
-    write_file(root / "mission.yaml", "keel_mission: 1\nname: " + name +
-                                          "\nplatform: usv\nsensors:\n  - name: imu\n    type: imu\n"
-                                          "    file: imu.csv\n    rate_hz: 200\n");
+    write_file(root / "mission.yaml",
+               "keel_mission: 1\nname: " + name +
+                   "\nplatform: usv\nsensors:\n  - name: imu\n    type: imu\n"
+                   "    file: imu.csv\n    rate_hz: 200\n");
     write_file(root / "imu.csv", "t,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.81\n");
     return root;
   }
@@ -94,8 +95,8 @@ TEST_F(ServerIntegration, UploadResumesAtTheServersOffsetAfterADrop) {
   // Second run (a new process would do the same): resumes at 8 chunks.
   ApiClient client(config(chunk));
   std::vector<int64_t> reports;
-  const std::string blob = client.upload_file(dir_.path() / "big.bin", state,
-                                              [&](int64_t done, int64_t) { reports.push_back(done); });
+  const std::string blob = client.upload_file(
+      dir_.path() / "big.bin", state, [&](int64_t done, int64_t) { reports.push_back(done); });
   EXPECT_EQ(blob, storage::sha256_bytes(bytes));
   EXPECT_EQ(client.stats().upload_body_bytes, static_cast<int64_t>(bytes.size()) - 8 * chunk)
       << "completed bytes must not be sent again";
@@ -175,7 +176,8 @@ TEST_F(ServerIntegration, ClientAndWorkerCallsRoundTrip) {
   write_file(dir_.path() / "report.json", report);
   const std::string blob = client.upload_file(dir_.path() / "report.json", dir_.path() / "state");
   client.register_artifact(first.job.id, {lease->lease_id, "ingest", "report.json", blob});
-  client.complete_stage(first.job.id, "ingest", {lease->lease_id, nlohmann::json{{"samples", 200}}, 0.1});
+  client.complete_stage(first.job.id, "ingest",
+                        {lease->lease_id, nlohmann::json{{"samples", 200}}, 0.1});
   EXPECT_EQ(client.finish_job(first.job.id, {lease->lease_id, ""}, true).state,
             proto::JobState::kSucceeded);
 
@@ -213,8 +215,9 @@ std::pair<int, std::string> run_cli(const std::string& env, const std::string& a
 TEST_F(ServerIntegration, CliSubmitIsIdempotentAndExitCodesTellWhatWentWrong) {
   if (std::string(kCliBinary).empty() || !fs::exists(kCliBinary)) GTEST_SKIP() << "keel not built";
   const fs::path mission = make_mission("hull-b");
-  const std::string env = "HOME=" + dir_.path().string() + " XDG_CONFIG_HOME= XDG_CACHE_HOME= KEEL_URL=" +
-                          server_->url() + " KEEL_TOKEN=" + server_->token();
+  const std::string env = "HOME=" + dir_.path().string() +
+                          " XDG_CONFIG_HOME= XDG_CACHE_HOME= KEEL_URL=" + server_->url() +
+                          " KEEL_TOKEN=" + server_->token();
   const auto first = run_cli(env, "submit -q " + mission.string());
   ASSERT_EQ(first.first, 0) << first.second;
   const auto again = run_cli(env, "submit -q " + mission.string());

@@ -26,8 +26,9 @@ class ServerProcess {
       : data_dir_(data_dir) {
     std::filesystem::create_directories(data_dir);
     const std::string log = (data_dir.parent_path() / "server.log").string();
-    std::vector<std::string> args = {binary.string(), "--data-dir", data_dir.string(),
-                                     "--listen", "127.0.0.1:0", "--workers", "0"};
+    std::vector<std::string> args = {
+        binary.string(), "--data-dir", data_dir.string(), "--listen", "127.0.0.1:0",
+        "--workers",     "0"};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);

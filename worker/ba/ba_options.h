@@ -28,8 +28,7 @@ struct FrontendOptions {
   double essential_threshold_px = 1.0;  // RANSAC Sampson distance threshold (monocular)
   double ransac_confidence = 0.999;
   int min_inliers = 15;            // a keyframe pair with fewer verified matches is dropped
-  // Stereo: matches between the top and bottom images must agree with rectification.
-  double stereo_rectified_tolerance_px = 2.0;
+  // Stereo: a top-bottom match must reproject onto both detections (rectified pair).
   double stereo_max_reprojection_px = 2.0;
   // Stereo: RANSAC rigid alignment of triangulated points between keyframes.
   double rigid_inlier_threshold_m = 0.05;

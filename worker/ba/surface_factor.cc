@@ -83,7 +83,7 @@ ceres::CostFunction* make_surface_factor(const MeshQuery& mesh, const MaxMixture
       new Surface{&mesh, mixture, mode, surface_offset_m, label_slot});
 }
 
-double signed_distance_to_model(const MeshQuery& mesh, const Eigen::Isometry3d& T_world_model,
+double signed_distance_to_model(const MeshQuery& mesh, const Pose3& T_world_model,
                                 const Eigen::Vector3d& landmark_world) {
   return signed_distance<double>(mesh, T_world_model.inverse() * landmark_world);
 }

@@ -34,6 +34,7 @@
 #include <cstdint>
 
 #include "worker/ba/mesh_query.h"
+#include "worker/core/pose.h"
 
 namespace keel::ba {
 
@@ -66,7 +67,7 @@ ceres::CostFunction* make_surface_factor(const MeshQuery& mesh, const MaxMixture
                                          uint8_t* label_slot = nullptr);
 
 // h(x_gM, l) of Eq. (5) for a landmark in the world frame.
-double signed_distance_to_model(const MeshQuery& mesh, const Eigen::Isometry3d& T_world_model,
+double signed_distance_to_model(const MeshQuery& mesh, const Pose3& T_world_model,
                                 const Eigen::Vector3d& landmark_world);
 
 }  // namespace keel::ba

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "worker/ba/mesh_query.h"
 #include "worker/inspect/mesh_fusion.h"
+#include "worker/inspect/vertex_deviation.h"
 
 namespace keel::inspect {
 namespace {
@@ -31,23 +31,6 @@ std::vector<std::vector<int>> visible_per_view(const InspectInput& input) {
     for (const int view : input.landmarks[i].views) visible[view].push_back(static_cast<int>(i));
   }
   return visible;
-}
-
-std::vector<double> vertex_deviations(const TriangleMesh& prior, const TriangleMesh& remeshed,
-                                      const std::vector<int>& counts) {
-  std::vector<double> deviation(remeshed.vertices.size(), 0.0);
-  std::vector<int> moved;
-  std::vector<Eigen::Vector3d> queries;
-  for (size_t i = 0; i < counts.size(); ++i) {
-    if (counts[i] == 0) continue;
-    moved.push_back(static_cast<int>(i));
-    queries.push_back(remeshed.vertices[i]);
-  }
-  if (moved.empty()) return deviation;
-  const ba::MeshQuery prior_query(prior);
-  const std::vector<double> h = prior_query.signed_distances(queries);  // Eq. (5)
-  for (size_t k = 0; k < moved.size(); ++k) deviation[moved[k]] = h[k];
-  return deviation;
 }
 
 }  // namespace
@@ -95,7 +78,7 @@ InspectResult run_inspect(const InspectInput& input, const InspectOptions& optio
   result.vertex_deviation_m =
       vertex_deviations(input.cad_in_world, result.remeshed, result.vertex_update_count);
   stats.deviation_s = seconds_since(start);
-  result.shapes = summarize_shapes(result.detections, input.landmarks);
+  result.shapes = summarize_shapes(result.detections, input.landmarks, options.dbscan_eps_m);
   return result;
 }
 

@@ -40,6 +40,7 @@ int MeshFusion::fuse_view(const Pose3& T_world_camera, const std::vector<Detecte
       ++updates;
     }
   }
+  if (updates > 0) mesh_.vertex_normals.clear();
   return updates;
 }
 

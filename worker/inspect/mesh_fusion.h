@@ -21,10 +21,12 @@ class MeshFusion {
 
   // Lines 5-14 for one pose: the vertices within view_range_m of the camera centre, each ray
   // camera centre -> vertex against each shape detected at that pose (in that camera's frame).
-  // Returns the number of moving-average updates (evaluations of line 11).
+  // A ray meeting two shapes of the same view updates its vertex twice, as the loops of lines
+  // 6-13 do. Returns the number of moving-average updates (evaluations of line 11).
   int fuse_view(const Pose3& T_world_camera, const std::vector<DetectedShape>& shapes);
 
-  // M_new: the prior's faces and per-vertex data, the vertices as fused so far.
+  // M_new: the prior's faces and colours, the vertices as fused so far. The prior's vertex
+  // normals are dropped once a vertex has moved: they would no longer match the surface.
   const TriangleMesh& mesh() const { return mesh_; }
   // n of Eq. (15) per vertex: how many intersections were averaged into it (0: untouched).
   const std::vector<int>& update_counts() const { return counts_; }

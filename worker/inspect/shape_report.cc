@@ -6,6 +6,8 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "worker/inspect/radius_index.h"
+
 namespace keel::inspect {
 namespace {
 
@@ -19,18 +21,38 @@ int find_root(std::vector<int>& parent, int i) {
   return i;
 }
 
-// Object of each detection: connected components of "shares a feature".
-std::vector<int> group_detections(const std::vector<DetectedShape>& detections) {
+void unite(std::vector<int>& parent, int a, int b) {
+  a = find_root(parent, a);
+  b = find_root(parent, b);
+  parent[std::max(a, b)] = std::min(a, b);  // the root stays the earliest detection
+}
+
+// Object of each detection: connected components of "shares a feature, or has a feature within
+// link_distance_m of one of the other's features".
+std::vector<int> group_detections(const std::vector<DetectedShape>& detections,
+                                  const std::vector<Landmark>& landmarks, double link_distance_m) {
   std::vector<int> parent(detections.size());
   std::iota(parent.begin(), parent.end(), 0);
-  std::unordered_map<int, int> first_detection_of_landmark;
+  std::unordered_map<int, int> node_of_landmark;  // feature id -> index into first_detection
+  std::vector<int> first_detection;
+  std::vector<Eigen::Vector3d> points_world;
   for (size_t k = 0; k < detections.size(); ++k) {
     for (const int id : detections[k].landmarks) {
-      const auto [it, inserted] = first_detection_of_landmark.emplace(id, static_cast<int>(k));
-      if (inserted) continue;
-      const int a = find_root(parent, it->second), b = find_root(parent, static_cast<int>(k));
-      parent[std::max(a, b)] = std::min(a, b);  // the root stays the earliest detection
+      const auto [it, inserted] =
+          node_of_landmark.emplace(id, static_cast<int>(first_detection.size()));
+      if (inserted) {
+        first_detection.push_back(static_cast<int>(k));
+        points_world.push_back(landmarks[id].point_world);
+      } else {
+        unite(parent, first_detection[it->second], static_cast<int>(k));
+      }
     }
+  }
+  const RadiusIndex index(points_world);
+  std::vector<int> near;
+  for (size_t node = 0; node < points_world.size(); ++node) {
+    index.within(points_world[node], link_distance_m, &near);
+    for (const int other : near) unite(parent, first_detection[node], first_detection[other]);
   }
   for (size_t k = 0; k < detections.size(); ++k) parent[k] = find_root(parent, static_cast<int>(k));
   return parent;
@@ -74,8 +96,9 @@ nlohmann::json ShapeSummary::to_json() const {
 }
 
 std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& detections,
-                                           const std::vector<Landmark>& landmarks) {
-  const std::vector<int> root = group_detections(detections);
+                                           const std::vector<Landmark>& landmarks,
+                                           double link_distance_m) {
+  const std::vector<int> root = group_detections(detections, landmarks, link_distance_m);
   std::unordered_map<int, int> object_of_root;
   std::vector<std::vector<int>> object_landmarks, object_views;
   std::vector<int> object_detections;

@@ -1,6 +1,6 @@
 // The shapes list of shapes.json. Algorithm 1 (seed 001) finds shapes per camera view, so "a
 // single physical object on the hull will have multiple shapes associated with it" (section
-// 3.2); here detections that share a feature are merged into one object and summarised.
+// 3.2); here those detections are merged into one object and summarised.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,9 +30,13 @@ struct ShapeSummary {
   nlohmann::json to_json() const;
 };
 
-// Merges detections that share at least one feature (transitively) and summarises each object.
+// Merges detections (transitively) that share a feature or come within link_distance_m of each
+// other (world frame, feature to feature), and summarises each object. Sharing alone would
+// split an object whose parts two cameras saw without overlap; run_inspect() links at
+// dbscan_eps_m, the spacing DBSCAN itself accepts inside a cluster.
 std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& detections,
-                                           const std::vector<Landmark>& landmarks);
+                                           const std::vector<Landmark>& landmarks,
+                                           double link_distance_m);
 
 // The shapes.json document: {"options": ..., "shapes": [...]}.
 nlohmann::json shapes_to_json(const std::vector<ShapeSummary>& shapes,

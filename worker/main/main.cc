@@ -12,13 +12,12 @@
 namespace {
 
 // Without a subcommand name, the arguments are those of `serve`.
-std::vector<std::string> with_default_subcommand(
-    int argc, char** argv, const std::vector<keel::worker::Subcommand>& commands) {
+std::vector<std::string> with_default_subcommand(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
   if (!args.empty() && (args[0] == "-h" || args[0] == "--help" || args[0] == "--version"))
     return args;
-  for (const auto& command : commands)
-    if (!args.empty() && args[0] == command.app->get_name()) return args;
+  // A first word that is not an option names a subcommand (CLI11 reports unknown ones).
+  if (!args.empty() && !args[0].empty() && args[0][0] != '-') return args;
   args.insert(args.begin(), "serve");
   return args;
 }
@@ -26,7 +25,8 @@ std::vector<std::string> with_default_subcommand(
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"keel-worker: runs Keel pipeline stages, leased from a server or locally"};
+  CLI::App app{"keel-worker: runs Keel pipeline stages, leased from a server or locally",
+               "keel-worker"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "keel-worker 0.1.0");
   const std::vector<keel::worker::Subcommand> commands = {
@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
       keel::worker::add_run_command(app),
   };
 
-  std::vector<std::string> args = with_default_subcommand(argc, argv, commands);
+  std::vector<std::string> args = with_default_subcommand(argc, argv);
   std::reverse(args.begin(), args.end());  // CLI11 takes the arguments reversed
   try {
     app.parse(args);

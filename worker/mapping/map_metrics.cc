@@ -22,27 +22,37 @@ struct NeighbourhoodMetrics {
   float planarity = kUndefined;
 };
 
-// Thread-local scratch for one neighbourhood.
+// Scratch for one neighbourhood, reused across the queries of a thread.
 struct Scratch {
-  std::vector<int> indices;
-  std::vector<float> squared_distances;
+  std::vector<Eigen::Vector3f> neighbours;
   std::vector<double> axis[3];
 };
 
 // Coordinates are taken relative to the query point q, so q contributes zero to the sums.
-NeighbourhoodMetrics neighbourhood_metrics(const std::vector<Eigen::Vector3f>& points,
-                                           const Eigen::Vector3f& q, Scratch& scratch) {
-  const size_t n = scratch.indices.size();  // includes q itself
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d sum_outer = Eigen::Matrix3d::Zero();
+NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& scratch) {
+  const size_t n = scratch.neighbours.size();  // includes q itself
+  double s[3] = {0, 0, 0};
+  double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
   for (int a = 0; a < 3; ++a) scratch.axis[a].resize(n);
   for (size_t m = 0; m < n; ++m) {
-    const Eigen::Vector3d v = (points[scratch.indices[m]] - q).cast<double>();
-    sum += v;
-    sum_outer.selfadjointView<Eigen::Lower>().rankUpdate(v);
-    for (int a = 0; a < 3; ++a) scratch.axis[a][m] = v[a];
+    const Eigen::Vector3f d = scratch.neighbours[m] - q;
+    const double x = d.x(), y = d.y(), z = d.z();
+    s[0] += x;
+    s[1] += y;
+    s[2] += z;
+    xx += x * x;
+    xy += x * y;
+    xz += x * z;
+    yy += y * y;
+    yz += y * z;
+    zz += z * z;
+    scratch.axis[0][m] = x;
+    scratch.axis[1][m] = y;
+    scratch.axis[2][m] = z;
   }
-  sum_outer = sum_outer.selfadjointView<Eigen::Lower>();
+  const Eigen::Vector3d sum(s[0], s[1], s[2]);
+  Eigen::Matrix3d sum_outer;
+  sum_outer << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   NeighbourhoodMetrics out;
 
   // Eq. (24): plane through the centroid of the n - 1 others (q adds nothing to the sums).
@@ -112,14 +122,25 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
   if (queries == 0) return out;
 
   const RadiusSearch search(points);
+  // Visit the queries in the search's Morton order: consecutive queries touch the same leaves.
+  std::vector<uint32_t> rank(points.size());
+  const std::vector<uint32_t>& order = search.spatial_order();
+  for (size_t i = 0; i < order.size(); ++i) rank[order[i]] = static_cast<uint32_t>(i);
+  std::vector<uint32_t> visit(queries);
+  for (size_t q = 0; q < queries; ++q) visit[q] = static_cast<uint32_t>(q);
+  std::sort(visit.begin(), visit.end(), [&](uint32_t a, uint32_t b) {
+    return rank[out.query_index[a]] < rank[out.query_index[b]];
+  });
+
   const double area = kPi * options.radius_m * options.radius_m;
   parallel_for(queries, options.threads, [&](size_t begin, size_t end) {
     Scratch scratch;
-    for (size_t q = begin; q < end; ++q) {
+    for (size_t v = begin; v < end; ++v) {
+      const size_t q = visit[v];
       const Eigen::Vector3f& p = points[out.query_index[q]];
-      search.within(p, options.radius_m, &scratch.indices, &scratch.squared_distances);
-      out.surface_density[q] = static_cast<float>(scratch.indices.size() / area);  // Eq. (23)
-      const NeighbourhoodMetrics metrics = neighbourhood_metrics(points, p, scratch);
+      search.points_within(p, options.radius_m, &scratch.neighbours);
+      out.surface_density[q] = static_cast<float>(scratch.neighbours.size() / area);  // Eq. (23)
+      const NeighbourhoodMetrics metrics = neighbourhood_metrics(p, scratch);
       out.roughness[q] = metrics.roughness;
       out.planarity[q] = metrics.planarity;
     }

@@ -9,7 +9,7 @@
 // distance to the others) costs O(N^2) per point, and inspection maps hold thousands of points
 // within 0.25 m, so v_bar here is the coordinate-wise median (element of rank floor(N/2) per
 // axis), the robust centre the paper's med(.) denotes at O(N) cost.
-// Neighbour search: PCL's KdTreeFLANN; points are processed in parallel over `threads`.
+// Neighbour search: a kd-tree (nanoflann); points are processed in parallel over `threads`.
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -37,8 +37,10 @@ size_t apply_radius_outlier(const RadiusOutlierFilter& filter, PointCloud& cloud
   // The count includes the point itself, hence min_neighbors + 1 (PCL's k = min_pts + 1).
   const int needed = filter.min_neighbors + 1;
   std::vector<uint8_t> keep(cloud.size());
+  const std::vector<uint32_t>& order = search.spatial_order();  // cache-friendly query order
   parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
-    for (size_t n = begin; n < end; ++n) {
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t n = order[i];
       keep[n] = search.count_within(cloud.xyz[n], filter.radius_m, needed) >= needed;
     }
   });
@@ -53,8 +55,10 @@ size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads) {
   if (cloud.empty() || filter.k_min <= 1) return 0;  // every point counts itself
   const RadiusSearch search(cloud.xyz);
   std::vector<uint8_t> keep(cloud.size());
+  const std::vector<uint32_t>& order = search.spatial_order();
   parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
-    for (size_t n = begin; n < end; ++n) {
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t n = order[i];
       const Eigen::Vector3f& p = cloud.xyz[n];
       const double r_xy = std::hypot(static_cast<double>(p.x()), static_cast<double>(p.y()));
       const double radius = dror_search_radius(filter, r_xy);

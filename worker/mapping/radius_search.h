@@ -1,10 +1,11 @@
-// Fixed-radius neighbour queries over a point set, on PCL's KdTreeFLANN (FLANN kd-tree),
-// hidden behind a pimpl so PCL stays out of this header. Queries are const and may run
+// Fixed-radius neighbour queries over a point set on a kd-tree (nanoflann),
+// hidden behind a pimpl. Queries are const and may run
 // concurrently from several threads.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -12,7 +13,8 @@ namespace keel::mapping {
 
 class RadiusSearch {
  public:
-  // Copies the points (PCL keeps its own cloud). Points must be finite.
+  // Copies the points, stored in Morton (Z-order) sequence so that the points of a kd-tree
+  // leaf, and the leaves near one another, sit together in memory. Points must be finite.
   explicit RadiusSearch(const std::vector<Eigen::Vector3f>& points);
   ~RadiusSearch();
   RadiusSearch(const RadiusSearch&) = delete;
@@ -20,11 +22,17 @@ class RadiusSearch {
 
   // Number of indexed points p with |p - query| < radius_m (a query point that is itself
   // indexed counts), capped at max_count when max_count > 0 (the search stops early).
-  // `radius_m` is the radius in metres (FLANN squares it internally; never pass r^2 or sqrt r).
+  // `radius_m` is the radius in metres (squared internally; never pass r^2 or sqrt r).
   int count_within(const Eigen::Vector3f& query, double radius_m, int max_count = 0) const;
   // Indices (unsorted) of all indexed points with |p - query| < radius_m.
   void within(const Eigen::Vector3f& query, double radius_m, std::vector<int>* indices,
               std::vector<float>* squared_distances) const;
+  // The positions of all indexed points with |p - query| < radius_m (cheaper than indices
+  // when only positions are needed: no second, scattered read of the input).
+  void points_within(const Eigen::Vector3f& query, double radius_m,
+                     std::vector<Eigen::Vector3f>* points) const;
+  // Input indices in Morton order: queries issued in this order reuse the cache.
+  const std::vector<uint32_t>& spatial_order() const;
   size_t size() const;
 
  private:

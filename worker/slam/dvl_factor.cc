@@ -22,8 +22,8 @@ bool DvlFactor::Evaluate(double const* const* parameters, double* residuals,
 
   const Eigen::Matrix3d Rt = R_i.transpose();
   const Eigen::Vector3d dp_pred = pre_->corrected_delta_p(bg, bv, s, R_imu_dvl);
-  const Eigen::Vector3d r = Rt * (p_j - p_i) + (Rt * R_j - Eigen::Matrix3d::Identity()) * t_ -
-                            dp_pred;  // Eq. (15)
+  const Eigen::Vector3d r =
+      Rt * (p_j - p_i) + (Rt * R_j - Eigen::Matrix3d::Identity()) * t_ - dp_pred;  // Eq. (15)
   Eigen::Map<Eigen::Vector3d> residual_out(residuals);
   residual_out = sqrt_info_ * r;
   if (jacobians == nullptr) return true;

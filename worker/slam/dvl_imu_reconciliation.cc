@@ -11,18 +11,17 @@ template <class Sample>
 void check_stamps(const std::vector<Sample>& samples, const char* stream) {
   for (size_t k = 1; k < samples.size(); ++k) {
     if (samples[k].t_ns <= samples[k - 1].t_ns) {
-      throw std::invalid_argument(std::string(stream) + " sample " + std::to_string(k) +
-                                  ": timestamp " + std::to_string(samples[k].t_ns) +
-                                  " ns is not after the previous one (" +
-                                  std::to_string(samples[k - 1].t_ns) +
-                                  " ns); expected strictly increasing stamps");
+      throw std::invalid_argument(
+          std::string(stream) + " sample " + std::to_string(k) + ": timestamp " +
+          std::to_string(samples[k].t_ns) + " ns is not after the previous one (" +
+          std::to_string(samples[k - 1].t_ns) + " ns); expected strictly increasing stamps");
     }
   }
 }
 
 [[noreturn]] void throw_non_finite(const char* stream, size_t k, const char* field) {
-  throw std::invalid_argument(std::string(stream) + " sample " + std::to_string(k) + ": " +
-                              field + " is not finite");
+  throw std::invalid_argument(std::string(stream) + " sample " + std::to_string(k) + ": " + field +
+                              " is not finite");
 }
 
 // Spacing (s) from valid[l] to the nearer neighbour that is not a dropout gap; the gap
@@ -88,8 +87,7 @@ std::vector<PseudoSample> reconcile_dvl_imu(const std::vector<DvlSample>& dvl,
       const TimeNs span_ns = d1.t_ns - d0.t_ns;
       if (span_ns > max_gap_ns) continue;  // a dropout: not bridged
       // Line 22: LinearlyInterpolate(t_k, D_l, D_{l-1}).
-      const double alpha =
-          static_cast<double>(s.t_ns - d0.t_ns) / static_cast<double>(span_ns);
+      const double alpha = static_cast<double>(s.t_ns - d0.t_ns) / static_cast<double>(span_ns);
       p.velocity_dvl_mps = (1.0 - alpha) * d0.velocity_mps + alpha * d1.velocity_mps;
       p.dvl_period_s = ns_to_seconds(span_ns);
     }

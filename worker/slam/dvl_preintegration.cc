@@ -29,10 +29,10 @@ void DvlPreintegration::integrate(const Eigen::Vector3d& gyro_radps,
                                   const Eigen::Vector3d& velocity_dvl_mps, double dt_s,
                                   double dvl_period_s) {
   const double inv_s = 1.0 / scale_lin_;
-  const Eigen::Vector3d w_dt = (gyro_radps - bias_gyro_lin_) * dt_s;  // Eq. (13) increment
-  const Eigen::Matrix3d dR_step = so3_exp(w_dt);                     // Delta R~_{k,k+1}
-  const Eigen::Matrix3d Jr = right_jacobian(w_dt);                   // J_r^k of Eq. (14)
-  const Eigen::Vector3d v_imu = R_imu_dvl_lin_ * velocity_dvl_mps;   // B~v_k (Eq. (19))
+  const Eigen::Vector3d w_dt = (gyro_radps - bias_gyro_lin_) * dt_s;   // Eq. (13) increment
+  const Eigen::Matrix3d dR_step = so3_exp(w_dt);                       // Delta R~_{k,k+1}
+  const Eigen::Matrix3d Jr = right_jacobian(w_dt);                     // J_r^k of Eq. (14)
+  const Eigen::Vector3d v_imu = R_imu_dvl_lin_ * velocity_dvl_mps;     // B~v_k (Eq. (19))
   const Eigen::Vector3d v_unbiased = (v_imu - bias_vel_lin_) * inv_s;  // (v~_k - b^v) / s_d
   const Eigen::Matrix3d v_hat = hat(v_unbiased);
 
@@ -67,8 +67,7 @@ void DvlPreintegration::integrate(const Eigen::Vector3d& gyro_radps,
 }
 
 Eigen::Vector3d DvlPreintegration::corrected_delta_p(const Eigen::Vector3d& bias_gyro,
-                                                     const Eigen::Vector3d& bias_vel,
-                                                     double scale,
+                                                     const Eigen::Vector3d& bias_vel, double scale,
                                                      const Eigen::Matrix3d& R_imu_dvl) const {
   const Eigen::Vector3d d_theta = so3_log(R_imu_dvl_lin_.transpose() * R_imu_dvl);
   const Eigen::Vector3d at_lin_scale = delta_p_ + dp_dbg_ * (bias_gyro - bias_gyro_lin_) +

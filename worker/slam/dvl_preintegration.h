@@ -16,10 +16,10 @@ namespace keel::slam {
 // velocity, which makes them vanish at rest; a floor keeps the information finite there
 // (engineering choice, not in the paper).
 struct DvlNoise {
-  double velocity_sigma_rel = 1.0e-3;         // sigma_v = velocity_sigma_rel * |v~|   [-]
-  double velocity_sigma_floor_mps = 5.0e-4;   // combined in quadrature                 [m/s]
-  double bias_random_walk_rel = 1.0e-4;       // sigma_bv = rel * |v~|  [m/s/sqrt(Hz) per m/s]
-  double bias_random_walk_floor = 1.0e-5;     // combined in quadrature  [m/s/sqrt(Hz)]
+  double velocity_sigma_rel = 1.0e-3;        // sigma_v = velocity_sigma_rel * |v~|   [-]
+  double velocity_sigma_floor_mps = 5.0e-4;  // combined in quadrature                 [m/s]
+  double bias_random_walk_rel = 1.0e-4;      // sigma_bv = rel * |v~|  [m/s/sqrt(Hz) per m/s]
+  double bias_random_walk_floor = 1.0e-5;    // combined in quadrature  [m/s/sqrt(Hz)]
 
   // Per-sample white-noise sigma of one DVL measurement with speed |v~| (m/s).
   double velocity_sigma(double speed_mps) const;
@@ -34,8 +34,8 @@ class DvlPreintegration {
   // Linearisation point: biases b^w, b^v (b^v in the IMU frame B, as Eq. (11) subtracts it
   // from the velocity already rotated into B), scale s_d and extrinsic rotation R_B,Bo.
   DvlPreintegration(const Eigen::Vector3d& bias_gyro_lin, const Eigen::Vector3d& bias_vel_lin,
-                    double scale_lin, const Eigen::Matrix3d& R_imu_dvl_lin,
-                    const DvlNoise& noise, double gyro_noise_density);
+                    double scale_lin, const Eigen::Matrix3d& R_imu_dvl_lin, const DvlNoise& noise,
+                    double gyro_noise_density);
 
   // Adds one pseudosensor measurement (gyro in B, interpolated DVL velocity in B_o) held over
   // dt_s. dvl_period_s is the spacing of the DVL samples it was interpolated from: the DVL's
@@ -52,8 +52,8 @@ class DvlPreintegration {
   const Matrix6d& covariance() const { return covariance_; }   // Eq. (16), order [phi, p]
   Eigen::Matrix3d position_covariance() const { return covariance_.block<3, 3>(3, 3); }
   const Eigen::Matrix3d& dR_dbg() const { return dR_dbg_; }
-  const Eigen::Matrix3d& dp_dbg() const { return dp_dbg_; }      // Eq. (28)
-  const Eigen::Matrix3d& dp_dbv() const { return dp_dbv_; }      // Eq. (29)
+  const Eigen::Matrix3d& dp_dbg() const { return dp_dbg_; }        // Eq. (28)
+  const Eigen::Matrix3d& dp_dbv() const { return dp_dbv_; }        // Eq. (29)
   const Eigen::Matrix3d& dp_dtheta() const { return dp_dtheta_; }  // R_B,Bo <- R Exp(theta)
   const Eigen::Vector3d& bias_gyro_lin() const { return bias_gyro_lin_; }
   const Eigen::Vector3d& bias_vel_lin() const { return bias_vel_lin_; }

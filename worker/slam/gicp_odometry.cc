@@ -94,8 +94,8 @@ std::vector<RelativePoseMeasurement> relative_poses_from_scans(
     const std::vector<PointCloud>& scans, const Pose3& T_body_sensor,
     const std::vector<Pose3>& initial_T_world_body, const GicpOdometryOptions& options) {
   if (scans.size() != initial_T_world_body.size()) {
-    throw std::invalid_argument("gicp odometry: " + std::to_string(scans.size()) +
-                                " scans but " + std::to_string(initial_T_world_body.size()) +
+    throw std::invalid_argument("gicp odometry: " + std::to_string(scans.size()) + " scans but " +
+                                std::to_string(initial_T_world_body.size()) +
                                 " initial poses; expected one per keyframe");
   }
   std::vector<Cloud::Ptr> clouds;

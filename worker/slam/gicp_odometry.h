@@ -13,12 +13,12 @@
 namespace keel::slam {
 
 struct GicpOdometryOptions {
-  double voxel_leaf_m = 0.2;            // downsampling before matching
+  double voxel_leaf_m = 0.2;  // downsampling before matching
   int max_iterations = 50;
   double max_correspondence_m = 1.0;
   double transformation_epsilon = 1e-8;
-  int normal_neighbors = 10;             // plane fit for the information
-  double max_planarity_ratio = 0.1;      // lambda_min / sum(lambda) of a usable plane
+  int normal_neighbors = 10;         // plane fit for the information
+  double max_planarity_ratio = 0.1;  // lambda_min / sum(lambda) of a usable plane
   // Point-to-plane residual sigma for the information H = sum J^T J / sigma^2. Neighbouring
   // residuals are not independent, so this is deliberately larger than the range noise.
   double point_sigma_m = 0.05;

@@ -5,8 +5,7 @@
 namespace keel::slam {
 
 ImuPreintegration::ImuPreintegration(const Eigen::Vector3d& bias_gyro_lin,
-                                     const Eigen::Vector3d& bias_accel_lin,
-                                     const ImuNoise& noise)
+                                     const Eigen::Vector3d& bias_accel_lin, const ImuNoise& noise)
     : bias_gyro_lin_(bias_gyro_lin), bias_accel_lin_(bias_accel_lin), noise_(noise) {}
 
 void ImuPreintegration::integrate(const Eigen::Vector3d& gyro_radps,

@@ -27,8 +27,7 @@ class ImuPreintegration {
 
   // Adds one sample held over dt_s (Forster Eq. (24)-(26) for the means, (62) for the noise,
   // App. B for the bias Jacobians).
-  void integrate(const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& accel_mps2,
-                 double dt_s);
+  void integrate(const Eigen::Vector3d& gyro_radps, const Eigen::Vector3d& accel_mps2, double dt_s);
 
   double dt_s() const { return dt_s_; }
   const Eigen::Matrix3d& delta_R() const { return delta_R_; }

@@ -130,8 +130,8 @@ std::vector<Edge> odometry_edges(const RefineInput& in, const RefineOptions& opt
     check_measurement(m, what);
     const int i = keyframe_index(t_ns, m.t_i_ns, tol, what + ".t_i");
     const int j = keyframe_index(t_ns, m.t_j_ns, tol, what + ".t_j");
-    if (i == j) throw std::invalid_argument(what + ": both stamps match keyframe " +
-                                            std::to_string(i));
+    if (i == j)
+      throw std::invalid_argument(what + ": both stamps match keyframe " + std::to_string(i));
     const DegeneracyReport report = analyze_degeneracy(m.information, opt.degeneracy);
     KeyframeEstimate& target = (*kf)[std::max(i, j)];
     target.odometry_degeneracy = report;
@@ -160,8 +160,8 @@ std::vector<Edge> loop_edges(const RefineInput& in, const RefineOptions& opt,
     check_measurement(m, what);
     const int i = keyframe_index(t_ns, m.t_i_ns, tol, what + ".t_i");
     const int j = keyframe_index(t_ns, m.t_j_ns, tol, what + ".t_j");
-    if (i == j) throw std::invalid_argument(what + ": both stamps match keyframe " +
-                                            std::to_string(i));
+    if (i == j)
+      throw std::invalid_argument(what + ": both stamps match keyframe " + std::to_string(i));
     edges.push_back(make_edge(m, m.information, i, j, in.T_body_imu));
   }
   return edges;
@@ -220,8 +220,7 @@ std::vector<Interval> preintegrate(const RefineInput& in, const std::vector<Pseu
   std::vector<Interval> out(t_ns.size() - 1);
   summary->num_imu_intervals_skipped = summary->num_dvl_intervals_skipped = 0;
   const TimeNs imu_gap = seconds_to_ns(opt.max_imu_gap_s);
-  const TimeNs pseudo_gap =
-      seconds_to_ns(std::min(opt.max_imu_gap_s, opt.reconcile.max_dvl_gap_s));
+  const TimeNs pseudo_gap = seconds_to_ns(std::min(opt.max_imu_gap_s, opt.reconcile.max_dvl_gap_s));
   const Eigen::Matrix3d R_imu_dvl = block_rotation(s.q_imu_dvl.data());
   for (size_t k = 0; k + 1 < t_ns.size(); ++k) {
     if (opt.use_imu) {
@@ -229,20 +228,23 @@ std::vector<Interval> preintegrate(const RefineInput& in, const std::vector<Pseu
       const bool ok = for_each_hold_segment(
           in.imu, t_ns[k], t_ns[k + 1], imu_gap,
           [&](const ImuSample& m, double dt) { pre->integrate(m.gyro_radps, m.accel_mps2, dt); });
-      if (ok) out[k].imu = pre;
-      else ++summary->num_imu_intervals_skipped;
+      if (ok)
+        out[k].imu = pre;
+      else
+        ++summary->num_imu_intervals_skipped;
     }
     if (opt.use_dvl && !in.dvl.empty()) {
-      auto pre = std::make_shared<DvlPreintegration>(vec(s.bg[k]), vec(s.bv[k]), s.scale,
-                                                     R_imu_dvl, opt.dvl_noise,
-                                                     opt.imu_noise.gyro_noise_density);
-      const bool ok = for_each_hold_segment(pseudo, t_ns[k], t_ns[k + 1], pseudo_gap,
-                                            [&](const PseudoSample& m, double dt) {
-                                              pre->integrate(m.gyro_radps, m.velocity_dvl_mps,
-                                                             dt, m.dvl_period_s);
-                                            });
-      if (ok) out[k].dvl = pre;
-      else ++summary->num_dvl_intervals_skipped;
+      auto pre =
+          std::make_shared<DvlPreintegration>(vec(s.bg[k]), vec(s.bv[k]), s.scale, R_imu_dvl,
+                                              opt.dvl_noise, opt.imu_noise.gyro_noise_density);
+      const bool ok = for_each_hold_segment(
+          pseudo, t_ns[k], t_ns[k + 1], pseudo_gap, [&](const PseudoSample& m, double dt) {
+            pre->integrate(m.gyro_radps, m.velocity_dvl_mps, dt, m.dvl_period_s);
+          });
+      if (ok)
+        out[k].dvl = pre;
+      else
+        ++summary->num_dvl_intervals_skipped;
     }
   }
   return out;
@@ -331,12 +333,14 @@ class GraphBuilder {
     Eigen::VectorXd b(1);
     b(0) = opt_.dvl_scale_initial;
     p.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, &s_->scale);
-    p.AddResidualBlock(new RotationPriorFactor(
-                           R_imu_dvl_prior, Eigen::Matrix3d::Identity() /
-                                                opt_.dvl_rotation_prior_sigma_rad),
-                       nullptr, s_->q_imu_dvl.data());
-    if (!opt_.estimate_dvl_scale || num_dvl_ == 0) p.SetParameterBlockConstant(&s_->scale);
-    else p.SetParameterLowerBound(&s_->scale, 0, 0.5);
+    p.AddResidualBlock(
+        new RotationPriorFactor(R_imu_dvl_prior,
+                                Eigen::Matrix3d::Identity() / opt_.dvl_rotation_prior_sigma_rad),
+        nullptr, s_->q_imu_dvl.data());
+    if (!opt_.estimate_dvl_scale || num_dvl_ == 0)
+      p.SetParameterBlockConstant(&s_->scale);
+    else
+      p.SetParameterLowerBound(&s_->scale, 0, 0.5);
     if (!opt_.estimate_dvl_rotation || num_dvl_ == 0) {
       p.SetParameterBlockConstant(s_->q_imu_dvl.data());
     }
@@ -352,7 +356,10 @@ class GraphBuilder {
   }
 
   void set_lever_arm(const Eigen::Vector3d& t_imu_dvl) { t_imu_dvl_ = t_imu_dvl; }
-  void reset_usage(size_t n) { vel_used_.assign(n, false); num_dvl_ = 0; }
+  void reset_usage(size_t n) {
+    vel_used_.assign(n, false);
+    num_dvl_ = 0;
+  }
   int num_dvl() const { return num_dvl_; }
 
  private:
@@ -536,9 +543,8 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   Covariances cov;
   if (opt.covariances != CovarianceScope::kNone) {
     const Clock::time_point t_cov = Clock::now();
-    summary.covariance_ok =
-        compute_covariances(graph->problem(), s, opt.covariances == CovarianceScope::kAll,
-                            opt.num_threads, &cov);
+    summary.covariance_ok = compute_covariances(
+        graph->problem(), s, opt.covariances == CovarianceScope::kAll, opt.num_threads, &cov);
     summary.covariance_time_s = seconds_since(t_cov);
   }
 
@@ -560,7 +566,8 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   }
   result.dvl_scale = s.scale;
   result.dvl_scale_sigma = std::sqrt(std::max(0.0, cov.scale_var));
-  result.q_body_dvl = Eigen::Quaterniond(in.T_body_imu.linear() * block_rotation(s.q_imu_dvl.data()));
+  result.q_body_dvl =
+      Eigen::Quaterniond(in.T_body_imu.linear() * block_rotation(s.q_imu_dvl.data()));
   result.dvl_rotation_covariance = cov.rotation;  // R_body_imu R Exp(d) = R_body_dvl Exp(d)
   summary.total_time_s = seconds_since(t_start);
   return result;

@@ -37,16 +37,17 @@
 namespace keel::slam {
 
 enum class DegeneracyHandling {
-  kDropFactor,            // seed 000: rely on IMU and DVL factors (default)
-  kKeepWellConditioned,   // keep the odometry's well-observed directions only
-  kIgnore,                // flag, but keep the factor as it is
+  kDropFactor,           // seed 000: rely on IMU and DVL factors (default)
+  kKeepWellConditioned,  // keep the odometry's well-observed directions only
+  kIgnore,               // flag, but keep the factor as it is
 };
 
 // Which marginal covariances to compute after the solve (Ceres covariance, SPARSE_QR).
 enum class CovarianceScope {
   kNone,
-  kCalibration,  // s_d and the DVL-IMU extrinsic rotation only
-  kAll,          // also every keyframe's pose and biases (costs more than the solve)
+  kCalibration,  // s_d and the DVL-IMU extrinsic rotation only (~0.3 s, 10-minute mission)
+  kAll,          // also every keyframe's pose and biases: ~10x the solve time, since
+                 // SPARSE_QR recovers one column of the inverse per tangent dimension
 };
 
 struct RefineOptions {
@@ -98,7 +99,7 @@ struct RefineOptions {
   // Solve, re-preintegrate at the new biases / s_d / extrinsic, solve again: keeps the
   // first-order corrections of Eq. (27) and [27] Eq. (44) small.
   int relinearization_passes = 2;
-  CovarianceScope covariances = CovarianceScope::kAll;
+  CovarianceScope covariances = CovarianceScope::kCalibration;
 };
 
 struct RefineInput {
@@ -118,13 +119,13 @@ struct KeyframeEstimate {
   // Tangent [delta p (world, m), delta phi (body, rad)], T = (p + dp, R Exp(dphi)).
   Matrix6d pose_covariance = Matrix6d::Zero();
   Eigen::Vector3d velocity_imu_world_mps = Eigen::Vector3d::Zero();  // of the IMU origin
-  Eigen::Vector3d bias_gyro_radps = Eigen::Vector3d::Zero();   // b^w, IMU frame
-  Eigen::Vector3d bias_accel_mps2 = Eigen::Vector3d::Zero();   // b^a, IMU frame
-  Eigen::Vector3d bias_dvl_mps = Eigen::Vector3d::Zero();      // b^v, IMU frame (Eq. (11))
+  Eigen::Vector3d bias_gyro_radps = Eigen::Vector3d::Zero();         // b^w, IMU frame
+  Eigen::Vector3d bias_accel_mps2 = Eigen::Vector3d::Zero();         // b^a, IMU frame
+  Eigen::Vector3d bias_dvl_mps = Eigen::Vector3d::Zero();            // b^v, IMU frame (Eq. (11))
   Eigen::Matrix3d bias_gyro_covariance = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d bias_accel_covariance = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d bias_dvl_covariance = Eigen::Matrix3d::Zero();
-  bool degenerate = false;   // its incoming odometry edge was degenerate
+  bool degenerate = false;  // its incoming odometry edge was degenerate
   bool biases_zeroed = false;
   // Factors over the interval from the previous keyframe to this one.
   bool has_odometry_factor = false;

@@ -31,8 +31,7 @@ Pose3 interpolate_pose(const Trajectory& trajectory, TimeNs t_ns) {
   if (it->t_ns == t_ns) return it->T_world_body;
   const StampedPose& b = *it;
   const StampedPose& a = *(it - 1);
-  const double alpha =
-      static_cast<double>(t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
+  const double alpha = static_cast<double>(t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
   const Eigen::Quaterniond qa(a.T_world_body.linear());
   const Eigen::Quaterniond qb(b.T_world_body.linear());
   return make_pose(qa.slerp(alpha, qb), (1.0 - alpha) * a.T_world_body.translation() +

@@ -123,12 +123,13 @@ SimilarityTransform umeyama_alignment(const std::vector<Eigen::Vector3d>& x,
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(sigma, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Vector3d d = svd.singularValues();
   if (var_x <= 0.0 || d(1) <= 1e-12 * std::max(1.0, d(0))) {
-    throw std::invalid_argument("umeyama_alignment: degenerate point sets (coincident or collinear)");
+    throw std::invalid_argument(
+        "umeyama_alignment: degenerate point sets (coincident or collinear)");
   }
   Eigen::Matrix3d S = Eigen::Matrix3d::Identity();  // Eq. (39)
   if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0) S(2, 2) = -1.0;
   SimilarityTransform out;
-  out.R = svd.matrixU() * S * svd.matrixV().transpose();  // Eq. (40)
+  out.R = svd.matrixU() * S * svd.matrixV().transpose();                // Eq. (40)
   out.scale = with_scale ? (d.asDiagonal() * S).trace() / var_x : 1.0;  // Eq. (42)
   out.t = my - out.scale * out.R * mx;                                  // Eq. (41)
   return out;
@@ -209,8 +210,10 @@ void associated_poses(const Trajectory& reference, const Trajectory& estimate,
                       std::vector<Pose3>* est) {
   const Association a = associate_by_time(reference, estimate, options);
   if (a.reference_index.empty()) {
-    throw std::invalid_argument("no matching timestamps between the reference and the estimate "
-                                "within " + std::to_string(options.max_difference_s) + " s");
+    throw std::invalid_argument(
+        "no matching timestamps between the reference and the estimate "
+        "within " +
+        std::to_string(options.max_difference_s) + " s");
   }
   for (size_t k = 0; k < a.reference_index.size(); ++k) {
     ref->push_back(reference[a.reference_index[k]].T_world_body);
@@ -243,8 +246,8 @@ RpeResult relative_pose_error(const std::vector<Pose3>& reference,
     if (!options.pairs_from_reference) {
       for (const Pose3& T : estimate) aligned.push_back(S.apply(T));
     }
-    r.pairs = path_pairs(options.pairs_from_reference ? reference : aligned, options.delta, options.delta * options.rel_tolerance,
-                         options.all_pairs);
+    r.pairs = path_pairs(options.pairs_from_reference ? reference : aligned, options.delta,
+                         options.delta * options.rel_tolerance, options.all_pairs);
   }
   if (r.pairs.empty()) {
     throw std::invalid_argument("relative_pose_error: delta " + std::to_string(options.delta) +

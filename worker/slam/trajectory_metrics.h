@@ -55,9 +55,9 @@ Association associate_by_time(const Trajectory& reference, const Trajectory& est
                               const AssociationOptions& options = {});
 
 struct AteResult {
-  ErrorStatistics translation_m;   // |t_est' - t_ref|
-  ErrorStatistics rotation_deg;    // angle of R_ref^T R_est'
-  SimilarityTransform alignment;   // applied to the estimate
+  ErrorStatistics translation_m;  // |t_est' - t_ref|
+  ErrorStatistics rotation_deg;   // angle of R_ref^T R_est'
+  SimilarityTransform alignment;  // applied to the estimate
   std::vector<double> translation_errors_m;
 };
 

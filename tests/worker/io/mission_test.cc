@@ -181,3 +181,33 @@ TEST(MissionReader, ReadsEverySourceOfTheFileBundle) {
 
 }  // namespace
 }  // namespace keel::io
+
+namespace keel::io {
+namespace {
+
+// Seed 001's servo tray: a servo with an axis, and tray sensors naming it.
+TEST(Manifest, ServoTrayFieldsRoundTripAndAreChecked) {
+  const nlohmann::json servo = {{"name", "servo"}, {"type", "servo"}, {"file", "servo.csv"},
+                                {"rate_hz", 20}, {"axis", {0.0, -2.0, 0.0}}};
+  nlohmann::json dvl = {{"name", "dvl"}, {"type", "dvl"}, {"file", "dvl.csv"}, {"rate_hz", 20},
+                        {"mounted_on", "servo"}};
+  nlohmann::json doc = {{"keel_mission", 1}, {"name", "tray"}, {"sensors", {servo, dvl}}};
+  expect_error([&] { proto::MissionManifest::from_json(doc); }, {"sensors[0].axis", "unit vector"});
+  doc["sensors"][0]["axis"] = {0.0, -1.0, 0.0};
+  const auto m = proto::MissionManifest::from_json(doc);
+  ASSERT_TRUE(m.sensors[0].axis.has_value());
+  EXPECT_EQ((*m.sensors[0].axis)[1], -1.0);
+  EXPECT_EQ(m.sensors[1].mounted_on, "servo");
+  EXPECT_EQ(proto::MissionManifest::from_json(m.to_json()).to_json(), m.to_json());
+
+  doc["sensors"][1]["mounted_on"] = "imu";
+  expect_error([&] { proto::MissionManifest::from_json(doc); },
+               {"sensors[1].mounted_on", "'imu' is not a servo"});
+  doc["sensors"][1]["mounted_on"] = "servo";
+  doc["sensors"][1]["axis"] = {0.0, 0.0, 1.0};
+  expect_error([&] { proto::MissionManifest::from_json(doc); },
+               {"sensors[1].axis", "only servo sensors"});
+}
+
+}  // namespace
+}  // namespace keel::io

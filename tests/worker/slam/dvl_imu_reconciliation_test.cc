@@ -106,9 +106,8 @@ TEST(HoldSegments, TileTheIntervalWithClippedPieces) {
   };
   const std::vector<S> s = {{0, 0}, {10, 1}, {20, 2}, {30, 3}};
   std::vector<std::pair<int, double>> pieces;
-  ASSERT_TRUE(for_each_hold_segment(s, 5, 25, 100, [&](const S& m, double dt) {
-    pieces.emplace_back(m.id, dt);
-  }));
+  ASSERT_TRUE(for_each_hold_segment(s, 5, 25, 100,
+                                    [&](const S& m, double dt) { pieces.emplace_back(m.id, dt); }));
   ASSERT_EQ(pieces.size(), 3u);
   EXPECT_EQ(pieces[0].first, 0);
   EXPECT_DOUBLE_EQ(pieces[0].second, 5e-9);

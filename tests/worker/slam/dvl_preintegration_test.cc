@@ -51,8 +51,8 @@ TEST(DvlPreintegration, CircularArcMatchesClosedForm) {
   const Eigen::Vector3d v(1.2, 0.1, 0.05);
   const double s_d = 1.02;
   const Eigen::Vector3d b(0.01, -0.02, 0.0);
-  DvlPreintegration pre(Eigen::Vector3d::Zero(), b, s_d, Eigen::Matrix3d::Identity(),
-                        DvlNoise{}, 5.7e-4);
+  DvlPreintegration pre(Eigen::Vector3d::Zero(), b, s_d, Eigen::Matrix3d::Identity(), DvlNoise{},
+                        5.7e-4);
   for (int k = 0; k < N; ++k) pre.integrate(Eigen::Vector3d(0, 0, w), s_d * v + b, dt, 0.05);
 
   const std::complex<double> z = std::polar(1.0, w * dt);
@@ -177,8 +177,8 @@ TEST(DvlPreintegration, DvlRateNoiseThroughAlgorithm1MatchesCovariance) {
   std::normal_distribution<double> nv(0.0, noise.velocity_sigma_floor_mps);
   const int runs = 2000;
   Eigen::Matrix3d mc = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d predicted;
-  Eigen::Vector3d mean_truth;
+  Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d mean_truth = Eigen::Vector3d::Zero();
   for (int r = -1; r < runs; ++r) {  // r = -1: the noise-free reference
     std::vector<DvlSample> dvl;
     for (int l = 0; l <= static_cast<int>(T / dvl_dt); ++l) {
@@ -191,11 +191,10 @@ TEST(DvlPreintegration, DvlRateNoiseThroughAlgorithm1MatchesCovariance) {
     const auto pseudo = reconcile_dvl_imu(dvl, imu, Eigen::Matrix3d::Identity());
     DvlPreintegration pre(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 1.0,
                           Eigen::Matrix3d::Identity(), noise, 0.0);
-    ASSERT_TRUE(for_each_hold_segment(pseudo, 0, seconds_to_ns(T), seconds_to_ns(0.1),
-                                      [&](const PseudoSample& p, double dt) {
-                                        pre.integrate(p.gyro_radps, p.velocity_dvl_mps, dt,
-                                                      p.dvl_period_s);
-                                      }));
+    ASSERT_TRUE(for_each_hold_segment(
+        pseudo, 0, seconds_to_ns(T), seconds_to_ns(0.1), [&](const PseudoSample& p, double dt) {
+          pre.integrate(p.gyro_radps, p.velocity_dvl_mps, dt, p.dvl_period_s);
+        }));
     if (r < 0) {
       predicted = pre.position_covariance();
       mean_truth = pre.delta_p();

@@ -78,7 +78,9 @@ void expect_jacobians_match(const ceres::CostFunction& f, const std::vector<Bloc
     }
     const double scale = std::max(1.0, numeric.cwiseAbs().maxCoeff());
     EXPECT_LT((J - numeric).cwiseAbs().maxCoeff(), rel_tol * scale)
-        << "parameter block " << b << "\nanalytic\n" << J << "\nnumeric\n" << numeric;
+        << "parameter block " << b << "\nanalytic\n"
+        << J << "\nnumeric\n"
+        << numeric;
   }
 }
 
@@ -116,10 +118,9 @@ TEST(FactorJacobians, RelativePose) {
   T.linear() = so3_exp(Eigen::Vector3d(0.1, -0.3, 0.7));
   T.translation() = Eigen::Vector3d(1.0, 0.4, -0.2);
   RelativePoseFactor f(T, random_sqrt_info(6, 1));
-  expect_jacobians_match(f,
-                         {pose_block({0.2, 0.1, -0.4}, {1, 2, 3}),
-                          pose_block({0.5, -0.2, 0.1}, {2.1, 2.2, 2.7})},
-                         {&kPose, &kPose});
+  expect_jacobians_match(
+      f, {pose_block({0.2, 0.1, -0.4}, {1, 2, 3}), pose_block({0.5, -0.2, 0.1}, {2.1, 2.2, 2.7})},
+      {&kPose, &kPose});
 }
 
 TEST(FactorJacobians, PosePriorAndRotationPrior) {
@@ -150,11 +151,13 @@ std::shared_ptr<ImuPreintegration> imu_preintegration() {
 TEST(FactorJacobians, ImuWithAndWithoutPositionResidual) {
   const auto pre = imu_preintegration();
   const std::vector<Block> blocks = {
-      pose_block({0.1, -0.05, 0.3}, {1, 2, 0.5}), vec(1.0, 0.3, -0.1),
+      pose_block({0.1, -0.05, 0.3}, {1, 2, 0.5}),
+      vec(1.0, 0.3, -0.1),
       vec(0.015, -0.025, 0.012),  // b^w away from the linearisation point
       vec(0.12, -0.03, -0.09),    // b^a likewise
-      pose_block({0.15, 0.02, 0.7}, {2.1, 2.5, 0.4}), vec(1.1, 0.5, 0.0)};
-  const std::vector<const ceres::Manifold*> man = {&kPose,   nullptr, nullptr,
+      pose_block({0.15, 0.02, 0.7}, {2.1, 2.5, 0.4}),
+      vec(1.1, 0.5, 0.0)};
+  const std::vector<const ceres::Manifold*> man = {&kPose,  nullptr, nullptr,
                                                    nullptr, &kPose,  nullptr};
   for (bool with_position : {true, false}) {
     ImuFactor f(pre, Eigen::Vector3d(0, 0, -9.81), imu_sqrt_information(*pre, with_position));
@@ -173,10 +176,12 @@ TEST(FactorJacobians, Dvl) {
   }
   DvlFactor f(pre, Eigen::Vector3d(0.3, -0.1, -0.5),
               sqrt_information_from_covariance(pre->position_covariance()));
-  const std::vector<Block> blocks = {
-      pose_block({0.1, -0.05, 0.3}, {1, 2, 0.5}),  vec(0.012, 0.003, -0.008),
-      vec(0.025, -0.012, 0.004),                   pose_block({0.12, -0.02, 0.62}, {2.1, 2.4, 0.5}),
-      Block{1.03},                                 rotation_block({0.01, 0.03, 0.12})};
+  const std::vector<Block> blocks = {pose_block({0.1, -0.05, 0.3}, {1, 2, 0.5}),
+                                     vec(0.012, 0.003, -0.008),
+                                     vec(0.025, -0.012, 0.004),
+                                     pose_block({0.12, -0.02, 0.62}, {2.1, 2.4, 0.5}),
+                                     Block{1.03},
+                                     rotation_block({0.01, 0.03, 0.12})};
   const std::vector<const ceres::Manifold*> man = {&kPose, nullptr, nullptr,
                                                    &kPose, nullptr, &kRotation};
   // Whitened by a ~1e4 sqrt-information, so compare relative to the entries' scale.

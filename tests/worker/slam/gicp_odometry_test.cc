@@ -24,17 +24,32 @@ PointCloud scan(const Pose3& T_world_body, bool corridor, unsigned seed) {
     const int face = k % (corridor ? 3 : 6);
     Eigen::Vector3d p;
     if (corridor) {  // walls y = +-3, floor z = -1.5, along x in [-15, 15]
-      if (face == 0) p = {15 * a, 3, 1.5 * b};
-      else if (face == 1) p = {15 * a, -3, 1.5 * b};
-      else p = {15 * a, 3 * b, -1.5};
+      if (face == 0)
+        p = {15 * a, 3, 1.5 * b};
+      else if (face == 1)
+        p = {15 * a, -3, 1.5 * b};
+      else
+        p = {15 * a, 3 * b, -1.5};
     } else {  // room [-8, 8] x [-5, 5] x [-2, 2] with a pillar for good measure
       switch (face) {
-        case 0: p = {8, 5 * a, 2 * b}; break;
-        case 1: p = {-8, 5 * a, 2 * b}; break;
-        case 2: p = {8 * a, 5, 2 * b}; break;
-        case 3: p = {8 * a, -5, 2 * b}; break;
-        case 4: p = {8 * a, 5 * b, -2}; break;
-        default: p = {2 + 0.5 * a, 1 + 0.5 * b, 2 * u(rng)}; break;
+        case 0:
+          p = {8, 5 * a, 2 * b};
+          break;
+        case 1:
+          p = {-8, 5 * a, 2 * b};
+          break;
+        case 2:
+          p = {8 * a, 5, 2 * b};
+          break;
+        case 3:
+          p = {8 * a, -5, 2 * b};
+          break;
+        case 4:
+          p = {8 * a, 5 * b, -2};
+          break;
+        default:
+          p = {2 + 0.5 * a, 1 + 0.5 * b, 2 * u(rng)};
+          break;
       }
     }
     world.push_back(p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -39,8 +41,8 @@ TEST(RefineSolver, LowersAteBelowOdometryAndFurtherWithDvl) {
   const double ate_odom = ate_rmse(m.ground_truth, m.odometry);
   const double ate_dvl = ate_rmse(m.ground_truth, a.trajectory());
   const double ate_imu = ate_rmse(m.ground_truth, b.trajectory());
-  std::printf("ATE rmse: odometry %.3f m, refined without DVL %.3f m, with DVL %.3f m\n",
-              ate_odom, ate_imu, ate_dvl);
+  std::printf("ATE rmse: odometry %.3f m, refined without DVL %.3f m, with DVL %.3f m\n", ate_odom,
+              ate_imu, ate_dvl);
   EXPECT_LT(ate_dvl, ate_odom);
   EXPECT_LT(ate_dvl, ate_imu);
   EXPECT_GT(a.summary.num_dvl_factors, 100);
@@ -121,7 +123,9 @@ TEST(RefineSolver, HandlesABodyFrameDifferentFromTheImuFrame) {
   o.odom_yaw_drift_radps = 0.0;  // an unbiased odometry, so the gyro bias is unbiased too
   o.gyro_bias_radps = Eigen::Vector3d(2e-3, -1e-3, 3e-3);
   const SyntheticMission m = make_synthetic_mission(o);
-  const RefineResult r = refine_trajectory(m.input, RefineOptions{});
+  RefineOptions opt;
+  opt.covariances = CovarianceScope::kAll;
+  const RefineResult r = refine_trajectory(m.input, opt);
   EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()), 0.5 * ate_rmse(m.ground_truth, m.odometry));
   // The gyro bias is estimated and reported in the IMU frame (a frame mix-up would permute
   // and flip its x and y components, errors of ~3e-3 rad/s).
@@ -133,6 +137,13 @@ TEST(RefineSolver, HandlesABodyFrameDifferentFromTheImuFrame) {
         << k << ": " << last.bias_gyro_radps.transpose() << " sigma " << sigma;
     EXPECT_LT(sigma, 1e-3);
   }
+  // Pose covariances come back in the body frame: positive definite, and the first keyframe
+  // (held by the prior r_0) is the most certain.
+  for (const KeyframeEstimate& e : r.keyframes) {
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix6d>(e.pose_covariance).eigenvalues()(0), 0.0);
+  }
+  EXPECT_LT(r.keyframes.front().pose_covariance.trace(),
+            r.keyframes.back().pose_covariance.trace());
 }
 
 TEST(RefineSolver, LoopClosuresAloneCorrectDrift) {
@@ -146,8 +157,7 @@ TEST(RefineSolver, LoopClosuresAloneCorrectDrift) {
   pose_graph.use_imu = pose_graph.use_dvl = false;
   const RefineResult r = refine_trajectory(m.input, pose_graph);
   EXPECT_EQ(r.summary.num_imu_factors, 0);
-  EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()),
-            0.7 * ate_rmse(m.ground_truth, m.odometry));
+  EXPECT_LT(ate_rmse(m.ground_truth, r.trajectory()), 0.7 * ate_rmse(m.ground_truth, m.odometry));
 }
 
 TEST(RefineSolver, RejectsBadInputWithClearErrors) {

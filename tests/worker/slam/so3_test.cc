@@ -32,9 +32,9 @@ TEST(So3, RightJacobianMatchesFiniteDifferences) {
     numeric.col(k) = so3_log(so3_exp(phi).transpose() * so3_exp(phi + d)) / h;
   }
   EXPECT_LT((numeric - right_jacobian(phi)).norm(), 1e-5);
-  EXPECT_LT((right_jacobian(phi) * right_jacobian_inverse(phi) - Eigen::Matrix3d::Identity())
-                .norm(),
-            1e-12);
+  EXPECT_LT(
+      (right_jacobian(phi) * right_jacobian_inverse(phi) - Eigen::Matrix3d::Identity()).norm(),
+      1e-12);
 }
 
 TEST(So3, HatIsTheCrossProduct) {

@@ -138,8 +138,8 @@ SyntheticMission make_synthetic_mission(const SyntheticMissionOptions& o) {
         const double gap = ns_to_seconds(m.ground_truth[j].t_ns - m.ground_truth[i].t_ns);
         const Pose3& Ti = m.ground_truth[i].T_world_body;
         const Pose3& Tj = m.ground_truth[j].T_world_body;
-        if (gap < o.loop_min_gap_s || (Ti.translation() - Tj.translation()).norm() >
-                                          o.loop_max_distance_m) {
+        if (gap < o.loop_min_gap_s ||
+            (Ti.translation() - Tj.translation()).norm() > o.loop_max_distance_m) {
           continue;
         }
         RelativePoseMeasurement e;

@@ -27,8 +27,8 @@ struct SyntheticMissionOptions {
   Eigen::Vector3d accel_bias_mps2{0.02, -0.01, 0.015};
   DvlNoise dvl_noise;  // white noise used: hypot(floor, rel |v|) per sample
   Eigen::Vector3d dvl_bias_mps{1e-3, -5e-4, 0.0};  // constant, DVL frame
-  double dvl_scale = 1.0;                            // true s_d
-  double dvl_dropout_start_s = -1.0;                 // < 0: none
+  double dvl_scale = 1.0;                          // true s_d
+  double dvl_dropout_start_s = -1.0;               // < 0: none
   double dvl_dropout_duration_s = 0.0;
 
   Pose3 T_body_imu = Pose3::Identity();
@@ -54,9 +54,9 @@ struct SyntheticMissionOptions {
 };
 
 struct SyntheticMission {
-  RefineInput input;           // keyframes initialised from the odometry
-  Trajectory ground_truth;     // true T_world_body at the keyframe stamps
-  Trajectory odometry;         // the drifting odometry at the keyframe stamps
+  RefineInput input;                   // keyframes initialised from the odometry
+  Trajectory ground_truth;             // true T_world_body at the keyframe stamps
+  Trajectory odometry;                 // the drifting odometry at the keyframe stamps
   std::vector<bool> degenerate_truth;  // per keyframe: inside the degenerate segment
 };
 

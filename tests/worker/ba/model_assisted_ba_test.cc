@@ -1,0 +1,182 @@
+// Model-assisted BA end to end on a simulated hull patch with a 10 cm bump that is not in the
+// CAD (seed 001, Sec. 4.1): `proposed` keeps the bump (labels it lambda = 0), `geva` pulls it
+// toward the CAD, `naive` has no surface help. Checked against the simulator's ground truth.
+#include "worker/ba/model_assisted_ba.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+#include "tests/worker/ba/ba_synthetic.h"
+#include "worker/ba/mesh_query.h"
+#include "worker/ba/surface_factor.h"
+
+namespace keel::ba {
+namespace {
+
+struct ModeMetrics {
+  double bump_mean_height_error_m = 0;    // mean |h_est - h_true| on the bump's top
+  double bump_median_height_error_m = 0;
+  double bump_mean_signed_error_m = 0;    // mean (h_est - h_true): < 0 is flattening
+  double bump_lambda0_fraction = 0;
+  double on_model_rms_error_m = 0;        // landmark position error, h_true ~ 0
+  double on_model_lambda1_fraction = 0;
+  int bump_count = 0, on_model_count = 0;
+};
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// h_true is the truth landmark's signed distance to the CAD at the true x_gM; h_est is the
+// estimate's at the estimated x_gM (what the inspect stage will use).
+ModeMetrics metrics(const testing::SyntheticHull& sim, const BaModeResult& r) {
+  ModeMetrics m;
+  std::vector<double> bump_abs;
+  double on_sq = 0;
+  int on_lambda1 = 0, bump_lambda0 = 0;
+  for (const BaLandmark& l : r.landmarks) {
+    const double h_true = sim.landmark_height_m[l.id];
+    if (h_true > 0.08) {
+      bump_abs.push_back(std::abs(l.signed_distance_m - h_true));
+      m.bump_mean_signed_error_m += l.signed_distance_m - h_true;
+      bump_lambda0 += l.lambda == 0;
+    } else if (std::abs(h_true) < 0.005) {
+      on_sq += (l.position_world - sim.landmarks_world[l.id]).squaredNorm();
+      on_lambda1 += l.lambda == 1;
+      ++m.on_model_count;
+    }
+  }
+  m.bump_count = static_cast<int>(bump_abs.size());
+  if (m.bump_count > 0) {
+    m.bump_mean_height_error_m =
+        std::accumulate(bump_abs.begin(), bump_abs.end(), 0.0) / m.bump_count;
+    m.bump_median_height_error_m = median(bump_abs);
+    m.bump_mean_signed_error_m /= m.bump_count;
+    m.bump_lambda0_fraction = double(bump_lambda0) / m.bump_count;
+  }
+  if (m.on_model_count > 0) {
+    m.on_model_rms_error_m = std::sqrt(on_sq / m.on_model_count);
+    m.on_model_lambda1_fraction = double(on_lambda1) / m.on_model_count;
+  }
+  return m;
+}
+
+void print(const char* name, const BaModeResult& r, const ModeMetrics& m) {
+  std::printf("%-9s iters %3d  time %.2fs  cost %.1f -> %.1f  bump |dh| mean %.4f med %.4f "
+              "signed %.4f  lambda0 %.2f (n=%d)  on-model rms %.4f lambda1 %.2f (n=%d)\n",
+              name, r.iterations, r.solve_time_s, r.initial_cost, r.final_cost,
+              m.bump_mean_height_error_m, m.bump_median_height_error_m, m.bump_mean_signed_error_m,
+              m.bump_lambda0_fraction, m.bump_count, m.on_model_rms_error_m,
+              m.on_model_lambda1_fraction, m.on_model_count);
+}
+
+double rms(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s / std::max<size_t>(1, v.size()));
+}
+
+void run_and_check(const testing::SyntheticHullOptions& sim_options) {
+  const testing::SyntheticHull sim = testing::make_synthetic_hull(sim_options);
+  BaOptions options;
+  const BaResult result = run_model_assisted_ba(sim.problem, options);
+  ASSERT_EQ(result.modes.size(), 3u);
+  const BaModeResult& naive = *result.find(BaMode::kNaive);
+  const BaModeResult& geva = *result.find(BaMode::kGeva);
+  const BaModeResult& proposed = *result.find(BaMode::kProposed);
+  const ModeMetrics mn = metrics(sim, naive), mg = metrics(sim, geva), mp = metrics(sim, proposed);
+  print("naive", naive, mn);
+  print("geva", geva, mg);
+  print("proposed", proposed, mp);
+  std::printf("landmarks %d/%d, dvl %d/%d, gicp %d fitness %.4g, dvl rms initial %.4f final %.4f\n",
+              result.landmarks_triangulated, result.tracks_in, result.dvl_ranges_used,
+              result.dvl_ranges_in, result.gicp_converged, result.gicp_fitness,
+              rms(proposed.dvl_residuals_initial_m), rms(proposed.dvl_residuals_final_m));
+
+  ASSERT_GE(mp.bump_count, 30);
+  ASSERT_GE(mp.on_model_count, 100);
+  for (const BaModeResult* r : {&naive, &geva, &proposed}) {
+    EXPECT_LT(r->final_cost, r->initial_cost);
+    EXPECT_EQ(r->landmarks.size(), size_t(result.landmarks_triangulated));
+  }
+  // proposed recovers the bump: heights within 1.5 cm, labelled foreign (lambda = 0).
+  EXPECT_LT(mp.bump_mean_height_error_m, 0.015);
+  EXPECT_LT(std::abs(mp.bump_mean_signed_error_m), 0.015);
+  EXPECT_GE(mp.bump_lambda0_fraction, 0.95);
+  EXPECT_GE(mp.on_model_lambda1_fraction, 0.95);
+  // geva pulls the bump toward the CAD: a clear negative height bias, worse than proposed.
+  EXPECT_LT(mg.bump_mean_signed_error_m, -0.02);
+  EXPECT_GT(mg.bump_mean_height_error_m, 2.0 * mp.bump_mean_height_error_m);
+  // naive: no surface help, worse on-model landmarks than proposed.
+  EXPECT_GT(mn.on_model_rms_error_m, mp.on_model_rms_error_m);
+  // Fig. 16 curve: initial state plus one entry per iteration, fractions in [0, 1].
+  EXPECT_TRUE(naive.lambda1_fraction_per_iteration.empty());
+  ASSERT_FALSE(proposed.lambda1_fraction_per_iteration.empty());
+  EXPECT_GE(proposed.lambda1_fraction_per_iteration.size(), size_t(proposed.iterations));
+  for (double f : proposed.lambda1_fraction_per_iteration) {
+    EXPECT_GE(f, 0.0);
+    EXPECT_LE(f, 1.0);
+  }
+  // The last Fig. 16 entry is the final state's label fraction.
+  const double final_fraction =
+      std::count_if(proposed.landmarks.begin(), proposed.landmarks.end(),
+                    [](const BaLandmark& l) { return l.lambda == 1; }) /
+      double(proposed.landmarks.size());
+  EXPECT_NEAR(proposed.lambda1_fraction_per_iteration.back(), final_fraction, 0.01);
+  // Fig. 18: BA tightens the DVL residuals; the servo angles are recovered.
+  EXPECT_LT(rms(proposed.dvl_residuals_final_m), rms(proposed.dvl_residuals_initial_m));
+  EXPECT_LT(rms(proposed.dvl_residuals_final_m), 0.01);
+  double servo_err = 0;
+  for (size_t i = 0; i < sim.servo_angle_rad.size(); ++i) {
+    servo_err = std::max(servo_err, std::abs(proposed.servo_angle_rad[i] - sim.servo_angle_rad[i]));
+  }
+  EXPECT_LT(servo_err, 0.5 * kDegToRad);
+}
+
+TEST(ModelAssistedBa, MonocularProposedKeepsTheBumpGevaFlattensIt) {
+  testing::SyntheticHullOptions o;
+  run_and_check(o);
+}
+
+TEST(ModelAssistedBa, StereoProposedKeepsTheBumpGevaFlattensIt) {
+  testing::SyntheticHullOptions o;
+  o.stereo = true;
+  o.seed = 11;
+  run_and_check(o);
+}
+
+TEST(ModelAssistedBa, RejectsBadInputNamingTheField) {
+  testing::SyntheticHullOptions o;
+  o.landmarks = 50;
+  testing::SyntheticHull sim = testing::make_synthetic_hull(o);
+  BaProblem bad = sim.problem;
+  bad.keyframes[3].t_ns = bad.keyframes[2].t_ns;
+  try {
+    run_model_assisted_ba(bad);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("keyframes[3].t_ns"), std::string::npos) << e.what();
+  }
+  bad = sim.problem;
+  bad.tracks[1].observations[0].keyframe = 100000;
+  EXPECT_THROW(run_model_assisted_ba(bad), std::invalid_argument);
+  bad = sim.problem;
+  bad.dvl_ranges[0].range_m = std::nan("");
+  try {
+    run_model_assisted_ba(bad);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("dvl_ranges[0].range_m"), std::string::npos) << e.what();
+  }
+  bad = sim.problem;
+  bad.cad_mesh.faces.clear();
+  EXPECT_THROW(run_model_assisted_ba(bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace keel::ba

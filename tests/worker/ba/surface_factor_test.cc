@@ -1,0 +1,146 @@
+// The surface constraint, Eq. (4)-(7) of seed 001: the max-mixture picks the component of
+// larger likelihood, its cost is -log of the normalised max-mixture (continuous at the
+// switch), and h is the signed distance (closed forms on a box).
+#include "worker/ba/surface_factor.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <memory>
+
+#include "tests/worker/ba/mesh_fixtures.h"
+#include "worker/ba/pose_block.h"
+
+namespace keel::ba {
+namespace {
+
+// -log of the normalised Gaussian density N(e; 0, sigma^2).
+double neg_log_gaussian(double e, double sigma) {
+  return 0.5 * e * e / (sigma * sigma) + std::log(sigma) + 0.5 * std::log(2 * M_PI);
+}
+
+TEST(MaxMixture, PicksTheMoreLikelyComponent) {
+  const MaxMixture mixture{1.0, 0.02};
+  for (double e : {0.0, 0.01, -0.03, 0.05, -0.055}) EXPECT_EQ(mixture.label(e), 1) << e;
+  for (double e : {0.057, -0.06, 0.1, -0.3, 2.0}) EXPECT_EQ(mixture.label(e), 0) << e;
+  // Brute force over both normalised densities.
+  for (double e = -0.5; e <= 0.5; e += 0.001) {
+    const int expected = neg_log_gaussian(e, 0.02) <= neg_log_gaussian(e, 1.0) ? 1 : 0;
+    EXPECT_EQ(mixture.label(e), expected) << e;
+  }
+}
+
+TEST(MaxMixture, SwitchingDistanceClosedForm) {
+  const MaxMixture mixture{1.0, 0.02};
+  // e^2 / s1^2 + 2 log s1 = e^2 / s0^2 + 2 log s0  =>  e^2 = 2 log(50) / (2500 - 1).
+  const double expected = std::sqrt(2.0 * std::log(50.0) / (2500.0 - 1.0));
+  EXPECT_NEAR(mixture.switching_distance_m(), expected, 1e-12);
+  EXPECT_NEAR(expected, 0.05596, 1e-5);  // the "about 5 cm" of Fig. 7
+}
+
+TEST(MaxMixture, CostIsNegLogOfNormalisedMaxMixtureUpToAConstant) {
+  const MaxMixture mixture{1.0, 0.02};
+  // -log(eta max_l N(e; 0, s_l^2)) - (-log N(0; 0, s_1^2)) equals our cost for every e.
+  const double constant = neg_log_gaussian(0.0, 0.02);
+  for (double e = -1.0; e <= 1.0; e += 0.0037) {
+    const double reference =
+        std::min(neg_log_gaussian(e, 0.02), neg_log_gaussian(e, 1.0)) - constant;
+    EXPECT_NEAR(mixture.cost(e), reference, 1e-9) << e;
+  }
+}
+
+TEST(MaxMixture, CostIsContinuousAcrossTheSwitch) {
+  const MaxMixture mixture{1.0, 0.02};
+  const double s = mixture.switching_distance_m();
+  for (double sign : {1.0, -1.0}) {
+    for (double eps : {1e-4, 1e-6, 1e-8}) {
+      const double inside = sign * (s - eps), outside = sign * (s + eps);
+      ASSERT_EQ(mixture.label(inside), 1);
+      ASSERT_EQ(mixture.label(outside), 0);
+      // Lipschitz bound: the steeper component has slope s / sigma_1^2 at the switch.
+      const double slope = s / (0.02 * 0.02);
+      EXPECT_LE(std::abs(mixture.cost(outside) - mixture.cost(inside)), 2.0 * eps * slope * 1.01)
+          << "eps " << eps;
+    }
+  }
+  // The jump a cost without the normalisation residual would have at the switch.
+  const double unnormalised_jump = 0.5 * s * s * (1.0 / (0.02 * 0.02) - 1.0);
+  EXPECT_GT(unnormalised_jump, 3.0);
+}
+
+// The Ceres factor on a box [0,1]^3 placed by x_gM: h against closed-form signed distances
+// (face, edge and vertex regions, inside and outside), residuals per component and mode.
+class SurfaceFactorOnBox : public ::testing::Test {
+ protected:
+  SurfaceFactorOnBox() : mesh_(testing::make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones())) {
+    T_world_model_ = make_pose(
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -2, 0.5).normalized())),
+        Eigen::Vector3d(2.0, -1.0, 0.5));
+  }
+  // Residuals of the factor for a landmark given in the model frame.
+  Eigen::Vector2d residuals(const Eigen::Vector3d& l_model, SurfaceMode mode) {
+    std::unique_ptr<ceres::CostFunction> f(make_surface_factor(mesh_, mixture_, mode, 0.0));
+    PoseBlock model = to_pose_block(T_world_model_);
+    Eigen::Vector3d l_world = T_world_model_ * l_model;
+    double* blocks[2] = {model.data(), l_world.data()};
+    Eigen::Vector2d r;
+    EXPECT_TRUE(f->Evaluate(blocks, r.data(), nullptr));
+    return r;
+  }
+  MeshQuery mesh_;
+  Pose3 T_world_model_;
+  MaxMixture mixture_{1.0, 0.02};
+};
+
+TEST_F(SurfaceFactorOnBox, SignedDistanceMatchesClosedForm) {
+  struct Case {
+    Eigen::Vector3d p;
+    double h;
+  };
+  const Case cases[] = {
+      {{0.5, 0.5, 1.3}, 0.3},                    // above the top face
+      {{0.5, 0.5, 0.9}, -0.1},                   // inside, nearest the top face
+      {{0.3, -0.02, 0.4}, 0.02},                 // just outside a side face
+      {{1.2, 0.5, 1.2}, std::sqrt(0.08)},        // edge region
+      {{-0.1, -0.2, 1.2}, std::sqrt(0.09)},      // vertex region
+      {{0.5, 0.45, 0.5}, -0.45},                 // deep inside
+  };
+  for (const Case& c : cases) {
+    EXPECT_NEAR(signed_distance_to_model(mesh_, T_world_model_, T_world_model_ * c.p), c.h, 1e-9)
+        << c.p.transpose();
+    // Residual 0 is (z_s - h) / sigma_lambda with z_s = 0.
+    const Eigen::Vector2d r = residuals(c.p, SurfaceMode::kOnModel);
+    EXPECT_NEAR(r[0], -c.h / 0.02, 1e-6);
+    EXPECT_EQ(r[1], 0.0);
+  }
+}
+
+TEST_F(SurfaceFactorOnBox, MaxMixtureResidualsPerComponent) {
+  // 2 cm outside the top face: lambda = 1, r = [-h / sigma_1, 0].
+  Eigen::Vector2d r = residuals({0.5, 0.5, 1.02}, SurfaceMode::kMaxMixture);
+  EXPECT_NEAR(r[0], -1.0, 1e-9);
+  EXPECT_NEAR(r[1], 0.0, 1e-12);
+  // 30 cm outside: lambda = 0, r = [-h / sigma_0, sqrt(2 log(sigma_0 / sigma_1))].
+  r = residuals({0.5, 0.5, 1.3}, SurfaceMode::kMaxMixture);
+  EXPECT_NEAR(r[0], -0.3, 1e-9);
+  EXPECT_NEAR(r[1], std::sqrt(2.0 * std::log(50.0)), 1e-12);
+  EXPECT_NEAR(0.5 * r.squaredNorm(), mixture_.cost(-0.3), 1e-12);
+  // geva keeps lambda = 1 however far.
+  r = residuals({0.5, 0.5, 1.3}, SurfaceMode::kOnModel);
+  EXPECT_NEAR(r[0], -0.3 / 0.02, 1e-9);
+}
+
+TEST_F(SurfaceFactorOnBox, FactorCostContinuousAtTheSwitch) {
+  const double s = mixture_.switching_distance_m();
+  const double eps = 1e-7;
+  const Eigen::Vector2d below = residuals({0.5, 0.5, 1.0 + s - eps}, SurfaceMode::kMaxMixture);
+  const Eigen::Vector2d above = residuals({0.5, 0.5, 1.0 + s + eps}, SurfaceMode::kMaxMixture);
+  EXPECT_EQ(below[1], 0.0);  // lambda = 1 side
+  EXPECT_GT(above[1], 0.0);  // lambda = 0 side
+  EXPECT_NEAR(0.5 * below.squaredNorm(), 0.5 * above.squaredNorm(), 1e-3);
+}
+
+}  // namespace
+}  // namespace keel::ba

@@ -1,0 +1,309 @@
+#include "worker/ba/ba_graph.h"
+
+#include <ceres/ceres.h>
+
+#include <array>
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+
+#include "worker/ba/odometry_factor.h"
+#include "worker/ba/pose_block.h"
+#include "worker/ba/prior_factors.h"
+#include "worker/ba/reprojection_factors.h"
+#include "worker/ba/rig_geometry.h"
+#include "worker/ba/surface_factor.h"
+
+namespace keel::ba {
+namespace {
+
+// Fig. 16: the fraction of lambda = 1 after every iteration. The surface factors write their
+// labels whenever Ceres evaluates Jacobians, which it does exactly at accepted states, so the
+// slots describe the current state when the callback runs.
+class LabelFractionCallback : public ceres::IterationCallback {
+ public:
+  LabelFractionCallback(const std::vector<uint8_t>& labels, std::vector<double>& fractions)
+      : labels_(labels), fractions_(fractions) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    size_t on = 0;
+    for (uint8_t l : labels_) on += l;
+    fractions_.push_back(labels_.empty() ? 0.0 : double(on) / double(labels_.size()));
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::vector<uint8_t>& labels_;
+  std::vector<double>& fractions_;
+};
+
+class BaGraph {
+ public:
+  BaGraph(const BaProblem& problem, const MeshQuery& mesh, const BaInitialState& initial,
+          BaMode mode, const BaOptions& options)
+      : problem_(problem),
+        mesh_(mesh),
+        initial_(initial),
+        mode_(mode),
+        options_(options),
+        mount_(servo_mount(problem.rig)),
+        pose_manifold_(make_pose_manifold()),
+        reprojection_loss_(std::make_unique<ceres::HuberLoss>(options.reprojection_huber)),
+        dvl_loss_(std::make_unique<ceres::HuberLoss>(options.dvl_huber)),
+        ceres_problem_(problem_options()) {
+    init_variables();
+    add_priors();
+    add_odometry();
+    add_camera_factors();
+    add_dvl_factors();
+    if (mode_ != BaMode::kNaive) add_surface_factors();
+  }
+
+  BaModeResult solve() {
+    BaModeResult result;
+    result.mode = mode_;
+    result.dvl_residuals_initial_m = residuals_now();
+    ceres::Solver::Options solver = solver_options();
+    LabelFractionCallback callback(labels_, result.lambda1_fraction_per_iteration);
+    if (mode_ != BaMode::kNaive) solver.callbacks.push_back(&callback);
+    ceres::Solver::Summary summary;
+    const auto start = std::chrono::steady_clock::now();
+    ceres::Solve(solver, &ceres_problem_, &summary);
+    result.solve_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+    result.initial_cost = summary.initial_cost;
+    result.final_cost = summary.final_cost;
+    result.converged = summary.termination_type == ceres::CONVERGENCE;
+    result.termination = summary.message;
+    read_back(result);
+    result.dvl_residuals_final_m = residuals_now();
+    return result;
+  }
+
+ private:
+  static ceres::Problem::Options problem_options() {
+    ceres::Problem::Options o;
+    o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return o;
+  }
+
+  void add_pose_block(PoseBlock& block) {
+    ceres_problem_.AddParameterBlock(block.data(), kPoseBlockSize, pose_manifold_.get());
+  }
+
+  void init_variables() {
+    const size_t n = initial_.T_world_vehicle.size();
+    poses_.resize(n);
+    servo_ = initial_.servo_angle_rad;
+    for (size_t i = 0; i < n; ++i) {
+      poses_[i] = to_pose_block(initial_.T_world_vehicle[i]);
+      add_pose_block(poses_[i]);
+      ceres_problem_.AddParameterBlock(&servo_[i], 1);
+    }
+    model_ = to_pose_block(initial_.T_world_model);
+    extrinsic_ = to_pose_block(initial_.T_servo_camera);
+    add_pose_block(model_);
+    add_pose_block(extrinsic_);
+    landmarks_.resize(initial_.landmarks_world.size());
+    for (size_t k = 0; k < landmarks_.size(); ++k) {
+      const Eigen::Vector3d& l = initial_.landmarks_world[k];
+      landmarks_[k] = {l.x(), l.y(), l.z()};
+      ceres_problem_.AddParameterBlock(landmarks_[k].data(), 3);
+    }
+  }
+
+  void add_priors() {
+    const BaOptions& o = options_;
+    // Eq. (8): x_gM from GICP with Sigma = I_6; the first pose (gauge); x_sc_T.
+    ceres_problem_.AddResidualBlock(
+        make_pose_prior_factor(initial_.T_world_model, o.model_prior_sigma_m,
+                               o.model_prior_sigma_rad),
+        nullptr, model_.data());
+    ceres_problem_.AddResidualBlock(
+        make_pose_prior_factor(initial_.T_world_vehicle.front(), o.first_pose_prior_sigma_m,
+                               o.first_pose_prior_sigma_rad),
+        nullptr, poses_.front().data());
+    ceres_problem_.AddResidualBlock(
+        make_pose_prior_factor(initial_.T_servo_camera, o.extrinsic_prior_sigma_m,
+                               o.extrinsic_prior_sigma_rad),
+        nullptr, extrinsic_.data());
+    for (size_t i = 0; i < poses_.size(); ++i) {
+      const BaKeyframe& k = problem_.keyframes[i];
+      const DepthPitchRoll zpr =
+          k.depth_pitch_roll ? *k.depth_pitch_roll : depth_pitch_roll_of(k.T_world_vehicle);
+      ceres_problem_.AddResidualBlock(  // Eq. (9)
+          make_depth_pitch_roll_factor(zpr, o.depth_sigma_m, o.pitch_sigma_rad, o.roll_sigma_rad),
+          nullptr, poses_[i].data());
+      ceres_problem_.AddResidualBlock(  // Eq. (10)
+          make_servo_angle_factor(k.servo_angle_rad, o.servo_sigma_rad), nullptr, &servo_[i]);
+    }
+  }
+
+  void add_odometry() {
+    for (const BaOdometry& odo : problem_.odometry) {
+      const double dt_s =
+          ns_to_seconds(problem_.keyframes[odo.to].t_ns - problem_.keyframes[odo.from].t_ns);
+      const OdometrySigmas sigmas =
+          odometry_sigmas(dt_s, options_.odometry_sigma_m_per_s, options_.odometry_sigma_rad_per_s,
+                          options_.odometry_min_sigma_m, options_.odometry_min_sigma_rad);
+      ceres_problem_.AddResidualBlock(make_odometry_factor(odo.T_from_to, sigmas), nullptr,
+                                      poses_[odo.from].data(), poses_[odo.to].data());
+    }
+  }
+
+  void add_camera_factors() {
+    const BaRig& rig = problem_.rig;
+    for (size_t k = 0; k < initial_.tracks.size(); ++k) {
+      for (const FeatureObservation& obs : initial_.tracks[k].observations) {
+        ceres::CostFunction* factor =
+            obs.pixel_bottom && rig.camera_bottom
+                ? make_stereo_factor(rig.camera_top, *rig.camera_bottom, rig.T_top_bottom, mount_,
+                                     obs.pixel, *obs.pixel_bottom, options_.pixel_sigma)  // Eq. 12
+                : make_monocular_factor(rig.camera_top, mount_, obs.pixel,
+                                        options_.pixel_sigma);  // Eq. 13
+        ceres_problem_.AddResidualBlock(factor, reprojection_loss_.get(),
+                                        poses_[obs.keyframe].data(), &servo_[obs.keyframe],
+                                        extrinsic_.data(), landmarks_[k].data());
+      }
+    }
+  }
+
+  void add_dvl_factors() {
+    for (size_t b = 0; b < initial_.beams.size(); ++b) {
+      const int i = initial_.beam_keyframe[b];
+      ceres_problem_.AddResidualBlock(  // Eq. (14)
+          make_dvl_raycast_factor(mesh_, mount_, initial_.beams[b], options_.dvl_sigma_m,
+                                  options_.dvl_max_range_m, options_.dvl_gate_m),
+          dvl_loss_.get(), poses_[i].data(), &servo_[i], model_.data());
+    }
+  }
+
+  void add_surface_factors() {
+    const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
+    const SurfaceMode mode =
+        mode_ == BaMode::kGeva ? SurfaceMode::kOnModel : SurfaceMode::kMaxMixture;
+    labels_.assign(landmarks_.size(), 0);
+    for (size_t k = 0; k < landmarks_.size(); ++k) {
+      ceres_problem_.AddResidualBlock(  // Eq. (4)-(7)
+          make_surface_factor(mesh_, mixture, mode, options_.surface_offset_m, &labels_[k]),
+          nullptr, model_.data(), landmarks_[k].data());
+    }
+  }
+
+  ceres::Solver::Options solver_options() {
+    ceres::Solver::Options s;
+    s.max_num_iterations = options_.max_iterations;
+    s.num_threads = options_.num_threads;
+    s.function_tolerance = options_.function_tolerance;
+    s.gradient_tolerance = options_.gradient_tolerance;
+    s.parameter_tolerance = options_.parameter_tolerance;
+    s.logging_type = ceres::SILENT;
+    if (options_.linear_solver == "sparse_schur") {
+      s.linear_solver_type = ceres::SPARSE_SCHUR;
+    } else if (options_.linear_solver == "iterative_schur") {
+      s.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      s.preconditioner_type = ceres::SCHUR_JACOBI;
+    } else if (options_.linear_solver == "dense_schur") {
+      s.linear_solver_type = ceres::DENSE_SCHUR;
+    } else {
+      throw std::invalid_argument("ba options: linear_solver: expected sparse_schur, "
+                                  "iterative_schur or dense_schur, got '" +
+                                  options_.linear_solver + "'");
+    }
+    // Schur elimination: landmarks first, then every other variable.
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (auto& l : landmarks_) ordering->AddElementToGroup(l.data(), 0);
+    for (size_t i = 0; i < poses_.size(); ++i) {
+      ordering->AddElementToGroup(poses_[i].data(), 1);
+      ordering->AddElementToGroup(&servo_[i], 1);
+    }
+    ordering->AddElementToGroup(model_.data(), 1);
+    ordering->AddElementToGroup(extrinsic_.data(), 1);
+    s.linear_solver_ordering = ordering;
+    return s;
+  }
+
+  std::vector<Pose3> current_poses() const {
+    std::vector<Pose3> out;
+    for (const auto& p : poses_) out.push_back(from_pose_block(p.data()));
+    return out;
+  }
+
+  std::vector<double> residuals_now() const {
+    return dvl_range_residuals(mesh_, mount_, initial_.beams, initial_.beam_keyframe,
+                               current_poses(), servo_, from_pose_block(model_.data()),
+                               options_.dvl_max_range_m);
+  }
+
+  void read_back(BaModeResult& result) const {
+    result.T_world_vehicle = current_poses();
+    result.servo_angle_rad = servo_;
+    result.T_world_model = from_pose_block(model_.data());
+    result.T_servo_camera = from_pose_block(extrinsic_.data());
+    for (size_t i = 0; i < poses_.size(); ++i) {
+      result.T_world_camera.push_back(world_camera_pose(result.T_world_vehicle[i], servo_[i],
+                                                        mount_, result.T_servo_camera));
+    }
+    // h and lambda at the final state, Eq. (5) and (7).
+    const Pose3 T_model_world = result.T_world_model.inverse();
+    std::vector<Eigen::Vector3d> in_model;
+    for (const auto& l : landmarks_) in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
+    const std::vector<double> h = mesh_.signed_distances(in_model, options_.num_threads);
+    const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
+    for (size_t k = 0; k < landmarks_.size(); ++k) {
+      BaLandmark l;
+      l.id = initial_.tracks[k].landmark_id;
+      l.position_world = Eigen::Vector3d(landmarks_[k][0], landmarks_[k][1], landmarks_[k][2]);
+      l.signed_distance_m = h[k];
+      l.lambda = mixture.label(options_.surface_offset_m - h[k]);
+      for (const auto& obs : initial_.tracks[k].observations) l.keyframes.push_back(obs.keyframe);
+      result.landmarks.push_back(std::move(l));
+    }
+  }
+
+  const BaProblem& problem_;
+  const MeshQuery& mesh_;
+  const BaInitialState& initial_;
+  BaMode mode_;
+  const BaOptions& options_;
+  ServoMount mount_;
+  std::unique_ptr<ceres::Manifold> pose_manifold_;
+  std::unique_ptr<ceres::LossFunction> reprojection_loss_;
+  std::unique_ptr<ceres::LossFunction> dvl_loss_;
+  // Parameter storage; Ceres keeps pointers into it, so sizes are fixed before any block.
+  std::vector<PoseBlock> poses_;
+  std::vector<double> servo_;
+  PoseBlock model_{};
+  PoseBlock extrinsic_{};
+  std::vector<std::array<double, 3>> landmarks_;
+  std::vector<uint8_t> labels_;
+  ceres::Problem ceres_problem_;
+};
+
+}  // namespace
+
+BaModeResult solve_ba_mode(const BaProblem& problem, const MeshQuery& mesh,
+                           const BaInitialState& initial, BaMode mode, const BaOptions& options) {
+  if (initial.T_world_vehicle.empty()) throw std::invalid_argument("ba: no keyframes");
+  BaGraph graph(problem, mesh, initial, mode, options);
+  return graph.solve();
+}
+
+std::vector<double> dvl_range_residuals(const MeshQuery& mesh, const ServoMount& mount,
+                                        const std::vector<DvlBeam>& beams,
+                                        const std::vector<int>& beam_keyframe,
+                                        const std::vector<Pose3>& T_world_vehicle,
+                                        const std::vector<double>& servo_angle_rad,
+                                        const Pose3& T_world_model, double max_range_m) {
+  std::vector<double> residuals;
+  for (size_t b = 0; b < beams.size(); ++b) {
+    const int i = beam_keyframe[b];
+    const auto range = predict_dvl_range(mesh, mount, beams[b], T_world_vehicle[i],
+                                         servo_angle_rad[i], T_world_model, max_range_m);
+    if (range) residuals.push_back(beams[b].range_m - *range);
+  }
+  return residuals;
+}
+
+}  // namespace keel::ba

@@ -1,0 +1,110 @@
+#include "worker/ba/model_assisted_ba.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "worker/ba/ba_graph.h"
+#include "worker/ba/feature_frontend.h"
+#include "worker/ba/gicp_alignment.h"
+#include "worker/ba/mesh_query.h"
+#include "worker/ba/rig_geometry.h"
+#include "worker/ba/triangulation.h"
+
+namespace keel::ba {
+namespace {
+
+// Step 2.
+std::vector<FeatureTrack> feature_tracks(const BaProblem& problem, const BaOptions& options,
+                                         BaResult& result) {
+  if (!problem.tracks.empty()) return problem.tracks;
+  FrontendOutput frontend = run_frontend(problem.keyframes, problem.rig, options.frontend);
+  result.frontend = frontend.stats;
+  return std::move(frontend.tracks);
+}
+
+// Step 3.
+void triangulate(const std::vector<FeatureTrack>& tracks, const BaProblem& problem,
+                 const BaOptions& options, BaInitialState& state) {
+  const ServoMount mount = servo_mount(problem.rig);
+  std::vector<Pose3> T_world_camera;
+  for (size_t i = 0; i < state.T_world_vehicle.size(); ++i) {
+    T_world_camera.push_back(world_camera_pose(state.T_world_vehicle[i], state.servo_angle_rad[i],
+                                               mount, state.T_servo_camera));
+  }
+  for (const FeatureTrack& track : tracks) {
+    const auto point = triangulate_track(track, T_world_camera, problem.rig, options.triangulation);
+    if (!point) continue;
+    state.tracks.push_back(track);
+    state.landmarks_world.push_back(*point);
+  }
+}
+
+// Step 4: DVL returns in the world frame from the initial (SLAM-corrected) poses.
+std::vector<Eigen::Vector3d> dvl_returns_world(const BaProblem& problem) {
+  const ServoMount mount = servo_mount(problem.rig);
+  std::vector<Eigen::Vector3d> points;
+  for (const DvlRange& r : problem.dvl_ranges) {
+    const BaKeyframe& k = problem.keyframes[r.keyframe];
+    const Pose3 T_world_dvl =
+        k.T_world_vehicle * mount.T_vehicle_servo(k.servo_angle_rad) * problem.rig.T_servo_dvl;
+    points.push_back(T_world_dvl * (r.range_m * r.direction_dvl));
+  }
+  return points;
+}
+
+// Step 5.
+void gate_beams(const BaProblem& problem, const MeshQuery& mesh, const BaOptions& options,
+                BaInitialState& state) {
+  const ServoMount mount = servo_mount(problem.rig);
+  for (const DvlRange& r : problem.dvl_ranges) {
+    const DvlBeam beam = make_dvl_beam(problem.rig.T_servo_dvl, r.direction_dvl, r.range_m);
+    const auto range = predict_dvl_range(mesh, mount, beam, state.T_world_vehicle[r.keyframe],
+                                         state.servo_angle_rad[r.keyframe], state.T_world_model,
+                                         options.dvl_max_range_m);
+    if (!range || std::abs(*range - r.range_m) > options.dvl_gate_m) continue;
+    state.beams.push_back(beam);
+    state.beam_keyframe.push_back(r.keyframe);
+  }
+}
+
+}  // namespace
+
+BaResult run_model_assisted_ba(const BaProblem& problem, const BaOptions& options) {
+  validate(problem);  // step 1
+  const MeshQuery mesh(problem.cad_mesh);
+  BaResult result;
+  BaInitialState state;
+  for (const BaKeyframe& k : problem.keyframes) {
+    state.T_world_vehicle.push_back(k.T_world_vehicle);
+    state.servo_angle_rad.push_back(k.servo_angle_rad);
+  }
+  state.T_servo_camera = problem.rig.T_servo_camera;
+
+  const std::vector<FeatureTrack> tracks = feature_tracks(problem, options, result);  // step 2
+  result.tracks_in = static_cast<int>(tracks.size());
+  triangulate(tracks, problem, options, state);  // step 3
+  result.landmarks_triangulated = static_cast<int>(state.tracks.size());
+  if (state.tracks.empty()) {
+    throw std::invalid_argument("ba: no feature track could be triangulated from the initial "
+                                "poses (" + std::to_string(tracks.size()) + " tracks)");
+  }
+
+  const GicpAlignment gicp = align_dvl_returns_to_model(  // step 4
+      dvl_returns_world(problem), problem.cad_mesh, problem.T_world_model_guess, options.gicp);
+  result.gicp_ran = gicp.ran;
+  result.gicp_converged = gicp.converged;
+  result.gicp_fitness = gicp.fitness;
+  state.T_world_model = gicp.T_world_model;
+  result.T_world_model_initial = gicp.T_world_model;
+
+  gate_beams(problem, mesh, options, state);  // step 5
+  result.dvl_ranges_in = static_cast<int>(problem.dvl_ranges.size());
+  result.dvl_ranges_used = static_cast<int>(state.beams.size());
+
+  for (BaMode mode : options.modes) {  // step 6
+    result.modes.push_back(solve_ba_mode(problem, mesh, state, mode, options));
+  }
+  return result;
+}
+
+}  // namespace keel::ba
