@@ -106,9 +106,11 @@ std::string ApiClient::create_upload(const std::string& name, int64_t size) {
 }
 
 bool ApiClient::blob_exists(const std::string& sha256) {
-  // Saves a re-upload when the same bytes were sent before (a re-run submit). Any answer
-  // but 200 (404, or a server without HEAD on blobs) just means "upload it".
-  return request("HEAD", "/v1/blobs/" + sha256).status == 200;
+  // Saves a re-upload when the same bytes were sent before (a submit re-run after its
+  // uploads completed). One byte is asked for: 206 means the blob is there, 416 that it is
+  // there and empty; anything else (404) means "upload it".
+  const int status = request("GET", "/v1/blobs/" + sha256, "", {{"Range", "bytes=0-0"}}).status;
+  return status == 206 || status == 416;
 }
 
 HttpResult ApiClient::put_chunk(const std::string& upload_id, const char* data, int64_t first,

@@ -194,7 +194,8 @@ struct UploadScript {
       return FakeReply{"HTTP/1.1 200 OK\r\nUpload-Offset: " + std::to_string(committed.size()) +
                        "\r\nUpload-Length: " + std::to_string(size) +
                        "\r\nContent-Length: 0\r\n\r\n"};
-    if (method == "HEAD") return FakeReply{"HTTP/1.1 404 X\r\nContent-Length: 0\r\n\r\n"};
+    if (method == "HEAD" || method == "GET")
+      return FakeReply{"HTTP/1.1 404 X\r\nContent-Length: 0\r\n\r\n"};
     if (method == "POST" && target == "/v1/uploads") {
       size = nlohmann::json::parse(request.body())["size"].get<int64_t>();
       return FakeReply{http_reply(201, upload_json())};
@@ -291,7 +292,8 @@ TEST(ApiClientUpload, GivesUpAfterTheConfiguredConsecutiveFailures) {
       return FakeReply{http_reply(201, R"({"id":"u1","name":"f","size":6,"offset":0,"blob":""})")};
     if (method == "HEAD" && r.target() == "/v1/uploads/u1")
       return FakeReply{"HTTP/1.1 200 OK\r\nUpload-Offset: 0\r\nContent-Length: 0\r\n\r\n"};
-    if (method == "HEAD") return FakeReply{"HTTP/1.1 404 X\r\nContent-Length: 0\r\n\r\n"};
+    if (method == "HEAD" || method == "GET")
+      return FakeReply{"HTTP/1.1 404 X\r\nContent-Length: 0\r\n\r\n"};
     ++puts;
     return FakeReply{http_reply(503, R"({"error":{"code":"internal","message":"disk full"}})")};
   });

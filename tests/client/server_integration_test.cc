@@ -153,7 +153,10 @@ TEST_F(ServerIntegration, ClientAndWorkerCallsRoundTrip) {
   submit.cache_dir = dir_.path() / "cache";
   submit.show_progress = false;
   const SubmitResult first = submit_mission(client, submit);
+  const int64_t sent = client.stats().upload_body_bytes;
+  EXPECT_GT(sent, 0);
   const SubmitResult again = submit_mission(client, submit);
+  EXPECT_EQ(client.stats().upload_body_bytes, sent) << "the bundle blob is on the server already";
   EXPECT_EQ(first.job.id, again.job.id) << "a re-run submit must not make a second job";
   EXPECT_EQ(first.mission.id, again.mission.id);
   EXPECT_EQ(first.job.state, proto::JobState::kQueued);

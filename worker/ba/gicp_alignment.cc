@@ -27,7 +27,9 @@ GicpAlignment align_dvl_returns_to_model(const std::vector<Eigen::Vector3d>& dvl
   gicp.setInputTarget(target);
   gicp.setMaxCorrespondenceDistance(options.max_correspondence_distance_m);
   gicp.setMaximumIterations(options.max_iterations);
-  gicp.setTransformationEpsilon(1e-8);
+  gicp.setTransformationEpsilon(1e-10);
+  gicp.setRotationEpsilon(1e-10);
+  gicp.setEuclideanFitnessEpsilon(1e-12);
   pcl::PointCloud<pcl::PointXYZ> aligned;
   const Eigen::Matrix4f guess = T_world_model_guess.inverse().matrix().cast<float>();
   gicp.align(aligned, guess);

@@ -20,8 +20,8 @@ struct CropBoxFilter {
 
 // Replaces the points of each occupied voxel by their centroid (the average intensity with it;
 // ring and per-point time are dropped, a centroid has neither). The grid is anchored at the
-// origin, voxel (i,j,k) = floor(p / leaf), as pcl::VoxelGrid's is; output is in (i,j,k)
-// lexicographic order. Voxel indices are 64-bit per axis: any extent/leaf works, including
+// origin, voxel (i,j,k) = floor(p / leaf), as pcl::VoxelGrid's is; output is in
+// first-occupied order. Voxel indices are 64-bit per axis: any extent/leaf works, including
 // those that overflow pcl::VoxelGrid's 32-bit linear index ("Leaf size is too small").
 struct VoxelGridFilter {
   double leaf_m = 0.05;

@@ -10,6 +10,7 @@
 
 #include "worker/mapping/parallel_for.h"
 #include "worker/mapping/radius_search.h"
+#include "worker/mapping/selection.h"
 
 namespace keel::mapping {
 namespace {
@@ -25,7 +26,7 @@ struct NeighbourhoodMetrics {
 // Scratch for one neighbourhood, reused across the queries of a thread.
 struct Scratch {
   std::vector<Eigen::Vector3f> neighbours;
-  std::vector<double> axis[3];
+  std::vector<float> axis[3];
 };
 
 // Coordinates are taken relative to the query point q, so q contributes zero to the sums.
@@ -46,9 +47,9 @@ NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& sc
     yy += y * y;
     yz += y * z;
     zz += z * z;
-    scratch.axis[0][m] = x;
-    scratch.axis[1][m] = y;
-    scratch.axis[2][m] = z;
+    scratch.axis[0][m] = d.x();
+    scratch.axis[1][m] = d.y();
+    scratch.axis[2][m] = d.z();
   }
   const Eigen::Vector3d sum(s[0], s[1], s[2]);
   Eigen::Matrix3d sum_outer;
@@ -69,11 +70,7 @@ NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& sc
   // Eq. (26) about the coordinate-wise median, Eq. (25) from its eigenvalues.
   if (n >= 3) {
     Eigen::Vector3d median;
-    for (int a = 0; a < 3; ++a) {
-      auto middle = scratch.axis[a].begin() + static_cast<std::ptrdiff_t>(n / 2);
-      std::nth_element(scratch.axis[a].begin(), middle, scratch.axis[a].end());
-      median[a] = *middle;
-    }
+    for (int a = 0; a < 3; ++a) median[a] = select_kth(scratch.axis[a].data(), n, n / 2);
     const double count = static_cast<double>(n);
     const Eigen::Vector3d mean = sum / count;
     // 1/N sum (v - m)(v - m)^T = S2/N - mean m^T - m mean^T + m m^T.
@@ -123,14 +120,19 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
 
   const RadiusSearch search(points);
   // Visit the queries in the search's Morton order: consecutive queries touch the same leaves.
-  std::vector<uint32_t> rank(points.size());
   const std::vector<uint32_t>& order = search.spatial_order();
-  for (size_t i = 0; i < order.size(); ++i) rank[order[i]] = static_cast<uint32_t>(i);
-  std::vector<uint32_t> visit(queries);
-  for (size_t q = 0; q < queries; ++q) visit[q] = static_cast<uint32_t>(q);
-  std::sort(visit.begin(), visit.end(), [&](uint32_t a, uint32_t b) {
-    return rank[out.query_index[a]] < rank[out.query_index[b]];
-  });
+  std::vector<uint32_t> visit;  // query numbers q in Morton order of their points
+  if (queries == points.size()) {
+    visit = order;  // query q is point q
+  } else {
+    std::vector<uint32_t> rank(points.size());
+    for (size_t i = 0; i < order.size(); ++i) rank[order[i]] = static_cast<uint32_t>(i);
+    visit.resize(queries);
+    for (size_t q = 0; q < queries; ++q) visit[q] = static_cast<uint32_t>(q);
+    std::sort(visit.begin(), visit.end(), [&](uint32_t a, uint32_t b) {
+      return rank[out.query_index[a]] < rank[out.query_index[b]];
+    });
+  }
 
   const double area = kPi * options.radius_m * options.radius_m;
   parallel_for(queries, options.threads, [&](size_t begin, size_t end) {

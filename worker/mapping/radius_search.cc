@@ -101,9 +101,9 @@ const nanoflann::SearchParams kUnsorted(32, 0.0f, false);
 struct RadiusSearch::Impl {
   PointSet set;                 // Morton order
   std::vector<uint32_t> order;  // set.points[i] = input[order[i]]
-  // Leaves of 16 points: a good balance for the small radii of DROR, ROR and the metrics.
+  static constexpr size_t kLeafSize = 32;
   Tree tree{3, set, nanoflann::KDTreeSingleIndexAdaptorParams(
-                        16, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)};
+                        kLeafSize, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)};
 };
 
 RadiusSearch::RadiusSearch(const std::vector<Eigen::Vector3f>& points)

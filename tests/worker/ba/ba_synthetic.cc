@@ -105,16 +105,22 @@ void add_keyframes(const SyntheticHullOptions& o, Noise& noise, SyntheticHull& o
                                                   truth.roll_rad + noise(o.attitude_noise_rad)};
     out.problem.keyframes.push_back(k);
   }
-  // Dead reckoning: noisy relative motions chained from the true first pose.
+  // Dead-reckoning odometry between consecutive keyframes (Eq. 11's measurements).
   auto& kf = out.problem.keyframes;
-  kf[0].T_world_vehicle = out.T_world_vehicle[0];
   for (size_t i = 1; i < kf.size(); ++i) {
     const double dt = ns_to_seconds(kf[i].t_ns - kf[i - 1].t_ns);
     const Pose3 truth = out.T_world_vehicle[i - 1].inverse() * out.T_world_vehicle[i];
     const Pose3 measured = truth * rotation_pose(noise.vec(o.odometry_noise_rad_per_s * dt),
                                                  noise.vec(o.odometry_noise_m_per_s * dt));
     out.problem.odometry.push_back({static_cast<int>(i - 1), static_cast<int>(i), measured});
-    kf[i].T_world_vehicle = kf[i - 1].T_world_vehicle * measured;
+  }
+  // SLAM-corrected initial poses: a drifting error on top of the truth.
+  Pose3 error = Pose3::Identity();
+  for (size_t i = 0; i < kf.size(); ++i) {
+    if (i > 0) {
+      error = error * rotation_pose(noise.vec(o.initial_pose_drift_rad), noise.vec(o.initial_pose_drift_m));
+    }
+    kf[i].T_world_vehicle = out.T_world_vehicle[i] * error;
   }
 }
 
@@ -227,12 +233,13 @@ SyntheticHull make_synthetic_hull(const SyntheticHullOptions& o) {
   out.problem.rig = make_rig(o);
   // The calibration handed to the BA is off by ~2 cm and ~0.6 degrees.
   out.problem.rig.T_servo_camera =
-      out.T_servo_camera * rotation_pose(Eigen::Vector3d(0.006, -0.008, 0.004),
-                                         Eigen::Vector3d(0.012, -0.01, 0.015));
+      out.T_servo_camera * rotation_pose(o.extrinsic_error_scale * Eigen::Vector3d(0.006, -0.008, 0.004),
+                                         o.extrinsic_error_scale * Eigen::Vector3d(0.012, -0.01, 0.015));
   out.problem.cad_mesh = make_hull_patch(o, false);
   // The CAD-to-world guess GICP starts from: ~15 cm and ~2 degrees off.
   out.problem.T_world_model_guess =
-      out.T_world_model * rotation_pose(Eigen::Vector3d(0.02, 0.015, -0.02), Eigen::Vector3d(0.1, -0.08, 0.08));
+      out.T_world_model * rotation_pose(o.model_guess_error_scale * Eigen::Vector3d(0.02, 0.015, -0.02),
+                                     o.model_guess_error_scale * Eigen::Vector3d(0.1, -0.08, 0.08));
   add_keyframes(o, noise, out);
   add_landmarks(o, noise, out);
   add_observations(o, noise, out);

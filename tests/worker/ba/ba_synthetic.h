@@ -3,7 +3,7 @@
 // an HAUV flying lawnmower lanes below it with its sensor tray servoed up at the hull, SIFT-like
 // feature tracks of landmarks on the real surface (monocular or stereo, pixel noise), noisy
 // dead-reckoning odometry (5 mm/s, 80 deg/h), noisy depth/pitch/roll, servo slop, four-beam
-// Janus DVL ranges cast against the real surface, a miscalibrated servo-camera extrinsic and a
+// Janus DVL ranges cast against the real surface, SLAM-corrected initial poses, a miscalibrated servo-camera extrinsic and a
 // CAD-to-world misalignment. Everything is generated from a seed; ground truth is returned.
 #pragma once
 
@@ -22,8 +22,8 @@ struct SyntheticHullOptions {
   double half_length_m = 2.5;
   double half_width_m = 1.8;
   double grid_m = 0.05;
-  double curvature_x = 0.02;
-  double curvature_y = 0.03;
+  double curvature_x = 0.06;
+  double curvature_y = 0.12;
   // Bump toward the vehicle (outside): flat top of `bump_height_m` within bump_radius_m of
   // bump_center, cosine fall-off over bump_falloff_m.
   Eigen::Vector2d bump_center = Eigen::Vector2d(0.2, 0.0);
@@ -43,12 +43,21 @@ struct SyntheticHullOptions {
   double stereo_baseline_m = 0.1;
   keel::ba::PinholeCamera camera{1000, 1000, 320, 240, 640, 480};
   double pixel_noise = 1.0;
+  // Initial poses are the online SLAM's (Sec. 2.5: "SLAM-corrected"): truth with a slowly
+  // drifting error, a random walk of these steps per keyframe (the first keyframe exact: it
+  // fixes the gauge). Odometry factors get their own dead-reckoning noise below.
+  double initial_pose_drift_m = 0.004;
+  double initial_pose_drift_rad = 0.03 * 0.017453292519943295;
   double odometry_noise_m_per_s = 0.005;
   double odometry_noise_rad_per_s = 80.0 * 0.017453292519943295 / 3600.0;
   double depth_noise_m = 0.01;
   double attitude_noise_rad = 0.05 * 0.017453292519943295;
   double servo_slop_rad = 1.0 * 0.017453292519943295;
   double dvl_noise_m = 0.003;
+  // Scales of the calibration error handed to the BA (~2 cm, ~0.6 deg) and of the error of
+  // the CAD-to-world guess GICP starts from (~15 cm, ~2 deg); 0 = exact.
+  double extrinsic_error_scale = 1.0;
+  double model_guess_error_scale = 1.0;
   uint32_t seed = 7;
 };
 

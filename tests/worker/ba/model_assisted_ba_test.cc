@@ -22,7 +22,7 @@ struct ModeMetrics {
   double bump_median_height_error_m = 0;
   double bump_mean_signed_error_m = 0;    // mean (h_est - h_true): < 0 is flattening
   double bump_lambda0_fraction = 0;
-  double on_model_rms_error_m = 0;        // landmark position error, h_true ~ 0
+  double on_model_rms_error_m = 0;        // RMS of h_est - h_true where h_true ~ 0
   double on_model_lambda1_fraction = 0;
   int bump_count = 0, on_model_count = 0;
 };
@@ -46,7 +46,7 @@ ModeMetrics metrics(const testing::SyntheticHull& sim, const BaModeResult& r) {
       m.bump_mean_signed_error_m += l.signed_distance_m - h_true;
       bump_lambda0 += l.lambda == 0;
     } else if (std::abs(h_true) < 0.005) {
-      on_sq += (l.position_world - sim.landmarks_world[l.id]).squaredNorm();
+      on_sq += (l.signed_distance_m - h_true) * (l.signed_distance_m - h_true);
       on_lambda1 += l.lambda == 1;
       ++m.on_model_count;
     }

@@ -99,10 +99,15 @@ void expect_voxel_grid_matches_oracle(const PointCloud& cloud, double leaf, doub
   apply_voxel_grid(VoxelGridFilter{leaf}, ours);
   const auto expected = oracle_voxels(cloud, leaf);
   ASSERT_EQ(ours.size(), expected.size());
-  size_t k = 0;
-  for (const auto& [key, centroid] : expected) {  // both in (i, j, k) order
-    ASSERT_LT((ours.xyz[k].cast<double>() - centroid).norm(), tolerance) << k;
-    ++k;
+  // Each output point is the centroid of the voxel it lies in (a voxel is convex).
+  for (size_t k = 0; k < ours.size(); ++k) {
+    const Eigen::Vector3f& p = ours.xyz[k];
+    const auto key = std::make_tuple(static_cast<int64_t>(std::floor(p.x() / leaf)),
+                                     static_cast<int64_t>(std::floor(p.y() / leaf)),
+                                     static_cast<int64_t>(std::floor(p.z() / leaf)));
+    const auto found = expected.find(key);
+    ASSERT_NE(found, expected.end()) << k;
+    ASSERT_LT((p.cast<double>() - found->second).norm(), tolerance) << k;
   }
 }
 
