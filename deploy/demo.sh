@@ -15,9 +15,9 @@ export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/keel-ccache}"
 cmake -G Ninja -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 ninja -C "$build" keel-server keel-worker keel keel-sim
 
-server_bin="$build/server/keel-server"
-keel_bin="$build/client/keel"
-sim_bin="$build/tests/sim/keel-sim"
+server_bin="$build/bin/keel-server"
+keel_bin="$build/bin/keel"
+sim_bin="$build/bin/keel-sim"
 data="$out/server-data"
 rm -rf "$data" "$out/mission" "$out/artifacts"
 mkdir -p "$data"

@@ -36,6 +36,7 @@ struct Settings {
   std::string listen = "127.0.0.1:8080";
   int workers = 1;
   std::string worker_binary;
+  int worker_lease_seconds = 30;
   uint64_t max_chunk_bytes = 64ull << 20;
   int threads = 2;
   double read_timeout_s = 30.0;
@@ -88,7 +89,8 @@ int run(const Settings& settings) {
           ? "http://127.0.0.1:" + std::to_string(server.port())
           : url;
   supervisor.start(
-      {"--server", worker_url, "--token-file", (settings.data_dir / "token").string()});
+      {"--server", worker_url, "--token-file", (settings.data_dir / "token").string(),
+       "--lease-seconds", std::to_string(settings.worker_lease_seconds)});
 
   std::cout << url << std::endl;
   spdlog::info("keel-server listening on {} with {} io threads, {} workers, data in {}", url,
@@ -117,6 +119,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--worker-binary", settings.worker_binary,
                  "keel-worker executable (default: next to keel-server)");
+  app.add_option("--worker-lease-seconds", settings.worker_lease_seconds,
+                 "lease the local workers ask for: a crashed worker's job is re-run after it")
+      ->check(CLI::Range(1, 3600));
   app.add_option("--max-chunk-bytes", settings.max_chunk_bytes, "largest upload chunk (PUT body)")
       ->check(CLI::Range(uint64_t{1}, uint64_t{1} << 34))
       ->capture_default_str();

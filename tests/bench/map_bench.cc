@@ -21,8 +21,8 @@
 
 namespace {
 
-using keel::Pose3;
 using keel::PointCloud;
+using keel::Pose3;
 using keel::TimeNs;
 using namespace keel::mapping;
 
@@ -147,10 +147,11 @@ void throughput(const char* label, bool with_map_filters, int scans, PointCloud*
   const double elapsed = seconds_since(start);
   const double cpu = cpu_seconds() - cpu_start;
   const SensorMapStats& stats = builder.stats("lidar_h");
-  std::printf("%-44s %9zu pts: wall %6.2f s = %5.2f M points/s; cpu %6.2f s = %5.2f M points/s "
-              "per 2 cores -> %zu map points\n",
-              label, points, elapsed, points / elapsed / 1e6, cpu, 2.0 * points / cpu / 1e6,
-              stats.points_out);
+  std::printf(
+      "%-44s %9zu pts: wall %6.2f s = %5.2f M points/s; cpu %6.2f s = %5.2f M points/s "
+      "per 2 cores -> %zu map points\n",
+      label, points, elapsed, points / elapsed / 1e6, cpu, 2.0 * points / cpu / 1e6,
+      stats.points_out);
   for (const FilterStep& step : stats.scan_stage.steps) {
     std::printf("    scan stage %-10s %10zu -> %10zu\n", step.filter.c_str(), step.points_in,
                 step.points_out);
@@ -165,10 +166,11 @@ void metrics_throughput(const PointCloud& map) {
   const MapMetrics metrics = compute_map_metrics(map, options);
   const double elapsed = seconds_since(start);
   const double cpu = cpu_seconds() - cpu_start;
-  std::printf("%-44s %9zu pts: wall %6.2f s = %5.2f M points/s; cpu %6.2f s = %5.2f M points/s "
-              "per 2 cores\n",
-              "metrics (r = 0.25 m, 2 threads)", metrics.query_points, elapsed,
-              metrics.query_points / elapsed / 1e6, cpu, 2.0 * metrics.query_points / cpu / 1e6);
+  std::printf(
+      "%-44s %9zu pts: wall %6.2f s = %5.2f M points/s; cpu %6.2f s = %5.2f M points/s "
+      "per 2 cores\n",
+      "metrics (r = 0.25 m, 2 threads)", metrics.query_points, elapsed,
+      metrics.query_points / elapsed / 1e6, cpu, 2.0 * metrics.query_points / cpu / 1e6);
   std::printf("    density mean %.1f /m^2, roughness mean %.4f m, planarity mean %.3f\n",
               metrics.surface_density.mean, metrics.roughness.mean, metrics.planarity.mean);
 }
@@ -191,7 +193,8 @@ int run_stream(double laps) {
 // Runs `bench_map --stream laps` as a fresh process (a forked child would start with this
 // process's pages counted in its RSS) and reads its peak RSS.
 double stream_peak_rss_mib(double laps, size_t* map_points) {
-  const std::string command = "/proc/" + std::to_string(getpid()) + "/exe --stream " + std::to_string(laps);
+  const std::string command =
+      "/proc/" + std::to_string(getpid()) + "/exe --stream " + std::to_string(laps);
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return -1.0;
   double mib = -1.0;
@@ -216,9 +219,9 @@ int main(int argc, char** argv) {
   size_t short_points = 0, long_points = 0;
   const double short_mib = stream_peak_rss_mib(1.0, &short_points);
   const double long_mib = stream_peak_rss_mib(laps_long, &long_points);
-  std::printf("peak RSS: 1 lap (%.0f s, %zu map points) %.1f MiB, %.1f laps (%zu map points) "
-              "%.1f MiB: ratio %.2f (target <= 1.5)\n",
-              kLapS, short_points, short_mib, laps_long, long_points, long_mib,
-              long_mib / short_mib);
+  std::printf(
+      "peak RSS: 1 lap (%.0f s, %zu map points) %.1f MiB, %.1f laps (%zu map points) "
+      "%.1f MiB: ratio %.2f (target <= 1.5)\n",
+      kLapS, short_points, short_mib, laps_long, long_points, long_mib, long_mib / short_mib);
   return 0;
 }

@@ -38,12 +38,14 @@ class LabelFractionCallback : public ceres::IterationCallback {
 
 class BaGraph {
  public:
+  // model_free: the online-SLAM graph (no x_gM, no DVL raycasts, no surface factors).
   BaGraph(const BaProblem& problem, const MeshQuery& mesh, const BaInitialState& initial,
-          BaMode mode, const BaOptions& options)
+          BaMode mode, const BaOptions& options, bool model_free = false)
       : problem_(problem),
         mesh_(mesh),
         initial_(initial),
         mode_(mode),
+        model_free_(model_free),
         options_(options),
         mount_(servo_mount(problem.rig)),
         pose_manifold_(make_pose_manifold()),
@@ -54,6 +56,7 @@ class BaGraph {
     add_priors();
     add_odometry();
     add_camera_factors();
+    if (model_free_) return;
     add_dvl_factors();
     if (mode_ != BaMode::kNaive) add_surface_factors();
   }
@@ -64,7 +67,7 @@ class BaGraph {
     result.dvl_residuals_initial_m = residuals_now();
     ceres::Solver::Options solver = solver_options();
     LabelFractionCallback callback(labels_, result.lambda1_fraction_per_iteration);
-    if (mode_ != BaMode::kNaive) solver.callbacks.push_back(&callback);
+    if (!labels_.empty()) solver.callbacks.push_back(&callback);
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
     ceres::Solve(solver, &ceres_problem_, &summary);
@@ -103,7 +106,7 @@ class BaGraph {
     }
     model_ = to_pose_block(initial_.T_world_model);
     extrinsic_ = to_pose_block(initial_.T_servo_camera);
-    add_pose_block(model_);
+    if (!model_free_) add_pose_block(model_);
     add_pose_block(extrinsic_);
     landmarks_.resize(initial_.landmarks_world.size());
     for (size_t k = 0; k < landmarks_.size(); ++k) {
@@ -116,10 +119,12 @@ class BaGraph {
   void add_priors() {
     const BaOptions& o = options_;
     // Eq. (8): x_gM from GICP with Sigma = I_6; the first pose (gauge); x_sc_T.
-    ceres_problem_.AddResidualBlock(
-        make_pose_prior_factor(initial_.T_world_model, o.model_prior_sigma_m,
-                               o.model_prior_sigma_rad),
-        nullptr, model_.data());
+    if (!model_free_) {
+      ceres_problem_.AddResidualBlock(
+          make_pose_prior_factor(initial_.T_world_model, o.model_prior_sigma_m,
+                                 o.model_prior_sigma_rad),
+          nullptr, model_.data());
+    }
     ceres_problem_.AddResidualBlock(
         make_pose_prior_factor(initial_.T_world_vehicle.front(), o.first_pose_prior_sigma_m,
                                o.first_pose_prior_sigma_rad),
@@ -218,7 +223,7 @@ class BaGraph {
       ordering->AddElementToGroup(poses_[i].data(), 1);
       ordering->AddElementToGroup(&servo_[i], 1);
     }
-    ordering->AddElementToGroup(model_.data(), 1);
+    if (!model_free_) ordering->AddElementToGroup(model_.data(), 1);
     ordering->AddElementToGroup(extrinsic_.data(), 1);
     s.linear_solver_ordering = ordering;
     return s;
@@ -266,6 +271,7 @@ class BaGraph {
   const MeshQuery& mesh_;
   const BaInitialState& initial_;
   BaMode mode_;
+  bool model_free_;
   const BaOptions& options_;
   ServoMount mount_;
   std::unique_ptr<ceres::Manifold> pose_manifold_;
@@ -288,6 +294,19 @@ BaModeResult solve_ba_mode(const BaProblem& problem, const MeshQuery& mesh,
   if (initial.T_world_vehicle.empty()) throw std::invalid_argument("ba: no keyframes");
   BaGraph graph(problem, mesh, initial, mode, options);
   return graph.solve();
+}
+
+BaInitialisation refine_initial_state(const BaProblem& problem, const MeshQuery& mesh,
+                                      BaInitialState& state, const BaOptions& options) {
+  BaOptions init_options = options;
+  init_options.max_iterations = options.initialisation_max_iterations;
+  BaGraph graph(problem, mesh, state, BaMode::kNaive, init_options, /*model_free=*/true);
+  const BaModeResult r = graph.solve();
+  state.T_world_vehicle = r.T_world_vehicle;
+  state.servo_angle_rad = r.servo_angle_rad;
+  state.T_servo_camera = r.T_servo_camera;
+  for (size_t k = 0; k < r.landmarks.size(); ++k) state.landmarks_world[k] = r.landmarks[k].position_world;
+  return {true, r.iterations, r.solve_time_s, r.initial_cost, r.final_cost};
 }
 
 std::vector<double> dvl_range_residuals(const MeshQuery& mesh, const ServoMount& mount,

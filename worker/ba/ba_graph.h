@@ -34,6 +34,12 @@ struct BaInitialState {
   std::vector<int> beam_keyframe;  // parallel to beams
 };
 
+// Model-free initialisation (see BaOptions::slam_initialisation): the graph without x_gM, DVL
+// raycasts and surface factors, i.e. what the vehicle's online visual SLAM optimises, run from
+// `state` and written back into its poses, servo angles, extrinsic and landmarks.
+BaInitialisation refine_initial_state(const BaProblem& problem, const MeshQuery& mesh,
+                                      BaInitialState& state, const BaOptions& options);
+
 // Builds the graph for `mode` from `problem` (keyframe times, odometry, depth/pitch/roll, rig)
 // and `initial`, runs Ceres and reads the result back. `mesh` is the CAD mesh's query.
 BaModeResult solve_ba_mode(const BaProblem& problem, const MeshQuery& mesh,

@@ -109,6 +109,16 @@ struct BaOptions {
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-8;
 
+  // Sec. 2.2 step 1, "Initialize X": the paper starts from its online SLAM's estimate. From
+  // raw tracks, measured servo angles (with slop) and a calibration guess, triangulated
+  // landmarks are several cm off (mono), enough to put foreign structure inside the 5.6 cm
+  // lambda = 1 basin before the first iteration. So we first optimise the model-free graph the
+  // online SLAM would (Eq. 8-13: poses, servo angles, extrinsic, landmarks; no x_gM, DVL
+  // raycasts or surface factors), then run GICP (Sec. 2.5) from those SLAM-corrected poses,
+  // and start every mode from that same state.
+  bool slam_initialisation = true;
+  int initialisation_max_iterations = 50;
+
   FrontendOptions frontend;
   GicpOptions gicp;
   TriangulationOptions triangulation;

@@ -66,8 +66,17 @@ struct BaFrontendStats {
   int tracks = 0;
 };
 
+struct BaInitialisation {
+  bool ran = false;
+  int iterations = 0;
+  double solve_time_s = 0;
+  double initial_cost = 0;
+  double final_cost = 0;
+};
+
 struct BaResult {
   BaFrontendStats frontend;
+  BaInitialisation initialisation;  // BaOptions::slam_initialisation
   int tracks_in = 0;              // tracks handed to triangulation
   int landmarks_triangulated = 0;  // tracks kept as landmarks
   int dvl_ranges_in = 0;

@@ -39,20 +39,21 @@ void triangulate(const std::vector<FeatureTrack>& tracks, const BaProblem& probl
   }
 }
 
-// Step 4: DVL returns in the world frame from the initial (SLAM-corrected) poses.
-std::vector<Eigen::Vector3d> dvl_returns_world(const BaProblem& problem) {
+// Step 5: DVL returns in the world frame from the SLAM-corrected poses.
+std::vector<Eigen::Vector3d> dvl_returns_world(const BaProblem& problem,
+                                               const BaInitialState& state) {
   const ServoMount mount = servo_mount(problem.rig);
   std::vector<Eigen::Vector3d> points;
   for (const DvlRange& r : problem.dvl_ranges) {
-    const BaKeyframe& k = problem.keyframes[r.keyframe];
-    const Pose3 T_world_dvl =
-        k.T_world_vehicle * mount.T_vehicle_servo(k.servo_angle_rad) * problem.rig.T_servo_dvl;
+    const Pose3 T_world_dvl = state.T_world_vehicle[r.keyframe] *
+                              mount.T_vehicle_servo(state.servo_angle_rad[r.keyframe]) *
+                              problem.rig.T_servo_dvl;
     points.push_back(T_world_dvl * (r.range_m * r.direction_dvl));
   }
   return points;
 }
 
-// Step 5.
+// Step 6.
 void gate_beams(const BaProblem& problem, const MeshQuery& mesh, const BaOptions& options,
                 BaInitialState& state) {
   const ServoMount mount = servo_mount(problem.rig);
@@ -89,19 +90,24 @@ BaResult run_model_assisted_ba(const BaProblem& problem, const BaOptions& option
                                 "poses (" + std::to_string(tracks.size()) + " tracks)");
   }
 
-  const GicpAlignment gicp = align_dvl_returns_to_model(  // step 4
-      dvl_returns_world(problem), problem.cad_mesh, problem.T_world_model_guess, options.gicp);
+  if (options.slam_initialisation) {  // step 4
+    result.initialisation = refine_initial_state(problem, mesh, state, options);
+  }
+
+  const GicpAlignment gicp = align_dvl_returns_to_model(  // step 5
+      dvl_returns_world(problem, state), problem.cad_mesh, problem.T_world_model_guess,
+      options.gicp);
   result.gicp_ran = gicp.ran;
   result.gicp_converged = gicp.converged;
   result.gicp_fitness = gicp.fitness;
   state.T_world_model = gicp.T_world_model;
   result.T_world_model_initial = gicp.T_world_model;
 
-  gate_beams(problem, mesh, options, state);  // step 5
+  gate_beams(problem, mesh, options, state);  // step 6
   result.dvl_ranges_in = static_cast<int>(problem.dvl_ranges.size());
   result.dvl_ranges_used = static_cast<int>(state.beams.size());
 
-  for (BaMode mode : options.modes) {  // step 6
+  for (BaMode mode : options.modes) {  // step 7
     result.modes.push_back(solve_ba_mode(problem, mesh, state, mode, options));
   }
   return result;

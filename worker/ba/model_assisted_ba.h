@@ -4,11 +4,13 @@
 //   2. feature tracks: problem.tracks, or the SIFT frontend on the keyframe images (Sec. 2.7);
 //   3. initial landmarks: triangulation from the initial poses, measured servo angles and the
 //      calibrated extrinsic (triangulation.h);
-//   4. x_gM: GICP of the DVL returns (world, from the initial poses) onto the CAD vertices
-//      (Sec. 2.5); it is the start and the Eq. (8) prior of x_gM;
-//   5. DVL beams whose predicted range misses the mesh or is off by more than
+//   4. SLAM initialisation (BaOptions::slam_initialisation): the model-free graph, as the
+//      vehicle's online SLAM would solve it, so the modes start from a SLAM-quality state;
+//   5. x_gM: GICP of the DVL returns (world, from the SLAM-corrected poses) onto the CAD
+//      vertices (Sec. 2.5); it is the start and the Eq. (8) prior of x_gM;
+//   6. DVL beams whose predicted range misses the mesh or is off by more than
 //      BaOptions::dvl_gate_m are left out (foreign objects, beams past the CAD's edge);
-//   6. for each of BaOptions::modes: the factor graph of Sec. 2.6 (ba_graph.h), solved by
+//   7. for each of BaOptions::modes: the factor graph of Sec. 2.6 (ba_graph.h), solved by
 //      Ceres from the same initial state.
 // No I/O. Thread use: BaOptions::num_threads for Ceres and batch mesh queries.
 //

@@ -23,5 +23,7 @@ inline constexpr int kExitInterrupted = 130;
 
 Subcommand add_serve_command(CLI::App& app);  // serve_command.cc (the default)
 Subcommand add_run_command(CLI::App& app);    // run_command.cc
+Subcommand add_ate_command(CLI::App& app);    // ate_command.cc (evo_ape)
+Subcommand add_rpe_command(CLI::App& app);    // rpe_command.cc (evo_rpe)
 
 }  // namespace keel::worker

@@ -1,12 +1,15 @@
 #include "worker/main/lease_loop.h"
 
+#include <signal.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <thread>
 
@@ -22,6 +25,25 @@ void pause(double seconds, const std::function<bool()>& stop_requested) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
   while (!stop_requested() && std::chrono::steady_clock::now() < until)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
+}
+
+bool process_alive(long pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
+
+// Workers started together (keel-server --workers N) share one cache folder: blobs are
+// shared, but job folders and upload state belong to one process, in "work-<pid>". The
+// folders of processes that are gone (killed, crashed) are removed.
+std::filesystem::path make_process_area(const std::filesystem::path& cache_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(cache_dir);
+  for (const auto& item : std::filesystem::directory_iterator(cache_dir, ec)) {
+    const std::string name = item.path().filename().string();
+    if (name.rfind("work-", 0) != 0) continue;
+    if (!process_alive(std::atol(name.c_str() + 5))) std::filesystem::remove_all(item.path(), ec);
+  }
+  const auto area = cache_dir / ("work-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(area / "jobs");
+  std::filesystem::create_directories(area / "uploads");
+  return area;
 }
 
 }  // namespace
@@ -42,13 +64,16 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
   client::ApiClient api(config_);
   client::ApiClient heartbeat_api(config_);  // ApiClient is not thread-safe: one per thread
   BlobCache blobs(options_.cache_dir / "blobs");
+  const std::filesystem::path area = make_process_area(options_.cache_dir);
+  auto remove_area = [&] {
+    std::error_code ec;
+    if (!options_.keep_work) std::filesystem::remove_all(area, ec);
+  };
   LeasedJobOptions job_options;
-  job_options.jobs_dir = options_.cache_dir / "jobs";
-  job_options.uploads_dir = options_.cache_dir / "uploads";
+  job_options.jobs_dir = area / "jobs";
+  job_options.uploads_dir = area / "uploads";
   job_options.heartbeat_seconds = options_.heartbeat_seconds;
   job_options.keep_work = options_.keep_work;
-  std::filesystem::create_directories(job_options.jobs_dir);
-  std::filesystem::create_directories(job_options.uploads_dir);
 
   proto::LeaseRequest request;
   request.worker = options_.worker_name;
@@ -65,6 +90,7 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
     } catch (const client::ApiCallError& e) {
       if (e.status() == 401) {
         spdlog::error("the server rejected the token: {}", e.what());
+        remove_area();
         return 1;
       }
       // Exponential backoff from poll_seconds up to max_backoff_seconds.
@@ -89,6 +115,7 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
     if (options_.once) break;
   }
   if (stop_requested()) spdlog::info("stopping");
+  remove_area();
   return 0;
 }
 

@@ -14,7 +14,7 @@ namespace keel::worker {
 
 struct LeaseLoopOptions {
   std::string worker_name;          // "host:pid" by default
-  std::filesystem::path cache_dir;  // blobs/, jobs/, uploads/ live here
+  std::filesystem::path cache_dir;  // blobs/ (shared) and work-<pid>/ (jobs, uploads)
   int lease_seconds = 30;
   double poll_seconds = 1.0;          // pause when no job is queued
   double heartbeat_seconds = 1.0;     // cancel is honoured within ~2 heartbeats

@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   const std::vector<keel::worker::Subcommand> commands = {
       keel::worker::add_serve_command(app),
       keel::worker::add_run_command(app),
+      keel::worker::add_ate_command(app),
+      keel::worker::add_rpe_command(app),
   };
 
   std::vector<std::string> args = with_default_subcommand(argc, argv);

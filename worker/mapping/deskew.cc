@@ -40,8 +40,8 @@ void sweep_time_range(const std::string& sensor, const PointCloud& scan,
   if (*t_max_s - *t_min_s > options.max_sweep_duration_s) {
     throw std::invalid_argument(
         describe_scan(sensor, scan) + ": per-point times span " +
-        std::to_string(*t_max_s - *t_min_s) + " s, more than max_sweep_duration_s = " +
-        std::to_string(options.max_sweep_duration_s) +
+        std::to_string(*t_max_s - *t_min_s) +
+        " s, more than max_sweep_duration_s = " + std::to_string(options.max_sweep_duration_s) +
         " s; expected seconds relative to the scan stamp (nanoseconds read as seconds?)");
   }
 }

@@ -20,9 +20,8 @@ double number_field(const json& object, const std::string& key, double fallback,
   if (!value.is_number()) fail(where + "." + key, "expected a number, got " + value.dump());
   const double number = value.get<double>();
   if (!std::isfinite(number) || (positive && number <= 0.0) || (!positive && number < 0.0)) {
-    fail(where + "." + key,
-         std::string("expected a ") + (positive ? "positive" : "non-negative") +
-             " number, got " + value.dump());
+    fail(where + "." + key, std::string("expected a ") + (positive ? "positive" : "non-negative") +
+                                " number, got " + value.dump());
   }
   return number;
 }
@@ -38,8 +37,7 @@ int count_field(const json& object, const std::string& key, int fallback,
   return value.get<int>();
 }
 
-Eigen::Vector3d vector_field(const json& object, const std::string& key,
-                             const std::string& where) {
+Eigen::Vector3d vector_field(const json& object, const std::string& key, const std::string& where) {
   if (!object.contains(key)) fail(where + "." + key, "missing (expected [x, y, z] in metres)");
   const json& value = object.at(key);
   if (!value.is_array() || value.size() != 3) {
@@ -101,7 +99,8 @@ FilterSpec filter_from_json(const json& object, const std::string& where) {
                       count_field(object, "k_min", defaults.k_min, where),
                       number_field(object, "sr_min", defaults.sr_min_m, where, true)};
   }
-  fail(where + ".type", "unknown filter \"" + type + "\" (expected crop_box, voxel_grid, ror or dror)");
+  fail(where + ".type",
+       "unknown filter \"" + type + "\" (expected crop_box, voxel_grid, ror or dror)");
 }
 
 template <class... Ts>
@@ -135,13 +134,12 @@ std::vector<FilterStep> apply_filter_chain(const FilterChain& chain, PointCloud&
   std::vector<FilterStep> steps;
   for (const FilterSpec& filter : chain.filters) {
     FilterStep step{filter_type(filter), cloud.size(), 0};
-    std::visit(Overloaded{[&](const CropBoxFilter& f) { apply_crop_box(f, cloud); },
-                          [&](const VoxelGridFilter& f) { apply_voxel_grid(f, cloud); },
-                          [&](const RadiusOutlierFilter& f) {
-                            apply_radius_outlier(f, cloud, threads);
-                          },
-                          [&](const DrorFilter& f) { apply_dror(f, cloud, threads); }},
-               filter);
+    std::visit(
+        Overloaded{[&](const CropBoxFilter& f) { apply_crop_box(f, cloud); },
+                   [&](const VoxelGridFilter& f) { apply_voxel_grid(f, cloud); },
+                   [&](const RadiusOutlierFilter& f) { apply_radius_outlier(f, cloud, threads); },
+                   [&](const DrorFilter& f) { apply_dror(f, cloud, threads); }},
+        filter);
     step.points_out = cloud.size();
     steps.push_back(step);
   }
@@ -160,29 +158,29 @@ FilterChain filter_chain_from_json(const json& value, const std::string& where) 
 json filter_chain_to_json(const FilterChain& chain) {
   json out = json::array();
   for (const FilterSpec& filter : chain.filters) {
-    out.push_back(std::visit(
-        Overloaded{[](const CropBoxFilter& f) {
-                     return json{{"type", "crop_box"},
-                                 {"min", vector_json(f.min_m)},
-                                 {"max", vector_json(f.max_m)},
-                                 {"remove", f.remove_inside ? "inside" : "outside"}};
-                   },
-                   [](const VoxelGridFilter& f) {
-                     return json{{"type", "voxel_grid"}, {"leaf", f.leaf_m}};
-                   },
-                   [](const RadiusOutlierFilter& f) {
-                     return json{{"type", "ror"},
-                                 {"radius", f.radius_m},
-                                 {"min_neighbors", f.min_neighbors}};
-                   },
-                   [](const DrorFilter& f) {
-                     return json{{"type", "dror"},
-                                 {"beta", f.beta},
-                                 {"alpha_deg", f.alpha_deg},
-                                 {"k_min", f.k_min},
-                                 {"sr_min", f.sr_min_m}};
-                   }},
-        filter));
+    out.push_back(std::visit(Overloaded{[](const CropBoxFilter& f) {
+                                          return json{
+                                              {"type", "crop_box"},
+                                              {"min", vector_json(f.min_m)},
+                                              {"max", vector_json(f.max_m)},
+                                              {"remove", f.remove_inside ? "inside" : "outside"}};
+                                        },
+                                        [](const VoxelGridFilter& f) {
+                                          return json{{"type", "voxel_grid"}, {"leaf", f.leaf_m}};
+                                        },
+                                        [](const RadiusOutlierFilter& f) {
+                                          return json{{"type", "ror"},
+                                                      {"radius", f.radius_m},
+                                                      {"min_neighbors", f.min_neighbors}};
+                                        },
+                                        [](const DrorFilter& f) {
+                                          return json{{"type", "dror"},
+                                                      {"beta", f.beta},
+                                                      {"alpha_deg", f.alpha_deg},
+                                                      {"k_min", f.k_min},
+                                                      {"sr_min", f.sr_min_m}};
+                                        }},
+                             filter));
   }
   return out;
 }

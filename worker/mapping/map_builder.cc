@@ -45,6 +45,41 @@ bool starts_with_voxel_grid(const FilterChain& chain) {
 
 }  // namespace
 
+SensorMapOptions sensor_map_options_from_json(const nlohmann::json& json, const std::string& where,
+                                              SensorMapOptions defaults) {
+  if (!json.is_object()) {
+    throw std::invalid_argument(where + ": expected an object, got " + json.dump());
+  }
+  for (const auto& item : json.items()) {
+    const std::string key = item.key();
+    const std::string path = where + "." + key;
+    if (key == "scan_filters") {
+      defaults.scan_filters = filter_chain_from_json(item.value(), path);
+    } else if (key == "intermediary_filters") {
+      defaults.intermediary_filters = filter_chain_from_json(item.value(), path);
+    } else if (key == "final_filters") {
+      defaults.final_filters = filter_chain_from_json(item.value(), path);
+    } else if (key == "deskew") {
+      if (!item.value().is_boolean()) {
+        throw std::invalid_argument(path + ": expected true or false, got " + item.value().dump());
+      }
+      defaults.deskew = item.value().get<bool>();
+    } else {
+      throw std::invalid_argument(path +
+                                  ": unknown key (expected scan_filters, "
+                                  "intermediary_filters, final_filters or deskew)");
+    }
+  }
+  return defaults;
+}
+
+nlohmann::json to_json(const SensorMapOptions& options) {
+  return {{"scan_filters", filter_chain_to_json(options.scan_filters)},
+          {"intermediary_filters", filter_chain_to_json(options.intermediary_filters)},
+          {"final_filters", filter_chain_to_json(options.final_filters)},
+          {"deskew", options.deskew}};
+}
+
 MapBuilder::MapBuilder(const TransformTree& tree, MapBuilderOptions options)
     : tree_(tree), options_(std::move(options)) {
   if (options_.scans_per_intermediary < 1) {
@@ -119,8 +154,7 @@ void MapBuilder::flush_intermediary(SensorState& state) {
   if (state.batch_scans == 0) return;
   // Stage 2 on the intermediary map of Eq. (22).
   add_steps(state.stats.intermediary_stage,
-            apply_filter_chain(state.options.intermediary_filters, state.batch,
-                               options_.threads));
+            apply_filter_chain(state.options.intermediary_filters, state.batch, options_.threads));
   ++state.stats.intermediary_maps;
   if (state.voxel_map) {
     state.voxel_map->add(state.batch);

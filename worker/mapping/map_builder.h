@@ -31,6 +31,13 @@ struct SensorMapOptions {
   bool deskew = true;  // only scans with per-point times are deskewed
 };
 
+// Reads {"scan_filters": [...], "intermediary_filters": [...], "final_filters": [...],
+// "deskew": true} (each key optional, the others keep `defaults`). Throws
+// std::invalid_argument naming `where` and the key for anything malformed or unknown.
+SensorMapOptions sensor_map_options_from_json(const nlohmann::json& json, const std::string& where,
+                                              SensorMapOptions defaults = {});
+nlohmann::json to_json(const SensorMapOptions& options);
+
 struct MapBuilderOptions {
   // N_I, the number of scans per intermediary map (Eq. (22)); the paper gives no value. Ten
   // VLP-16 sweeps (1 s) make an intermediary map dense enough for ROR to separate inliers.

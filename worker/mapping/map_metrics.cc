@@ -63,7 +63,7 @@ NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& sc
     const Eigen::Matrix3d covariance = sum_outer / others - centroid * centroid.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(covariance);
-    const Eigen::Vector3d normal = solver.eigenvectors().col(0);  // smallest eigenvalue
+    const Eigen::Vector3d normal = solver.eigenvectors().col(0);         // smallest eigenvalue
     out.roughness = static_cast<float>(std::abs(normal.dot(centroid)));  // |n . (q - c)|
   }
 
@@ -201,10 +201,18 @@ MapMetrics compute_map_metrics(const PointCloud& map, const MapMetricsOptions& o
 }
 
 nlohmann::json to_json(const Distribution& d) {
-  return {{"count", d.count}, {"undefined", d.undefined}, {"mean", d.mean},
-          {"std", d.std},     {"min", d.min},             {"p05", d.p05},
-          {"p25", d.p25},     {"median", d.median},       {"p75", d.p75},
-          {"p95", d.p95},     {"max", d.max},             {"histogram_edges", d.histogram_edges},
+  return {{"count", d.count},
+          {"undefined", d.undefined},
+          {"mean", d.mean},
+          {"std", d.std},
+          {"min", d.min},
+          {"p05", d.p05},
+          {"p25", d.p25},
+          {"median", d.median},
+          {"p75", d.p75},
+          {"p95", d.p95},
+          {"max", d.max},
+          {"histogram_edges", d.histogram_edges},
           {"histogram_counts", d.histogram_counts}};
 }
 

@@ -4,7 +4,8 @@
 //   roughness       = distance of v_k to the least-squares plane of its         Eq. (24)
 //                     neighbours, v_k excluded (as CloudCompare's roughness; needs 3 others)
 //   planarity       = (l2 - l3) / l1, l1 >= l2 >= l3 the eigenvalues of          Eq. (25)
-//                     Sigma_k = 1/N sum (v_n - v_bar)(v_n - v_bar)^T about v_bar = med(v_n)  Eq. (26)
+//                     Sigma_k = 1/N sum (v_n - v_bar)(v_n - v_bar)^T about v_bar = med(v_n)  Eq.
+//                     (26)
 // v_bar: the paper calls med(.) the medoid; an exact medoid (the member minimising the summed
 // distance to the others) costs O(N^2) per point, and inspection maps hold thousands of points
 // within 0.25 m, so v_bar here is the coordinate-wise median (element of rank floor(N/2) per

@@ -45,11 +45,11 @@ OdometryCorrection correct_odometry(const Trajectory& T_world_body_map,
   result.corrections =
       corrections_at_map_stamps(T_world_body_map, odometry, &result.map_poses_outside_odometry);
   if (result.corrections.empty()) {
-    throw std::invalid_argument(
-        "Algorithm 2: no MAP pose lies inside the odometry span [" +
-        format_seconds(odometry.begin_ns()) + ", " + format_seconds(odometry.end_ns()) +
-        "] s (MAP poses span [" + format_seconds(map_poses.begin_ns()) + ", " +
-        format_seconds(map_poses.end_ns()) + "] s)");
+    throw std::invalid_argument("Algorithm 2: no MAP pose lies inside the odometry span [" +
+                                format_seconds(odometry.begin_ns()) + ", " +
+                                format_seconds(odometry.end_ns()) + "] s (MAP poses span [" +
+                                format_seconds(map_poses.begin_ns()) + ", " +
+                                format_seconds(map_poses.end_ns()) + "] s)");
   }
   const StampedTransforms tf_correct(result.corrections, "odometry corrections");
 

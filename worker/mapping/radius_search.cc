@@ -102,8 +102,9 @@ struct RadiusSearch::Impl {
   PointSet set;                 // Morton order
   std::vector<uint32_t> order;  // set.points[i] = input[order[i]]
   static constexpr size_t kLeafSize = 32;
-  Tree tree{3, set, nanoflann::KDTreeSingleIndexAdaptorParams(
-                        kLeafSize, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)};
+  Tree tree{3, set,
+            nanoflann::KDTreeSingleIndexAdaptorParams(
+                kLeafSize, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)};
 };
 
 RadiusSearch::RadiusSearch(const std::vector<Eigen::Vector3f>& points)
@@ -124,8 +125,7 @@ size_t RadiusSearch::size() const { return impl_->set.points.size(); }
 
 const std::vector<uint32_t>& RadiusSearch::spatial_order() const { return impl_->order; }
 
-int RadiusSearch::count_within(const Eigen::Vector3f& query, double radius_m,
-                               int max_count) const {
+int RadiusSearch::count_within(const Eigen::Vector3f& query, double radius_m, int max_count) const {
   if (impl_->set.points.empty()) return 0;
   const size_t limit = max_count > 0 ? static_cast<size_t>(max_count) : impl_->set.points.size();
   CountResultSet result(static_cast<float>(radius_m * radius_m), limit);
@@ -133,8 +133,8 @@ int RadiusSearch::count_within(const Eigen::Vector3f& query, double radius_m,
   return static_cast<int>(result.count());
 }
 
-void RadiusSearch::within(const Eigen::Vector3f& query, double radius_m,
-                          std::vector<int>* indices, std::vector<float>* squared_distances) const {
+void RadiusSearch::within(const Eigen::Vector3f& query, double radius_m, std::vector<int>* indices,
+                          std::vector<float>* squared_distances) const {
   indices->clear();
   squared_distances->clear();
   if (impl_->set.points.empty()) return;

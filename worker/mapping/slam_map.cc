@@ -35,8 +35,8 @@ void SlamMapBuilder::add_scan(const PointCloud& scan) {
       std::lower_bound(keyframes_.begin(), keyframes_.end(), scan.t_ns,
                        [](const StampedPose& pose, TimeNs t) { return pose.t_ns < t; });
   size_t nearest = static_cast<size_t>(upper - keyframes_.begin());
-  if (nearest == keyframes_.size() ||
-      (nearest > 0 && scan.t_ns - keyframes_[nearest - 1].t_ns < keyframes_[nearest].t_ns - scan.t_ns)) {
+  if (nearest == keyframes_.size() || (nearest > 0 && scan.t_ns - keyframes_[nearest - 1].t_ns <
+                                                          keyframes_[nearest].t_ns - scan.t_ns)) {
     --nearest;
   }
   const TimeNs distance_ns = std::abs(scan.t_ns - keyframes_[nearest].t_ns);

@@ -18,7 +18,8 @@ void check_rotation(const Eigen::Matrix3d& R, const std::string& where) {
   if (!R.allFinite()) throw std::invalid_argument(where + ": rotation is not finite");
   const double orthogonality_error = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
   if (orthogonality_error > 1e-6 || R.determinant() < 0.0) {
-    throw std::invalid_argument(where + ": rotation is not a proper rotation matrix (|R^T R - I| = " +
+    throw std::invalid_argument(where +
+                                ": rotation is not a proper rotation matrix (|R^T R - I| = " +
                                 std::to_string(orthogonality_error) + ")");
   }
 }
@@ -29,8 +30,7 @@ Pose3 interpolate_pose(const Pose3& T_a, const Pose3& T_b, double s) {
   const Eigen::Quaterniond q_a(T_a.linear());
   const Eigen::Quaterniond q_b(T_b.linear());
   // Eigen's slerp takes the shorter arc (it flips q_b when q_a . q_b < 0).
-  return make_pose(q_a.slerp(s, q_b),
-                   (1.0 - s) * T_a.translation() + s * T_b.translation());
+  return make_pose(q_a.slerp(s, q_b), (1.0 - s) * T_a.translation() + s * T_b.translation());
 }
 
 StampedTransforms::StampedTransforms(const Trajectory& samples, std::string name)
@@ -81,8 +81,8 @@ Pose3 StampedTransforms::interpolate_inside(TimeNs t_ns) const {
   const size_t i1 = static_cast<size_t>(upper - stamps_.begin());
   const size_t i0 = i1 - 1;
   // Integer differences first: exact for any mission length.
-  const double s = static_cast<double>(t_ns - stamps_[i0]) /
-                   static_cast<double>(stamps_[i1] - stamps_[i0]);
+  const double s =
+      static_cast<double>(t_ns - stamps_[i0]) / static_cast<double>(stamps_[i1] - stamps_[i0]);
   return make_pose(rotations_[i0].slerp(s, rotations_[i1]),
                    (1.0 - s) * translations_[i0] + s * translations_[i1]);
 }

@@ -19,11 +19,6 @@ struct VoxelKey {
   bool operator==(const VoxelKey& other) const {
     return i == other.i && j == other.j && k == other.k;
   }
-  bool operator<(const VoxelKey& other) const {
-    if (i != other.i) return i < other.i;
-    if (j != other.j) return j < other.j;
-    return k < other.k;
-  }
 };
 
 // 64-bit mix of the three indices (multiply-xorshift; full avalanche so linear probing does
@@ -79,7 +74,9 @@ class VoxelAccumulator {
   static constexpr uint32_t kEmpty = 0xffffffffu;
   static constexpr size_t kChunkBits = 16;
 
-  Entry& entry(size_t index) { return chunks_[index >> kChunkBits][index & ((1u << kChunkBits) - 1)]; }
+  Entry& entry(size_t index) {
+    return chunks_[index >> kChunkBits][index & ((1u << kChunkBits) - 1)];
+  }
   const Entry& entry(size_t index) const {
     return chunks_[index >> kChunkBits][index & ((1u << kChunkBits) - 1)];
   }

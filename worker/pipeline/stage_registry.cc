@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "worker/pipeline/ingest_stage.h"
+#include "worker/pipeline/refine_stage.h"
 #include "worker/pipeline/stage.h"
 
 namespace keel::pipeline {
@@ -19,6 +20,7 @@ struct StageEntry {
 const std::vector<StageEntry>& entries() {
   static const std::vector<StageEntry> table = {
       {"ingest", make_ingest_stage},
+      {"refine", make_refine_stage},
   };
   return table;
 }

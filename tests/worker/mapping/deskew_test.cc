@@ -38,8 +38,7 @@ PointCloud simulate_sweep(const TransformTree& tree, TimeNs t_scan_ns, unsigned 
       const double azimuth = -0.7 + 1.4 * k / firings;  // sweeps across the wall
       const double elevation = -0.25 + 0.07 * ring;
       const Eigen::Vector3d dir_lidar(std::cos(elevation) * std::cos(azimuth),
-                                      std::cos(elevation) * std::sin(azimuth),
-                                      std::sin(elevation));
+                                      std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
       const Eigen::Vector3d origin = T_world_lidar.translation();
       const Eigen::Vector3d dir_world = T_world_lidar.linear() * dir_lidar;
       if (dir_world.x() <= 0.1) continue;

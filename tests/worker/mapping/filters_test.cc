@@ -59,8 +59,8 @@ TEST(CropBox, KeepsOrRemovesTheInsideLikePcl) {
     std::set<int> expected;
     for (size_t k = 0; k < cloud.size(); ++k) {
       const Eigen::Vector3d p = cloud.xyz[k].cast<double>();
-      const bool inside = (p.array() >= filter.min_m.array()).all() &&
-                          (p.array() <= filter.max_m.array()).all();
+      const bool inside =
+          (p.array() >= filter.min_m.array()).all() && (p.array() <= filter.max_m.array()).all();
       if (inside != remove_inside) expected.insert(static_cast<int>(k));
     }
     EXPECT_EQ(kept_ids(ours), expected);

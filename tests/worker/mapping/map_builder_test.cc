@@ -16,9 +16,9 @@ using testing::sample_trajectory;
 
 TransformTree make_tree() {
   TransformTree tree(sample_trajectory(0.0, 30.0, 0.01, {1.0, 0.5, 0.0}, 0.05));
-  tree.set_extrinsic("lidar", make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(
-                                            0.2, Eigen::Vector3d::UnitZ())),
-                                        Eigen::Vector3d(0.1, 0.2, 0.3)));
+  tree.set_extrinsic("lidar",
+                     make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ())),
+                               Eigen::Vector3d(0.1, 0.2, 0.3)));
   tree.set_extrinsic("sonar", Pose3::Identity());
   return tree;
 }
@@ -165,6 +165,26 @@ TEST(MapBuilder, CombinedMapIsTheUnionOfSensorMaps) {
   builder.finish();
   EXPECT_EQ(builder.combined_map().size(), 150u);
   EXPECT_EQ(builder.sensors(), (std::vector<std::string>{"lidar", "sonar"}));
+}
+
+TEST(MapBuilder, SensorOptionsFromJson) {
+  const SensorMapOptions sonar = sensor_map_options_from_json(
+      nlohmann::json::parse(R"({"intermediary_filters": [{"type": "ror", "radius": 0.2,
+                                "min_neighbors": 3}], "deskew": false})"),
+      "map.sensors.sonar", SensorMapOptions{table_iv_sonar_scan_filters(), {}, {}, true});
+  EXPECT_FALSE(sonar.deskew);
+  EXPECT_EQ(filter_chain_to_json(sonar.scan_filters),
+            filter_chain_to_json(table_iv_sonar_scan_filters()));  // kept from the defaults
+  ASSERT_EQ(sonar.intermediary_filters.filters.size(), 1u);
+  EXPECT_EQ(to_json(sonar)["intermediary_filters"][0]["radius"], 0.2);
+  try {
+    sensor_map_options_from_json(nlohmann::json::parse(R"({"final_filter": []})"), "map.x");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("map.x.final_filter: unknown key"), std::string::npos);
+  }
+  EXPECT_THROW(sensor_map_options_from_json(nlohmann::json::parse(R"({"deskew": 1})"), "m"),
+               std::invalid_argument);
 }
 
 TEST(SlamMap, UsesTheScanNearestEachKeyframeVoxelized) {

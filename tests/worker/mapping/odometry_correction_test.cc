@@ -78,9 +78,9 @@ TEST(OdometryCorrection, RecoversInjectedCorrection) {
       continue;
     }
     ++outside;
-    const Pose3& held = (p.t_ns < keyframes.front().t_ns ? result.corrections.front()
-                                                         : result.corrections.back())
-                            .T_world_body;
+    const Pose3& held =
+        (p.t_ns < keyframes.front().t_ns ? result.corrections.front() : result.corrections.back())
+            .T_world_body;
     const Pose3 expected = held * odom[i].T_world_body;
     EXPECT_LT((p.T_world_body.translation() - expected.translation()).norm(), 1e-9);
     EXPECT_LT(rotation_angle(p.T_world_body, expected), 1e-9);

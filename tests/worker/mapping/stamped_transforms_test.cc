@@ -34,8 +34,9 @@ TEST(StampedTransforms, ConstantRateRotationAndLinearTranslationAreExact) {
 
 TEST(StampedTransforms, InterpolatePoseMidpointOfQuarterTurn) {
   const Pose3 a = make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 0));
-  const Pose3 b = make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX())),
-                            Eigen::Vector3d(2, 4, 6));
+  const Pose3 b =
+      make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX())),
+                Eigen::Vector3d(2, 4, 6));
   const Pose3 mid = interpolate_pose(a, b, 0.25);
   EXPECT_NEAR(Eigen::AngleAxisd(mid.linear()).angle(), M_PI / 8, 1e-12);
   EXPECT_LT((mid.translation() - Eigen::Vector3d(0.5, 1, 1.5)).norm(), 1e-12);
@@ -49,8 +50,8 @@ TEST(StampedTransforms, MissionLongerThanAThousandSeconds) {
   const double epoch = 1.7e9;
   for (int i = 0; i <= 50000; ++i) {
     const double t = 0.1 * i;
-    samples.push_back({std::llround(epoch * 1e9) + std::llround(t * 1e9),
-                       constant_rate_pose(t, v, yaw_rate)});
+    samples.push_back(
+        {std::llround(epoch * 1e9) + std::llround(t * 1e9), constant_rate_pose(t, v, yaw_rate)});
   }
   const StampedTransforms poses(samples);
   for (double t : {0.05, 999.97, 1000.03, 2500.5, 4321.25, 4999.95}) {
@@ -75,8 +76,9 @@ TEST(StampedTransforms, OutsideTheSpanIsAnErrorNamingTimeAndSpan) {
   EXPECT_NO_THROW(poses.at(seconds_to_ns(10.0)));
   EXPECT_NO_THROW(poses.at(seconds_to_ns(20.0)));
   // Clamped lookups hold the end poses.
-  EXPECT_LT((poses.at_clamped(seconds_to_ns(25.0)).translation() - Eigen::Vector3d(20, 0, 0)).norm(),
-            1e-12);
+  EXPECT_LT(
+      (poses.at_clamped(seconds_to_ns(25.0)).translation() - Eigen::Vector3d(20, 0, 0)).norm(),
+      1e-12);
 }
 
 TEST(StampedTransforms, RejectsUnsortedDuplicateAndNonRigidSamples) {

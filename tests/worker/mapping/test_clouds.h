@@ -32,8 +32,8 @@ inline Pose3 constant_rate_pose(double t_s, const Eigen::Vector3d& v, double yaw
                    v * t_s);
 }
 
-inline Trajectory sample_trajectory(double t0_s, double t1_s, double dt_s,
-                                    const Eigen::Vector3d& v, double yaw_rate) {
+inline Trajectory sample_trajectory(double t0_s, double t1_s, double dt_s, const Eigen::Vector3d& v,
+                                    double yaw_rate) {
   Trajectory trajectory;
   const long steps = std::lround((t1_s - t0_s) / dt_s);
   for (long i = 0; i <= steps; ++i) {

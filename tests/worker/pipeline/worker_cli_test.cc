@@ -11,12 +11,15 @@
 #include <sstream>
 #include <thread>
 
+#include "child_process.h"
+#include "test_missions.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-const fs::path kWorker = fs::path(KEEL_BINARY_DIR) / "worker" / "main" / "keel-worker";
+const fs::path kWorker = KEEL_WORKER_BIN;
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path);
@@ -25,49 +28,12 @@ std::string read_text(const fs::path& path) {
   return s.str();
 }
 
-// A child process with stdout and stderr in files.
-class Child {
+// keel-worker with stdout and stderr in files.
+class Child : public keel::testing::Child {
  public:
   Child(const std::vector<std::string>& args, const fs::path& out, const fs::path& err,
-        const std::vector<std::string>& env = {}) {
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      std::freopen(out.c_str(), "w", stdout);
-      std::freopen(err.c_str(), "w", stderr);
-      for (const auto& item : env) ::putenv(const_cast<char*>(item.c_str()));
-      std::vector<char*> argv;
-      argv.push_back(const_cast<char*>(kWorker.c_str()));
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      ::execv(kWorker.c_str(), argv.data());
-      ::_exit(127);
-    }
-  }
-  ~Child() {
-    if (pid_ > 0 && !status_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  void signal(int signo) { ::kill(pid_, signo); }
-  // The exit code, or -1 when still running after `timeout`.
-  int wait(std::chrono::milliseconds timeout) {
-    const auto until = std::chrono::steady_clock::now() + timeout;
-    while (!status_) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        break;
-      }
-      if (std::chrono::steady_clock::now() > until) return -1;
-      std::this_thread::sleep_for(5ms);
-    }
-    return *status_;
-  }
-
- private:
-  pid_t pid_ = -1;
-  std::optional<int> status_;
+        const std::vector<std::string>& env = {})
+      : keel::testing::Child(kWorker, args, out, err, env) {}
 };
 
 class WorkerCliTest : public ::testing::Test {
@@ -82,28 +48,9 @@ class WorkerCliTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // One IMU at 10 Hz with 6 samples and a 4-pose odometry: ingest counts are known.
   fs::path write_tiny_mission() {
-    const fs::path m = dir_ / "mission";
-    fs::create_directories(m);
-    std::ofstream(m / "mission.yaml") << R"(keel_mission: 1
-name: tiny
-platform: usv
-sensors:
-  - name: imu
-    type: imu
-    file: imu.csv
-    rate_hz: 10
-    T_body_sensor: {translation: [0, 0, 0], rotation_xyzw: [0, 0, 0, 1]}
-trajectories:
-  odometry: odometry.tum
-)";
-    std::ofstream imu(m / "imu.csv");
-    imu << "t,wx,wy,wz,ax,ay,az\n";
-    for (int i = 0; i < 6; ++i) imu << "1700000000." << i << ",0,0,0.1,0,0,9.81\n";
-    std::ofstream odometry(m / "odometry.tum");
-    for (int i = 0; i < 4; ++i) odometry << "1700000000." << i << " " << i << " 0 0 0 0 0 1\n";
-    return m;
+    keel::testing::write_tiny_mission(dir_ / "mission");
+    return dir_ / "mission";
   }
 
   int run(const std::vector<std::string>& args) {
@@ -177,31 +124,8 @@ TEST_F(WorkerCliTest, UsageErrorsExitOne) {
 }
 
 TEST_F(WorkerCliTest, SigintDuringAStageExits130) {
-  // 20000 scans (one file, indexed 20000 times): ingest checks for cancel between scans.
   const fs::path m = dir_ / "mission";
-  fs::create_directories(m / "lidar");
-  std::ofstream(m / "mission.yaml") << R"(keel_mission: 1
-name: scans
-platform: usv
-sensors:
-  - name: lidar
-    type: lidar
-    scans: lidar
-    rate_hz: 10
-    T_body_sensor: {translation: [0, 0, 0], rotation_xyzw: [0, 0, 0, 1]}
-trajectories:
-  odometry: odometry.tum
-)";
-  std::ofstream(m / "lidar" / "s.pcd")
-      << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-         "WIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n0 0 1\n";
-  {
-    std::ofstream index(m / "lidar" / "index.csv");
-    index << "t,file\n";
-    for (int i = 0; i < 20000; ++i) index << 1700000000 + i / 10 << "." << i % 10 << ",s.pcd\n";
-    std::ofstream odometry(m / "odometry.tum");
-    for (int i = 0; i < 4; ++i) odometry << "1700000000." << i << " " << i << " 0 0 0 0 0 1\n";
-  }
+  keel::testing::write_long_mission(m);
   const fs::path out = dir_ / "out";
   Child child({"run", "--mission", m.string(), "--out", out.string()}, dir_ / "stdout.txt",
               dir_ / "stderr.txt");

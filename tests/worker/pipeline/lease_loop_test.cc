@@ -1,0 +1,206 @@
+// `keel-worker serve` against a real keel-server on loopback (no local workers): a job
+// succeeds and its report.json is an artifact; a stage error fails the job with the stage's
+// message and the worker leases the next job; a cancel stops the stage; SIGTERM abandons the
+// job and another worker resumes it once the lease expires.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "child_process.h"
+#include "client/api_client.h"
+#include "test_missions.h"
+
+namespace keel {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using testing::Child;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class LeaseLoopTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("keel_lease_loop_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    server_ = std::make_unique<Child>(
+        KEEL_SERVER_BIN,
+        std::vector<std::string>{"--data-dir", (dir_ / "data").string(), "--listen", "127.0.0.1:0",
+                                 "--workers", "0"},
+        dir_ / "server.out", dir_ / "server.err");
+    const fs::path url_file = dir_ / "data" / "server.url";
+    for (int i = 0; i < 600 && !fs::exists(url_file); ++i) std::this_thread::sleep_for(50ms);
+    ASSERT_TRUE(fs::exists(url_file)) << read_text(dir_ / "server.err");
+    url_ = read_text(url_file);
+    while (!url_.empty() && std::isspace(static_cast<unsigned char>(url_.back()))) url_.pop_back();
+    client::ClientConfig config;
+    config.url = url_;
+    std::string token = read_text(dir_ / "data" / "token");
+    config.token = token.substr(0, token.find_first_of(" \r\n"));
+    api_ = std::make_unique<client::ApiClient>(config);
+  }
+  void TearDown() override {
+    api_.reset();
+    if (server_) {
+      server_->signal(SIGTERM);
+      server_->wait(20s);
+      server_.reset();
+    }
+    fs::remove_all(dir_);
+  }
+
+  // Uploads `mission_dir` as a tar and queues a job running `stages` on it.
+  proto::Job submit(const fs::path& mission_dir, std::vector<std::string> stages = {"ingest"}) {
+    const fs::path tar = dir_ / ("bundle" + std::to_string(submitted_++) + ".tar");
+    const std::string command = "tar -C " + mission_dir.string() + " -cf " + tar.string() + " .";
+    EXPECT_EQ(std::system(command.c_str()), 0);
+    proto::MissionRequest mission;
+    mission.name = "m" + std::to_string(submitted_);
+    mission.bundle_blob = api_->upload_file(tar, dir_ / "client-state");
+    const proto::Mission stored = api_->create_mission(mission);
+    proto::JobRequest request;
+    request.mission_id = stored.id;
+    request.stages = std::move(stages);
+    return api_->create_job(request);
+  }
+
+  std::unique_ptr<Child> start_worker(const std::string& name,
+                                      std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"serve",
+                                     "--server",
+                                     url_,
+                                     "--token-file",
+                                     (dir_ / "data" / "token").string(),
+                                     "--cache-dir",
+                                     (dir_ / "cache").string(),
+                                     "--poll-seconds",
+                                     "0.1",
+                                     "--name",
+                                     name};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return std::make_unique<Child>(KEEL_WORKER_BIN, args, dir_ / (name + ".out"),
+                                   dir_ / (name + ".err"));
+  }
+  std::string worker_log(const std::string& name) const {
+    return read_text(dir_ / (name + ".out")) + read_text(dir_ / (name + ".err"));
+  }
+
+  // Polls the job until `done` holds (or 120 s pass).
+  proto::Job wait_job(const std::string& id, const std::function<bool(const proto::Job&)>& done) {
+    proto::Job job;
+    for (int i = 0; i < 2400; ++i) {
+      job = api_->get_job(id);
+      if (done(job)) break;
+      std::this_thread::sleep_for(50ms);
+    }
+    return job;
+  }
+  static bool finished(const proto::Job& job) { return proto::is_terminal(job.state); }
+
+  fs::path dir_;
+  std::string url_;
+  std::unique_ptr<Child> server_;
+  std::unique_ptr<client::ApiClient> api_;
+  int submitted_ = 0;
+};
+
+TEST_F(LeaseLoopTest, JobSucceedsWithReportArtifact) {
+  testing::write_tiny_mission(dir_ / "tiny");
+  const proto::Job job = submit(dir_ / "tiny");
+  auto worker = start_worker("w1", {"--once"});
+  ASSERT_EQ(worker->wait(120s), 0) << worker_log("w1");
+
+  const proto::Job done = api_->get_job(job.id);
+  EXPECT_EQ(done.state, proto::JobState::kSucceeded) << done.error;
+  EXPECT_EQ(done.completed_stages, std::vector<std::string>{"ingest"});
+  const auto artifacts = api_->list_artifacts(job.id);
+  ASSERT_EQ(artifacts.size(), 1u);
+  EXPECT_EQ(artifacts[0].name, "report.json");
+  EXPECT_EQ(artifacts[0].stage, "ingest");
+  api_->download("/v1/artifacts/" + artifacts[0].id, dir_ / "report.json", artifacts[0].sha256);
+  const auto report = nlohmann::json::parse(read_text(dir_ / "report.json"));
+  EXPECT_EQ(report["keel_report"], 1);
+  EXPECT_EQ(report["job"]["id"], job.id);
+  EXPECT_EQ(report["stages"]["ingest"]["sensors"]["imu"]["count"], 6);
+
+  // The job log carries the worker's lines, delivered by heartbeats.
+  std::string log;
+  for (const auto& line : api_->read_log(job.id, 0).lines) log += line.text + "\n";
+  EXPECT_NE(log.find("ingest: started"), std::string::npos) << log;
+  // The per-process work folder is gone; the bundle stays cached by its SHA-256.
+  for (const auto& item : fs::directory_iterator(dir_ / "cache"))
+    EXPECT_EQ(item.path().filename(), "blobs") << item.path();
+}
+
+TEST_F(LeaseLoopTest, StageErrorFailsTheJobAndTheWorkerTakesTheNext) {
+  testing::write_tiny_mission(dir_ / "broken");
+  fs::remove(dir_ / "broken" / "imu.csv");
+  testing::write_tiny_mission(dir_ / "tiny");
+  const proto::Job broken = submit(dir_ / "broken");
+  auto worker = start_worker("w1");
+  const proto::Job failed = wait_job(broken.id, finished);
+  EXPECT_EQ(failed.state, proto::JobState::kFailed);
+  EXPECT_EQ(failed.error.rfind("ingest: ", 0), 0u) << failed.error;
+  EXPECT_NE(failed.error.find("imu.csv"), std::string::npos) << failed.error;
+
+  const proto::Job good = submit(dir_ / "tiny");
+  EXPECT_EQ(wait_job(good.id, finished).state, proto::JobState::kSucceeded) << worker_log("w1");
+  worker->signal(SIGTERM);
+  EXPECT_EQ(worker->wait(30s), 0) << worker_log("w1");
+}
+
+TEST_F(LeaseLoopTest, CancelStopsTheRunningStage) {
+  testing::write_long_mission(dir_ / "long", 200000);
+  const proto::Job job = submit(dir_ / "long");
+  auto worker = start_worker("w1", {"--once"});
+  const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
+    return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
+  });
+  ASSERT_EQ(running.state, proto::JobState::kRunning);
+  api_->cancel_job(job.id);
+
+  // With --once the worker exits after the job: it stopped the stage instead of finishing it.
+  EXPECT_EQ(worker->wait(60s), 0) << worker_log("w1");
+  EXPECT_NE(worker_log("w1").find("canceled by the server"), std::string::npos) << worker_log("w1");
+  const proto::Job after = api_->get_job(job.id);
+  EXPECT_EQ(after.state, proto::JobState::kCanceled);
+  EXPECT_TRUE(after.completed_stages.empty());
+  EXPECT_TRUE(api_->list_artifacts(job.id).empty());
+}
+
+TEST_F(LeaseLoopTest, SigtermAbandonsTheJobAndAnotherWorkerResumesIt) {
+  testing::write_long_mission(dir_ / "long", 20000);
+  const proto::Job job = submit(dir_ / "long");
+  auto first = start_worker("w1", {"--lease-seconds", "2"});
+  const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
+    return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
+  });
+  ASSERT_EQ(running.state, proto::JobState::kRunning);
+  first->signal(SIGTERM);
+  EXPECT_EQ(first->wait(30s), 0) << worker_log("w1");
+  EXPECT_NE(worker_log("w1").find("abandoned"), std::string::npos) << worker_log("w1");
+  EXPECT_FALSE(proto::is_terminal(api_->get_job(job.id).state));  // not failed: abandoned
+
+  auto second = start_worker("w2", {"--once"});
+  EXPECT_EQ(second->wait(120s), 0) << worker_log("w2");
+  const proto::Job done = api_->get_job(job.id);
+  EXPECT_EQ(done.state, proto::JobState::kSucceeded) << done.error;
+  EXPECT_EQ(done.attempts, 2);
+}
+
+}  // namespace
+}  // namespace keel
