@@ -107,12 +107,12 @@ TransformTree make_tree(double duration_s) {
   return tree;
 }
 
-MapBuilderOptions inspection_options(bool with_map_filters) {
+MapBuilderOptions inspection_options(bool with_map_filters, double final_leaf_m = 0.05) {
   MapBuilderOptions options;  // Table IV lidar scan filters by default
   options.scans_per_intermediary = 10;
   if (with_map_filters) {
     options.default_sensor.intermediary_filters.filters.push_back(RadiusOutlierFilter{0.15, 2});
-    options.default_sensor.final_filters.filters.push_back(VoxelGridFilter{0.05});
+    options.default_sensor.final_filters.filters.push_back(VoxelGridFilter{final_leaf_m});
   }
   return options;
 }
@@ -177,10 +177,10 @@ void metrics_throughput(const PointCloud& map) {
 
 // One stream of `laps` laps, scans generated on the fly and never stored; prints the peak RSS
 // in MiB. Runs in its own process (see main) so each figure is that stream's alone.
-int run_stream(double laps) {
+int run_stream(double laps, double final_leaf_m) {
   const int scans = static_cast<int>(laps * kLapS / 0.1);
   const TransformTree tree = make_tree(scans * 0.1);
-  MapBuilder builder(tree, inspection_options(true));
+  MapBuilder builder(tree, inspection_options(true, final_leaf_m));
   std::mt19937 rng(2);
   for (int s = 0; s < scans; ++s) builder.add_scan("lidar_h", simulate_sweep(0.1 * s, rng));
   builder.finish();
@@ -192,9 +192,9 @@ int run_stream(double laps) {
 
 // Runs `bench_map --stream laps` as a fresh process (a forked child would start with this
 // process's pages counted in its RSS) and reads its peak RSS.
-double stream_peak_rss_mib(double laps, size_t* map_points) {
-  const std::string command =
-      "/proc/" + std::to_string(getpid()) + "/exe --stream " + std::to_string(laps);
+double stream_peak_rss_mib(double laps, double final_leaf_m, size_t* map_points) {
+  const std::string command = "/proc/" + std::to_string(getpid()) + "/exe --stream " +
+                              std::to_string(laps) + " " + std::to_string(final_leaf_m);
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return -1.0;
   double mib = -1.0;
@@ -203,10 +203,25 @@ double stream_peak_rss_mib(double laps, size_t* map_points) {
   return mib;
 }
 
+void memory_scaling(double laps_long, double final_leaf_m) {
+  size_t short_points = 0, long_points = 0;
+  const double short_mib = stream_peak_rss_mib(1.0, final_leaf_m, &short_points);
+  const double long_mib = stream_peak_rss_mib(laps_long, final_leaf_m, &long_points);
+  std::printf(
+      "peak RSS, final voxel %.2f m: 1 lap (%.0f s) %.1f MiB, %zu map points; %.1f laps "
+      "%.1f MiB, %zu map points: RSS ratio %.2f (target <= 1.5), map ratio %.2f, "
+      "%.0f / %.0f bytes per map point\n",
+      final_leaf_m, kLapS, short_mib, short_points, laps_long, long_mib, long_points,
+      long_mib / short_mib, static_cast<double>(long_points) / short_points,
+      short_mib * 1048576.0 / short_points, long_mib * 1048576.0 / long_points);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 3 && std::string(argv[1]) == "--stream") return run_stream(std::atof(argv[2]));
+  if (argc == 4 && std::string(argv[1]) == "--stream") {
+    return run_stream(std::atof(argv[2]), std::atof(argv[3]));
+  }
   if (argc == 2 && std::string(argv[1]) == "--pipeline-only") {
     throughput("MapBuilder, + intermediary ROR, final voxel", true, 100, nullptr);
     return 0;
@@ -216,12 +231,7 @@ int main(int argc, char** argv) {
   throughput("MapBuilder, Table IV scan filters", false, 100, nullptr);
   throughput("MapBuilder, + intermediary ROR, final voxel", true, 100, &map);
   metrics_throughput(map);
-  size_t short_points = 0, long_points = 0;
-  const double short_mib = stream_peak_rss_mib(1.0, &short_points);
-  const double long_mib = stream_peak_rss_mib(laps_long, &long_points);
-  std::printf(
-      "peak RSS: 1 lap (%.0f s, %zu map points) %.1f MiB, %.1f laps (%zu map points) "
-      "%.1f MiB: ratio %.2f (target <= 1.5)\n",
-      kLapS, short_points, short_mib, laps_long, long_points, long_mib, long_mib / short_mib);
+  memory_scaling(laps_long, 0.05);
+  memory_scaling(laps_long, 0.10);
   return 0;
 }

@@ -38,7 +38,8 @@ int run_ate(const TrajectoryErrorArgs& args) {
     return kExitOk;
   }
   std::cout << paired.log << "Compared " << paired.reference.size() << " absolute pose pairs.\n"
-            << "Calculating APE for " << (rotation ? "rotation angle in degrees" : "translation part")
+            << "Calculating APE for "
+            << (rotation ? "rotation angle in degrees" : "translation part")
             << " pose relation...\n"
             << "--------------------------------------------------------------------------------\n"
             << "APE w.r.t. " << relation << " (" << unit << ")\n"
@@ -52,8 +53,8 @@ int run_ate(const TrajectoryErrorArgs& args) {
 
 Subcommand add_ate_command(CLI::App& app) {
   auto args = std::make_shared<TrajectoryErrorArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "ate", "Absolute trajectory error of --est against --ref (as evo_ape)");
+  CLI::App* cmd =
+      app.add_subcommand("ate", "Absolute trajectory error of --est against --ref (as evo_ape)");
   add_trajectory_error_options(cmd, args.get());
   return {cmd, [args] { return run_trajectory_tool("ate", [&] { return run_ate(*args); }); }};
 }

@@ -68,8 +68,9 @@ int run_rpe(const RpeArgs& args) {
   std::cout << paired.log << "Found " << rpe.pairs.size() << " pairs with delta "
             << format_delta(args.delta) << " (" << unit_name << ") among "
             << paired.reference.size() << " poses using " << pairs << ".\n"
-            << "Compared " << rpe.pairs.size() << " relative pose pairs, delta = "
-            << format_delta(args.delta) << " (" << unit_name << ") with " << pairs << ".\n"
+            << "Compared " << rpe.pairs.size()
+            << " relative pose pairs, delta = " << format_delta(args.delta) << " (" << unit_name
+            << ") with " << pairs << ".\n"
             << "Calculating RPE for "
             << (rotation ? "rotation angle in degrees" : "translation part")
             << " pose relation...\n"

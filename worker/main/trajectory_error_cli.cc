@@ -18,8 +18,7 @@ const char* kRule =
 
 slam::Alignment resolve_alignment(const TrajectoryErrorArgs& args) {
   if (args.align_flag) {
-    if (args.align != "none")
-      throw std::invalid_argument("give either --align or -a/-s, not both");
+    if (args.align != "none") throw std::invalid_argument("give either --align or -a/-s, not both");
     return args.scale_flag ? slam::Alignment::kSim3 : slam::Alignment::kSE3;
   }
   if (args.scale_flag)
@@ -120,8 +119,8 @@ PairedPoses load_paired_poses(const TrajectoryErrorArgs& args) {
     const slam::Association a = slam::associate_by_time(ref.poses, est.poses, association);
     log << "Found " << a.reference_index.size() << " of max. "
         << std::min(ref.poses.size(), est.poses.size())
-        << " possible matching timestamps between...\n\t" << ref.source << "\nand:\t"
-        << est.source << "\n..with max. time diff.: " << args.t_max_diff_s
+        << " possible matching timestamps between...\n\t" << ref.source << "\nand:\t" << est.source
+        << "\n..with max. time diff.: " << args.t_max_diff_s
         << " (s) and time offset: " << args.t_offset_s << " (s).\n"
         << kRule;
     if (a.reference_index.empty())
@@ -143,10 +142,9 @@ PairedPoses load_paired_poses(const TrajectoryErrorArgs& args) {
 
 void print_statistics(std::ostream& out, const slam::ErrorStatistics& s) {
   const double sse = s.rmse * s.rmse * static_cast<double>(s.count);
-  const std::pair<const char*, double> rows[] = {{"max", s.max},   {"mean", s.mean},
-                                                 {"median", s.median}, {"min", s.min},
-                                                 {"rmse", s.rmse}, {"sse", sse},
-                                                 {"std", s.std}};
+  const std::pair<const char*, double> rows[] = {
+      {"max", s.max},   {"mean", s.mean}, {"median", s.median}, {"min", s.min},
+      {"rmse", s.rmse}, {"sse", sse},     {"std", s.std}};
   char line[64];
   for (const auto& [name, value] : rows) {
     std::snprintf(line, sizeof(line), "%10s\t%f\n", name, value);
@@ -155,9 +153,10 @@ void print_statistics(std::ostream& out, const slam::ErrorStatistics& s) {
 }
 
 nlohmann::ordered_json statistics_json(const slam::ErrorStatistics& s) {
-  return {{"count", s.count},   {"rmse", s.rmse}, {"mean", s.mean},
-          {"median", s.median}, {"std", s.std},   {"min", s.min},
-          {"max", s.max},       {"sse", s.rmse * s.rmse * static_cast<double>(s.count)}};
+  return {{"count", s.count}, {"rmse", s.rmse},
+          {"mean", s.mean},   {"median", s.median},
+          {"std", s.std},     {"min", s.min},
+          {"max", s.max},     {"sse", s.rmse * s.rmse * static_cast<double>(s.count)}};
 }
 
 nlohmann::ordered_json alignment_json(const slam::SimilarityTransform& S) {

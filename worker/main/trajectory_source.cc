@@ -41,9 +41,9 @@ Trajectory read_kitti_poses(const fs::path& path) {
     R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
     const double orthogonality = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
     if (orthogonality > 1e-2 || R.determinant() <= 0.0)
-      lines.fail("rotation block is not a rotation (|R^T R - I| = " +
-                 std::to_string(orthogonality) + ", det = " + std::to_string(R.determinant()) +
-                 ")");
+      lines.fail(
+          "rotation block is not a rotation (|R^T R - I| = " + std::to_string(orthogonality) +
+          ", det = " + std::to_string(R.determinant()) + ")");
     StampedPose pose;
     pose.t_ns = static_cast<TimeNs>(trajectory.size()) * 1000000000LL;
     // Rounded to the nearest rotation (files carry 9 digits); translations are kept as given.

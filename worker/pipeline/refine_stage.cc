@@ -256,13 +256,15 @@ void loop_closures(const io::MissionReader& reader, const slam::RefineOptions& s
     m.t_j_ns = loop.t_j_ns;
     m.T_i_j = loop.T_body_i_body_j;
     m.information.setZero();
-    m.information.topLeftCorner<3, 3>().diagonal().setConstant(1.0 / (loop.sigma_t_m * loop.sigma_t_m));
+    m.information.topLeftCorner<3, 3>().diagonal().setConstant(1.0 /
+                                                               (loop.sigma_t_m * loop.sigma_t_m));
     m.information.bottomRightCorner<3, 3>().diagonal().setConstant(
         1.0 / (loop.sigma_r_rad * loop.sigma_r_rad));
     in.solver.loop_closures.push_back(m);
   }
-  in.report["loop_closures"] = {
-      {"count", loops.size()}, {"used", in.solver.loop_closures.size()}, {"skipped_no_keyframe", skipped}};
+  in.report["loop_closures"] = {{"count", loops.size()},
+                                {"used", in.solver.loop_closures.size()},
+                                {"skipped_no_keyframe", skipped}};
   if (skipped > 0)
     in.warnings.push_back(std::to_string(skipped) +
                           " loop closures match no keyframe stamp and were left out");
@@ -376,8 +378,8 @@ json solver_json(const slam::RefineSummary& s) {
             {"imu", s.num_imu_factors},
             {"dvl", s.num_dvl_factors},
             {"loop_closures", s.num_loop_closures}}},
-          {"intervals_skipped", {{"imu_gaps", s.num_imu_intervals_skipped},
-                                 {"dvl_gaps", s.num_dvl_intervals_skipped}}},
+          {"intervals_skipped",
+           {{"imu_gaps", s.num_imu_intervals_skipped}, {"dvl_gaps", s.num_dvl_intervals_skipped}}},
           {"pseudo_samples", s.num_pseudo_samples},
           {"covariance_ok", s.covariance_ok},
           {"ceres", s.ceres_report}};
@@ -409,8 +411,7 @@ struct DvlTruth {
   std::optional<Eigen::Matrix3d> R_body_dvl;
 };
 
-DvlTruth read_dvl_truth(const io::Mission& mission, const std::string& dvl_sensor,
-                        json& warnings) {
+DvlTruth read_dvl_truth(const io::Mission& mission, const std::string& dvl_sensor, json& warnings) {
   DvlTruth truth;
   if (mission.ground_truth_path.empty()) return truth;
   const json doc = io::load_yaml_file(mission.ground_truth_path);
@@ -450,7 +451,8 @@ json calibration_json(const slam::RefineResult& r, const RefineStageOptions& opt
       {"sigma_deg", vector_deg(sigma)},
       {"error_vs_truth_deg", nullptr}};
   if (truth.R_body_dvl)
-    rotation["error_vs_truth_deg"] = vector_deg(slam::so3_log(truth.R_body_dvl->transpose() * R_est));
+    rotation["error_vs_truth_deg"] =
+        vector_deg(slam::so3_log(truth.R_body_dvl->transpose() * R_est));
   return {{"dvl_scale", scale}, {"dvl_rotation", rotation}};
 }
 
@@ -470,8 +472,9 @@ json evaluate(const Trajectory& truth, const Trajectory& estimate,
   rpe_options.delta = options.rpe_delta_m;
   rpe_options.unit = slam::DeltaUnit::kMeters;
   rpe_options.pairs_from_reference = true;  // the same pairs for every estimate
-  json out = {{"ate", {{"translation_m", metrics_json(ate.translation_m)},
-                       {"rotation_deg", metrics_json(ate.rotation_deg)}}}};
+  json out = {{"ate",
+               {{"translation_m", metrics_json(ate.translation_m)},
+                {"rotation_deg", metrics_json(ate.rotation_deg)}}}};
   try {
     const auto rpe = slam::relative_pose_error(truth, estimate, rpe_options, association);
     out["rpe"] = {{"translation_m", metrics_json(rpe.translation_m)},
@@ -488,7 +491,8 @@ json evaluation_json(const Trajectory& truth, const Trajectory& map_poses,
                      const RefineStageOptions& options, const std::string& truth_source) {
   json rows = json::object();
   rows["map"] = evaluate(truth, map_poses, options);
-  rows["refined_without_dvl"] = without_dvl ? evaluate(truth, *without_dvl, options) : json(nullptr);
+  rows["refined_without_dvl"] =
+      without_dvl ? evaluate(truth, *without_dvl, options) : json(nullptr);
   rows["refined_with_dvl"] = with_dvl ? evaluate(truth, *with_dvl, options) : json(nullptr);
   json out = {{"ground_truth", truth_source},
               {"ate_method",
@@ -504,7 +508,8 @@ json evaluation_json(const Trajectory& truth, const Trajectory& map_poses,
   };
   const auto map = ate_rmse("map"), with = ate_rmse("refined_with_dvl"),
              without = ate_rmse("refined_without_dvl");
-  if (map && with && *map > 0.0) out["ate_reduction_with_dvl_vs_map_percent"] = 100.0 * (1.0 - *with / *map);
+  if (map && with && *map > 0.0)
+    out["ate_reduction_with_dvl_vs_map_percent"] = 100.0 * (1.0 - *with / *map);
   if (map && without && *map > 0.0)
     out["ate_reduction_without_dvl_vs_map_percent"] = 100.0 * (1.0 - *without / *map);
   return out;
@@ -651,12 +656,13 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   RefineStageOptions o;
   if (options.is_null()) return o;
   if (!options.is_object())
-    throw ContractError("options.refine: expected an object, got " + proto::json_type_name(options));
+    throw ContractError("options.refine: expected an object, got " +
+                        proto::json_type_name(options));
   const auto known = known_options();
   for (const auto& item : options.items())
     if (std::find(known.begin(), known.end(), item.key()) == known.end())
-      throw ContractError("options.refine." + item.key() + ": unknown option (known: " +
-                          join(known) + ")");
+      throw ContractError("options.refine." + item.key() +
+                          ": unknown option (known: " + join(known) + ")");
   proto::FieldReader r(options, "options.refine");
   o.imu_sensor = r.optional<std::string>("imu_sensor", o.imu_sensor);
   o.dvl_sensor = r.optional<std::string>("dvl_sensor", o.dvl_sensor);
@@ -699,13 +705,13 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   require(o.odometry_sigma_translation_per_m >= 0.0, "odometry_sigma_translation_per_m", ">= 0");
   require(o.odometry_sigma_rotation_rad > 0.0, "odometry_sigma_rotation_rad", "> 0");
   require(o.odometry_sigma_rotation_per_rad >= 0.0, "odometry_sigma_rotation_per_rad", ">= 0");
-  require(o.degeneracy == "drop" || o.degeneracy == "keep_well_conditioned" ||
-              o.degeneracy == "ignore",
-          "degeneracy", "drop, keep_well_conditioned or ignore, got '" + o.degeneracy + "'");
+  require(
+      o.degeneracy == "drop" || o.degeneracy == "keep_well_conditioned" || o.degeneracy == "ignore",
+      "degeneracy", "drop, keep_well_conditioned or ignore, got '" + o.degeneracy + "'");
   require(o.max_iterations >= 1 && o.max_iterations <= 10000, "max_iterations",
           "an integer in [1, 10000]");
-  require(o.relinearization_passes >= 1 && o.relinearization_passes <= 10,
-          "relinearization_passes", "an integer in [1, 10]");
+  require(o.relinearization_passes >= 1 && o.relinearization_passes <= 10, "relinearization_passes",
+          "an integer in [1, 10]");
   require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
   require(o.ate_max_time_difference_s >= 0.0, "ate_max_time_difference_s", ">= 0");
   require(o.rpe_delta_m > 0.0, "rpe_delta_m", "> 0");

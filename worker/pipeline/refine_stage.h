@@ -26,11 +26,11 @@ struct RefineStageOptions {
   std::string dvl_sensor;
   std::string lidar_sensor;  // scans for GICP odometry when the mission records none
 
-  bool dvl = true;  // DVL fusion; false refines with odometry, loops and IMU only
-  bool estimate_dvl_scale = true;     // s_d of Eq. (8) as a state (Sec. VII)
-  double dvl_scale_initial = 1.0;     // also the held value when not estimated
+  bool dvl = true;                 // DVL fusion; false refines with odometry, loops and IMU only
+  bool estimate_dvl_scale = true;  // s_d of Eq. (8) as a state (Sec. VII)
+  double dvl_scale_initial = 1.0;  // also the held value when not estimated
   double dvl_scale_prior_sigma = 0.1;
-  bool estimate_dvl_rotation = true;  // DVL-IMU extrinsic rotation as a state (Sec. VII)
+  bool estimate_dvl_rotation = true;            // DVL-IMU extrinsic rotation as a state (Sec. VII)
   double dvl_rotation_prior_sigma_deg = 2.865;  // 0.05 rad
   double max_dvl_gap_s = 0.5;                   // Algorithm 1: dropouts longer are not bridged
 
@@ -48,7 +48,7 @@ struct RefineStageOptions {
   int threads = 2;
 
   // Evaluation against ground truth (when the mission has it).
-  bool compare_without_dvl = true;  // solve a second time without DVL for Table II
+  bool compare_without_dvl = true;          // solve a second time without DVL for Table II
   double ate_max_time_difference_s = 0.01;  // evo's --t_max_diff
   double rpe_delta_m = 5.0;                 // RPE pairs every 5 m of ground-truth path
 

@@ -1,5 +1,8 @@
-// Sec. 2.5 of seed 001: GICP of DVL returns onto the CAD vertices recovers the CAD-to-world
-// transform of a simulated survey (exact returns: the true transform is the answer).
+// Sec. 2.5 of seed 001: GICP of DVL returns onto the CAD vertices registers the CAD to the
+// world on a simulated survey (exact returns, so the truth is the answer). A doubly curved
+// patch a few metres wide only weakly separates a slide along the hull from a tilt (a shifted
+// paraboloid is a tilted one to second order), so what is checked is what the BA needs: the
+// placed CAD surface matches the true one over the surveyed area.
 #include "worker/ba/gicp_alignment.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +12,7 @@
 #include <cstdio>
 
 #include "tests/worker/ba/ba_synthetic.h"
+#include "worker/ba/mesh_query.h"
 #include "worker/ba/rig_geometry.h"
 
 namespace keel::ba {
@@ -26,7 +30,7 @@ std::vector<Eigen::Vector3d> true_dvl_returns(const testing::SyntheticHull& sim)
   return points;
 }
 
-TEST(GicpAlignment, RecoversTheCadToWorldTransform) {
+TEST(GicpAlignment, RegistersTheCadSurfaceToTheDvlReturns) {
   testing::SyntheticHullOptions o;
   o.dvl_noise_m = 0.0;
   o.bump_height_m = 0.0;  // every return lies on the CAD surface
@@ -37,14 +41,25 @@ TEST(GicpAlignment, RecoversTheCadToWorldTransform) {
                                                      sim.problem.T_world_model_guess, GicpOptions{});
   ASSERT_TRUE(a.ran);
   EXPECT_TRUE(a.converged);
-  const Pose3 E = sim.T_world_model.inverse() * a.T_world_model;
-  const Pose3 E0 = sim.T_world_model.inverse() * sim.problem.T_world_model_guess;
-  std::printf("guess error %.4f m %.3f deg -> gicp error %.4f m %.3f deg (fitness %.3g)\n",
-              E0.translation().norm(), Eigen::AngleAxisd(E0.linear()).angle() * 57.2958,
-              E.translation().norm(), Eigen::AngleAxisd(E.linear()).angle() * 57.2958, a.fitness);
-  EXPECT_LT(Eigen::AngleAxisd(E.linear()).angle(), 0.5 * kDegToRad);
-  EXPECT_LT(E.translation().norm(), 0.05);
-  EXPECT_LT(E.translation().norm(), E0.translation().norm());
+  // True surface points over the surveyed area, and their distance to the CAD when placed
+  // by the guess and by GICP.
+  const MeshQuery cad(sim.problem.cad_mesh);
+  const auto surface_rms = [&](const Pose3& T_world_model) {
+    double sq = 0;
+    int n = 0;
+    for (const auto& v : sim.problem.cad_mesh.vertices) {
+      if (std::abs(v.x()) > o.lane_half_length_m || std::abs(v.y()) > o.lane_spacing_m) continue;
+      const double h = cad.signed_distance(T_world_model.inverse() * (sim.T_world_model * v));
+      sq += h * h;
+      ++n;
+    }
+    return std::sqrt(sq / n);
+  };
+  const double before = surface_rms(sim.problem.T_world_model_guess);
+  const double after = surface_rms(a.T_world_model);
+  std::printf("surface rms: guess %.4f m -> gicp %.4f m (fitness %.3g)\n", before, after, a.fitness);
+  EXPECT_GT(before, 0.05);
+  EXPECT_LT(after, 0.005);
 }
 
 TEST(GicpAlignment, TooFewReturnsKeepTheGuess) {

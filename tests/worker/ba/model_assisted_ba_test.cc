@@ -81,6 +81,12 @@ double rms(const std::vector<double>& v) {
   return std::sqrt(s / std::max<size_t>(1, v.size()));
 }
 
+// Median absolute value: the few beams that hit the bump (not in the CAD) are outliers.
+double median_abs(std::vector<double> v) {
+  for (double& x : v) x = std::abs(x);
+  return median(v);
+}
+
 void run_and_check(const testing::SyntheticHullOptions& sim_options) {
   const testing::SyntheticHull sim = testing::make_synthetic_hull(sim_options);
   BaOptions options;
@@ -93,10 +99,19 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
   print("naive", naive, mn);
   print("geva", geva, mg);
   print("proposed", proposed, mp);
-  std::printf("landmarks %d/%d, dvl %d/%d, gicp %d fitness %.4g, dvl rms initial %.4f final %.4f\n",
+  double servo_sq = 0, servo_sq_measured = 0;
+  for (size_t i = 0; i < sim.servo_angle_rad.size(); ++i) {
+    servo_sq += std::pow(proposed.servo_angle_rad[i] - sim.servo_angle_rad[i], 2);
+    servo_sq_measured += std::pow(sim.problem.keyframes[i].servo_angle_rad - sim.servo_angle_rad[i], 2);
+  }
+  const double servo_rms = std::sqrt(servo_sq / sim.servo_angle_rad.size());
+  const double servo_rms_measured = std::sqrt(servo_sq_measured / sim.servo_angle_rad.size());
+  std::printf("landmarks %d/%d, dvl %d/%d, gicp %d fitness %.4g, dvl |r| median initial %.4f "
+              "final %.4f, servo rms error %.3f deg (measured %.3f deg)\n",
               result.landmarks_triangulated, result.tracks_in, result.dvl_ranges_used,
               result.dvl_ranges_in, result.gicp_converged, result.gicp_fitness,
-              rms(proposed.dvl_residuals_initial_m), rms(proposed.dvl_residuals_final_m));
+              median_abs(proposed.dvl_residuals_initial_m), median_abs(proposed.dvl_residuals_final_m),
+              servo_rms / kDegToRad, servo_rms_measured / kDegToRad);
 
   ASSERT_GE(mp.bump_count, 30);
   ASSERT_GE(mp.on_model_count, 100);
@@ -128,18 +143,16 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
                     [](const BaLandmark& l) { return l.lambda == 1; }) /
       double(proposed.landmarks.size());
   EXPECT_NEAR(proposed.lambda1_fraction_per_iteration.back(), final_fraction, 0.01);
-  // Fig. 18: BA tightens the DVL residuals; the servo angles are recovered.
-  EXPECT_LT(rms(proposed.dvl_residuals_final_m), rms(proposed.dvl_residuals_initial_m));
-  EXPECT_LT(rms(proposed.dvl_residuals_final_m), 0.01);
-  double servo_err = 0;
-  for (size_t i = 0; i < sim.servo_angle_rad.size(); ++i) {
-    servo_err = std::max(servo_err, std::abs(proposed.servo_angle_rad[i] - sim.servo_angle_rad[i]));
-  }
-  EXPECT_LT(servo_err, 0.5 * kDegToRad);
+  // Fig. 18: BA tightens the DVL residuals to about their 3 mm noise; the servo slop (1 deg)
+  // is estimated.
+  EXPECT_LT(median_abs(proposed.dvl_residuals_final_m), 0.5 * median_abs(proposed.dvl_residuals_initial_m));
+  EXPECT_LT(median_abs(proposed.dvl_residuals_final_m), 0.004);
+  EXPECT_LT(servo_rms, 0.5 * servo_rms_measured);
 }
 
 TEST(ModelAssistedBa, MonocularProposedKeepsTheBumpGevaFlattensIt) {
   testing::SyntheticHullOptions o;
+  o.bump_height_m = 0.11;  // the cylinder of Fig. 15 and 20, seed 001
   run_and_check(o);
 }
 

@@ -18,12 +18,15 @@ TEST(Debug, Run) {
   if (getenv("LIN")) opt.linear_solver = getenv("LIN");
   if (getenv("HUBER")) opt.reprojection_huber = opt.dvl_huber = atof(getenv("HUBER"));
   if (getenv("ITER")) opt.max_iterations = atoi(getenv("ITER"));
+  if (getenv("SEED")) o.seed = atoi(getenv("SEED"));
+  if (getenv("INITIT")) opt.initialisation_max_iterations = atoi(getenv("INITIT"));
+  if (getenv("BUMP")) o.bump_height_m = atof(getenv("BUMP"));
   auto sim = testing::make_synthetic_hull(o);
   opt.modes = {ba_mode_from_string(getenv("MODE") ? getenv("MODE") : "proposed")};
   auto res = run_model_assisted_ba(sim.problem, opt);
   auto& r = res.modes[0];
   std::printf("cost %.3f -> %.3f iters %d\n", r.initial_cost, r.final_cost, r.iterations);
-  std::printf("term: %s\n", r.termination.c_str());
+  std::printf("term: %s\ninit iters %d cost %.1f -> %.1f\n", r.termination.c_str(), res.initialisation.iterations, res.initialisation.initial_cost, res.initialisation.final_cost);
   { Pose3 E = sim.T_world_model.inverse() * res.T_world_model_initial; Eigen::AngleAxisd aa(E.linear());
     std::printf("gicp err in model frame t %.4f %.4f %.4f rotvec deg %.3f %.3f %.3f\n", E.translation().x(), E.translation().y(), E.translation().z(), aa.angle()*aa.axis().x()*57.3, aa.angle()*aa.axis().y()*57.3, aa.angle()*aa.axis().z()*57.3);
     E = sim.T_world_model.inverse() * r.T_world_model; aa = Eigen::AngleAxisd(E.linear());

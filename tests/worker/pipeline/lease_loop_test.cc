@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <thread>
 
@@ -171,10 +172,14 @@ TEST_F(LeaseLoopTest, CancelStopsTheRunningStage) {
     return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
   });
   ASSERT_EQ(running.state, proto::JobState::kRunning);
+  const auto canceled_at = std::chrono::steady_clock::now();
   api_->cancel_job(job.id);
 
   // With --once the worker exits after the job: it stopped the stage instead of finishing it.
   EXPECT_EQ(worker->wait(60s), 0) << worker_log("w1");
+  std::cout << "worker exited "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - canceled_at).count()
+            << " s after the cancel\n";
   EXPECT_NE(worker_log("w1").find("canceled by the server"), std::string::npos) << worker_log("w1");
   const proto::Job after = api_->get_job(job.id);
   EXPECT_EQ(after.state, proto::JobState::kCanceled);

@@ -1,0 +1,177 @@
+// Stage `refine` on short keel-sim missions (usv-bridge, IMU + DVL only): the refined keyframes
+// are closer to the simulator's ground truth than the recorded MAP poses and than the
+// refinement without DVL (seed 000 Table II); option and input errors name what is wrong.
+#include "worker/pipeline/refine_stage.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "tests/sim/simulator.h"
+#include "worker/io/tum.h"
+#include "worker/slam/trajectory_metrics.h"
+
+namespace keel::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path temp_root() {
+  return fs::temp_directory_path() / ("keel_refine_stage_" + std::to_string(::getpid()));
+}
+
+// One simulated mission per sensor set, shared by the tests of this file.
+fs::path simulated_mission(const std::string& name, const std::vector<std::string>& sensors,
+                           double dvl_scale = 1.0) {
+  const fs::path dir = temp_root() / name;
+  if (fs::exists(dir / "mission.yaml")) return dir;
+  sim::SimOptions o;
+  o.scenario = "usv-bridge";
+  o.seed = 3;
+  o.out_dir = dir.string();
+  o.duration_s = 60.0;
+  o.sensors = sensors;
+  o.dvl_scale = dvl_scale;
+  sim::run_simulation(o);
+  return dir;
+}
+
+struct StageRun {
+  StageResult result;
+  std::vector<double> progress;
+};
+
+StageRun run_stage(const fs::path& mission, const nlohmann::json& options,
+                   const fs::path& work_dir) {
+  fs::create_directories(work_dir);
+  StageContext context;
+  context.mission_dir = mission;
+  context.work_dir = work_dir;
+  context.options = options;
+  StageRun run;
+  context.progress = [&](double p) { run.progress.push_back(p); };
+  run.result = make_refine_stage()->run(context);
+  return run;
+}
+
+double ate_rmse(const Trajectory& truth, const Trajectory& estimate) {
+  return slam::absolute_trajectory_error(truth, estimate, slam::Alignment::kSE3).translation_m.rmse;
+}
+
+std::string error_of(const fs::path& mission, const nlohmann::json& options) {
+  try {
+    run_stage(mission, options, temp_root() / "work_error");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+class RefineStageTest : public ::testing::Test {
+ protected:
+  static void TearDownTestSuite() { fs::remove_all(temp_root()); }
+};
+
+TEST_F(RefineStageTest, RefinedKeyframesBeatMapPosesAndTheRefinementWithoutDvl) {
+  const fs::path mission = simulated_mission("bridge", {"imu", "dvl"});
+  const fs::path work = temp_root() / "work_bridge";
+  const StageRun run = run_stage(mission, nlohmann::json::object(), work);
+
+  // One pose per keyframe, at the keyframes' exact stamps.
+  ASSERT_EQ(run.result.artifacts, std::vector<std::string>{kRefinedTrajectoryFile});
+  const Trajectory refined = io::read_tum(work / kRefinedTrajectoryFile);
+  const Trajectory map = io::read_tum(mission / "map_poses.tum");
+  ASSERT_EQ(refined.size(), map.size());
+  for (size_t k = 0; k < map.size(); ++k) ASSERT_EQ(refined[k].t_ns, map[k].t_ns) << k;
+
+  // Against the simulator's truth, computed here from the files.
+  const Trajectory truth = io::read_tum(mission / "ground_truth" / "trajectory.tum");
+  const double ate_map = ate_rmse(truth, map);
+  const double ate_refined = ate_rmse(truth, refined);
+  EXPECT_LT(ate_refined, ate_map);
+
+  const auto& report = run.result.report;
+  const auto& table = report["evaluation"]["table"];
+  const double ate_without =
+      table["refined_without_dvl"]["ate"]["translation_m"]["rmse"].get<double>();
+  EXPECT_LT(ate_refined, ate_without);
+  EXPECT_NEAR(table["map"]["ate"]["translation_m"]["rmse"].get<double>(), ate_map, 1e-9);
+  EXPECT_NEAR(table["refined_with_dvl"]["ate"]["translation_m"]["rmse"].get<double>(), ate_refined,
+              1e-6);  // the TUM file rounds to 9 significant digits
+  EXPECT_TRUE(table["map"]["rpe"].contains("translation_m")) << table["map"]["rpe"].dump();
+
+  // Inputs, solver and calibration figures are there; s_d is 1 in this mission.
+  EXPECT_EQ(report["inputs"]["keyframes"]["used"].get<size_t>(), map.size());
+  EXPECT_EQ(report["inputs"]["odometry"]["source"], "recorded");
+  EXPECT_EQ(report["solver"]["factors"]["dvl"].get<int>(), static_cast<int>(map.size()) - 1);
+  EXPECT_GT(report["solver"]["iterations"].get<int>(), 0);
+  const auto& scale = report["dvl"]["dvl_scale"];
+  EXPECT_EQ(scale["true"].get<double>(), 1.0);
+  EXPECT_GT(scale["sigma"].get<double>(), 0.0);
+  EXPECT_LT(std::abs(scale["value"].get<double>() - 1.0), 4.0 * scale["sigma"].get<double>());
+  EXPECT_EQ(report["dvl"]["gaps"]["gaps_skipped"], 0);
+  EXPECT_TRUE(report["dvl"]["dvl_rotation"]["error_vs_truth_deg"].is_array());
+
+  // Progress is monotone and ends at 1.
+  ASSERT_FALSE(run.progress.empty());
+  for (size_t k = 1; k < run.progress.size(); ++k) EXPECT_GE(run.progress[k], run.progress[k - 1]);
+  EXPECT_EQ(run.progress.back(), 1.0);
+}
+
+TEST_F(RefineStageTest, EstimatesAnInjectedDvlScale) {
+  const fs::path mission = simulated_mission("bridge_scale", {"imu", "dvl"}, 1.02);
+  const StageRun run =
+      run_stage(mission, {{"compare_without_dvl", false}}, temp_root() / "work_scale");
+  const auto& scale = run.result.report["dvl"]["dvl_scale"];
+  EXPECT_EQ(scale["true"].get<double>(), 1.02);
+  EXPECT_LT(std::abs(scale["value"].get<double>() - 1.02), 4.0 * scale["sigma"].get<double>())
+      << scale.dump();
+  EXPECT_TRUE(run.result.report["evaluation"]["table"]["refined_without_dvl"].is_null());
+}
+
+TEST_F(RefineStageTest, OptionErrorsNameTheOption) {
+  const fs::path mission = simulated_mission("bridge", {"imu", "dvl"});
+  const std::string unknown = error_of(mission, {{"dvl_scael", 1.0}});
+  EXPECT_NE(unknown.find("options.refine.dvl_scael"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("estimate_dvl_scale"), std::string::npos) << unknown;  // the known ones
+  const std::string mistyped = error_of(mission, {{"dvl", "yes"}});
+  EXPECT_NE(mistyped.find("options.refine.dvl"), std::string::npos) << mistyped;
+  EXPECT_NE(mistyped.find("boolean"), std::string::npos) << mistyped;
+  const std::string range = error_of(mission, {{"rpe_delta_m", -1.0}});
+  EXPECT_NE(range.find("options.refine.rpe_delta_m"), std::string::npos) << range;
+  const std::string choice = error_of(mission, {{"odometry", "wheels"}});
+  EXPECT_NE(choice.find("options.refine.odometry"), std::string::npos) << choice;
+  const std::string sensor = error_of(mission, {{"dvl_sensor", "imu"}});
+  EXPECT_NE(sensor.find("options.refine.dvl_sensor"), std::string::npos) << sensor;
+}
+
+TEST_F(RefineStageTest, MissionWithoutDvlFailsUnlessDvlIsOff) {
+  const fs::path mission = simulated_mission("imu_only", {"imu"});
+  const std::string error = error_of(mission, nlohmann::json::object());
+  EXPECT_NE(error.find("no sensor of type dvl"), std::string::npos) << error;
+  EXPECT_NE(error.find("refine.dvl=false"), std::string::npos) << error;
+
+  const fs::path work = temp_root() / "work_imu_only";
+  const StageRun run = run_stage(mission, {{"dvl", false}}, work);
+  const Trajectory refined = io::read_tum(work / kRefinedTrajectoryFile);
+  EXPECT_EQ(refined.size(), io::read_tum(mission / "map_poses.tum").size());
+  EXPECT_TRUE(run.result.report["dvl"].is_null());
+  EXPECT_TRUE(run.result.report["evaluation"]["table"]["refined_with_dvl"].is_null());
+  EXPECT_EQ(run.result.report["solver"]["factors"]["dvl"], 0);
+}
+
+TEST_F(RefineStageTest, CancelStopsTheStage) {
+  const fs::path mission = simulated_mission("bridge", {"imu", "dvl"});
+  StageContext context;
+  context.mission_dir = mission;
+  context.work_dir = temp_root() / "work_cancel";
+  fs::create_directories(context.work_dir);
+  context.canceled = [] { return true; };
+  EXPECT_THROW(make_refine_stage()->run(context), Canceled);
+  EXPECT_FALSE(fs::exists(context.work_dir / kRefinedTrajectoryFile));
+}
+
+}  // namespace
+}  // namespace keel::pipeline
