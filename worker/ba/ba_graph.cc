@@ -4,6 +4,8 @@
 
 #include <array>
 #include <chrono>
+#include <cstdio>  // TEMP
+#include <cstdlib>  // TEMP
 #include <memory>
 #include <stdexcept>
 
@@ -71,6 +73,7 @@ class BaGraph {
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
     ceres::Solve(solver, &ceres_problem_, &summary);
+    if (getenv("KEEL_BA_DEBUG_REPORT")) std::printf("%s\n", summary.FullReport().c_str());  // TEMP
     result.solve_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;

@@ -124,4 +124,8 @@ struct BaOptions {
   TriangulationOptions triangulation;
 };
 
+// Throws std::invalid_argument naming the option (e.g. "ba options: sigma1_m") unless every
+// sigma, tolerance and count is positive and finite and the modes are not empty.
+void validate(const BaOptions& options);
+
 }  // namespace keel::ba

@@ -71,7 +71,8 @@ void gate_beams(const BaProblem& problem, const MeshQuery& mesh, const BaOptions
 }  // namespace
 
 BaResult run_model_assisted_ba(const BaProblem& problem, const BaOptions& options) {
-  validate(problem);  // step 1
+  validate(options);  // step 1
+  validate(problem);
   const MeshQuery mesh(problem.cad_mesh);
   BaResult result;
   BaInitialState state;

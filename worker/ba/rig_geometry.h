@@ -12,26 +12,27 @@
 
 namespace keel::ba {
 
-template <typename T>
-Eigen::Quaternion<T> cast_rotation(const Pose3& pose) {
-  return Eigen::Quaterniond(pose.linear()).cast<T>();
-}
-template <typename T>
-Vec3<T> cast_translation(const Pose3& pose) {
-  return pose.translation().cast<T>();
-}
-
-// The servo tray's mounting on the vehicle: fixed offset and rotation axis.
+// The servo tray's mounting on the vehicle: fixed offset and rotation axis. The offset's
+// quaternion is kept next to it so the factors do not convert a matrix per evaluation.
 struct ServoMount {
+  ServoMount() = default;
+  ServoMount(const Pose3& T_vehicle_servo_zero_in, const Eigen::Vector3d& axis_in)
+      : T_vehicle_servo_zero(T_vehicle_servo_zero_in),
+        axis(axis_in),
+        q_vehicle_servo_zero(T_vehicle_servo_zero_in.linear()),
+        t_vehicle_servo_zero(T_vehicle_servo_zero_in.translation()) {}
+
   Pose3 T_vehicle_servo_zero = Pose3::Identity();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
+  Eigen::Quaterniond q_vehicle_servo_zero = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d t_vehicle_servo_zero = Eigen::Vector3d::Zero();
 
   // p_servo = x_v_s(theta)^-1 * x_gv^-1 * p_world.
   template <typename T>
   Vec3<T> world_to_servo(const T* T_world_vehicle, const T& theta, const Vec3<T>& p_world) const {
     const Vec3<T> p_vehicle = inverse_transform_point(T_world_vehicle, p_world);
-    const Vec3<T> p_servo_zero = cast_rotation<T>(T_vehicle_servo_zero).conjugate() *
-                                 (p_vehicle - cast_translation<T>(T_vehicle_servo_zero));
+    const Vec3<T> p_servo_zero = q_vehicle_servo_zero.cast<T>().conjugate() *
+                                 (p_vehicle - t_vehicle_servo_zero.cast<T>());
     return axis_angle_rotation(axis, theta).conjugate() * p_servo_zero;
   }
 
@@ -39,8 +40,8 @@ struct ServoMount {
   template <typename T>
   Vec3<T> servo_to_world(const T* T_world_vehicle, const T& theta, const Vec3<T>& p_servo) const {
     const Vec3<T> p_servo_zero = axis_angle_rotation(axis, theta) * p_servo;
-    const Vec3<T> p_vehicle = cast_rotation<T>(T_vehicle_servo_zero) * p_servo_zero +
-                              cast_translation<T>(T_vehicle_servo_zero);
+    const Vec3<T> p_vehicle =
+        q_vehicle_servo_zero.cast<T>() * p_servo_zero + t_vehicle_servo_zero.cast<T>();
     return transform_point(T_world_vehicle, p_vehicle);
   }
 
@@ -49,7 +50,7 @@ struct ServoMount {
   Vec3<T> servo_direction_to_world(const T* T_world_vehicle, const T& theta,
                                    const Vec3<T>& d_servo) const {
     return block_rotation(T_world_vehicle).normalized() *
-           (cast_rotation<T>(T_vehicle_servo_zero) * (axis_angle_rotation(axis, theta) * d_servo));
+           (q_vehicle_servo_zero.cast<T>() * (axis_angle_rotation(axis, theta) * d_servo));
   }
 
   Pose3 T_vehicle_servo(double theta) const {

@@ -25,5 +25,7 @@ Subcommand add_serve_command(CLI::App& app);  // serve_command.cc (the default)
 Subcommand add_run_command(CLI::App& app);    // run_command.cc
 Subcommand add_ate_command(CLI::App& app);    // ate_command.cc (evo_ape)
 Subcommand add_rpe_command(CLI::App& app);    // rpe_command.cc (evo_rpe)
+Subcommand add_filter_command(CLI::App& app);   // filter_command.cc (map filter chains)
+Subcommand add_metrics_command(CLI::App& app);  // metrics_command.cc (Table V metrics)
 
 }  // namespace keel::worker

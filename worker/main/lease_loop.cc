@@ -62,7 +62,12 @@ LeaseLoop::LeaseLoop(client::ClientConfig config, LeaseLoopOptions options,
 
 int LeaseLoop::run(const std::function<bool()>& stop_requested) {
   client::ApiClient api(config_);
-  client::ApiClient heartbeat_api(config_);  // ApiClient is not thread-safe: one per thread
+  // ApiClient is not thread-safe: one per thread. A heartbeat that hangs longer than a
+  // third of the lease is useless, and it would hold up stopping.
+  client::ClientConfig heartbeat_config = config_;
+  heartbeat_config.timeout_s =
+      std::min(config_.timeout_s, std::max(2.0, options_.lease_seconds / 3.0));
+  client::ApiClient heartbeat_api(heartbeat_config);
   BlobCache blobs(options_.cache_dir / "blobs");
   const std::filesystem::path area = make_process_area(options_.cache_dir);
   auto remove_area = [&] {

@@ -131,6 +131,7 @@ pipeline::JobSpec LeasedJob::prepare() {
     if (heartbeat_->lease_lost()) throw Abandon{std::string("lease lost during ") + step};
     if (stop_requested_()) throw Abandon{std::string("stopping during ") + step};
   };
+  if (lease_.job.stages.empty()) throw std::invalid_argument("the job has no stages");
   std::error_code ec;
   fs::remove_all(job_dir_, ec);  // a folder left by an earlier attempt on this machine
   fs::create_directories(work_dir_);

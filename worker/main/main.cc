@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
       keel::worker::add_run_command(app),
       keel::worker::add_ate_command(app),
       keel::worker::add_rpe_command(app),
+      keel::worker::add_filter_command(app),
+      keel::worker::add_metrics_command(app),
   };
 
   std::vector<std::string> args = with_default_subcommand(argc, argv);

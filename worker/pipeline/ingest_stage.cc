@@ -113,7 +113,7 @@ class IngestStage : public Stage {
       context.check_canceled();
       sensors[sensor.name] =
           sensor_report(reader, sensor, options, context, warnings, [&](double f) { progress(f); });
-      context.log("ingest: " + sensor.name + " (" + proto::to_string(sensor.type) +
+      context.log(sensor.name + " (" + proto::to_string(sensor.type) +
                   "): " + std::to_string(sensors[sensor.name]["count"].get<size_t>()) + " records");
       ++done;
       progress(0.0);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "worker/pipeline/ingest_stage.h"
+#include "worker/pipeline/map_stage.h"
 #include "worker/pipeline/refine_stage.h"
 #include "worker/pipeline/stage.h"
 
@@ -21,6 +22,7 @@ const std::vector<StageEntry>& entries() {
   static const std::vector<StageEntry> table = {
       {"ingest", make_ingest_stage},
       {"refine", make_refine_stage},
+      {"map", make_map_stage},
   };
   return table;
 }

@@ -155,15 +155,18 @@ void add_observations(const SyntheticHullOptions& o, Noise& noise, SyntheticHull
     return uv.x() >= 5 && uv.y() >= 5 && uv.x() < o.camera.width - 5 && uv.y() < o.camera.height - 5;
   };
   const Pose3 T_bottom_top = out.problem.rig.T_top_bottom.inverse();
+  std::vector<Pose3> T_camera_world;
+  for (size_t i = 0; i < out.T_world_vehicle.size(); ++i) {
+    T_camera_world.push_back(keel::ba::world_camera_pose(out.T_world_vehicle[i],
+                                                         out.servo_angle_rad[i], mount,
+                                                         out.T_servo_camera)
+                                 .inverse());
+  }
   for (size_t l = 0; l < out.landmarks_world.size(); ++l) {
     keel::ba::FeatureTrack track;
     track.landmark_id = static_cast<int64_t>(l);
-    for (size_t i = 0; i < out.T_world_vehicle.size(); ++i) {
-      const Pose3 T_camera_world = keel::ba::world_camera_pose(out.T_world_vehicle[i],
-                                                               out.servo_angle_rad[i], mount,
-                                                               out.T_servo_camera)
-                                       .inverse();
-      const Eigen::Vector3d p_c = T_camera_world * out.landmarks_world[l];
+    for (size_t i = 0; i < T_camera_world.size(); ++i) {
+      const Eigen::Vector3d p_c = T_camera_world[i] * out.landmarks_world[l];
       Eigen::Vector2d uv, uv_bottom;
       if (!in_image(p_c, uv)) continue;
       keel::ba::FeatureObservation obs;

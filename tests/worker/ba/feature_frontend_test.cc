@@ -11,9 +11,11 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 
+#include "worker/ba/model_assisted_ba.h"
 #include "worker/ba/rigid_ransac.h"
 #include "worker/ba/track_builder.h"
 #include "worker/ba/triangulation.h"
@@ -137,6 +139,46 @@ TEST(FeatureFrontend, StereoWithoutBottomImageNamesTheKeyframe) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("keyframes[2].image_bottom"), std::string::npos);
   }
+}
+
+// The whole pipeline from images: frontend, triangulation, GICP, the three modes, with the
+// plate as the CAD (vehicle = servo = camera frames, the DVL at the camera looking up).
+TEST(FeatureFrontend, ImagesRunThroughTheWholePipeline) {
+  const RenderedSurvey s = render_survey(false);
+  BaProblem problem;
+  problem.rig = s.rig;
+  problem.keyframes = s.keyframes;
+  for (size_t i = 0; i < s.keyframes.size(); ++i) {
+    problem.keyframes[i].T_world_vehicle = s.T_world_camera[i];
+    for (int b = 0; b < 4; ++b) {
+      const double az = M_PI / 4 + b * M_PI / 2;
+      const Eigen::Vector3d d(0.5 * std::cos(az), 0.5 * std::sin(az), std::sqrt(0.75));
+      const Eigen::Vector3d d_world = s.T_world_camera[i].linear() * d;
+      const double range = (kPlateZ - s.T_world_camera[i].translation().z()) / d_world.z();
+      problem.dvl_ranges.push_back({static_cast<int>(i), b, d, range});
+    }
+  }
+  problem.odometry = odometry_from_initial_poses(problem.keyframes);
+  // The plate, normals down to the cameras.
+  problem.cad_mesh.vertices = {{-3, -3, kPlateZ}, {3, -3, kPlateZ}, {3, 3, kPlateZ}, {-3, 3, kPlateZ}};
+  problem.cad_mesh.faces = {{0, 2, 1}, {0, 3, 2}};
+  for (int x = -30; x <= 30; ++x) {  // dense vertices for GICP's target cloud
+    for (int y = -30; y <= 30; ++y) problem.cad_mesh.vertices.emplace_back(0.1 * x, 0.1 * y, kPlateZ);
+  }
+  BaOptions options;
+  options.gicp.min_points = 10;
+  const BaResult result = run_model_assisted_ba(problem, options);
+  EXPECT_TRUE(result.frontend.ran);
+  EXPECT_GE(result.landmarks_triangulated, 100);
+  const BaModeResult* proposed = result.find(BaMode::kProposed);
+  ASSERT_NE(proposed, nullptr);
+  int on_plate = 0;
+  for (const BaLandmark& l : proposed->landmarks) on_plate += std::abs(l.signed_distance_m) < 0.01 && l.lambda == 1;
+  EXPECT_GE(on_plate, 0.95 * proposed->landmarks.size());
+  // Algorithm 1's input: landmarks seen from keyframe 0, in its camera frame, 1.5 m ahead.
+  const auto in_camera = landmarks_in_camera(*proposed, 0);
+  ASSERT_FALSE(in_camera.empty());
+  for (const auto& p : in_camera) EXPECT_NEAR(p.point_camera.z(), kPlateZ, 0.02);
 }
 
 TEST(RigidRansac, RecoversMotionDespiteOutliers) {

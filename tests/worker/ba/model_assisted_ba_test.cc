@@ -189,6 +189,15 @@ TEST(ModelAssistedBa, RejectsBadInputNamingTheField) {
   bad = sim.problem;
   bad.cad_mesh.faces.clear();
   EXPECT_THROW(run_model_assisted_ba(bad), std::invalid_argument);
+  BaOptions options;
+  options.sigma1_m = 0;
+  try {
+    run_model_assisted_ba(sim.problem, options);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sigma1_m"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ba_mode_from_string("fast"), std::invalid_argument);
 }
 
 }  // namespace

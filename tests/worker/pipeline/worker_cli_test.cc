@@ -65,7 +65,9 @@ class WorkerCliTest : public ::testing::Test {
 TEST_F(WorkerCliTest, RunWritesTheReportAndExitsZero) {
   const fs::path mission = write_tiny_mission();
   const fs::path out = dir_ / "out";
-  ASSERT_EQ(run({"run", "--mission", mission.string(), "--out", out.string()}), 0) << err();
+  ASSERT_EQ(
+      run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out.string()}), 0)
+      << err();
 
   const auto report = nlohmann::json::parse(read_text(out / "report.json"));
   EXPECT_EQ(report["keel_report"], 1);
@@ -92,7 +94,8 @@ TEST_F(WorkerCliTest, StageFailureExitsTwoWithTheStageMessage) {
   const fs::path mission = write_tiny_mission();
   fs::remove(mission / "imu.csv");
   const fs::path out = dir_ / "out";
-  EXPECT_EQ(run({"run", "--mission", mission.string(), "--out", out.string()}), 2);
+  EXPECT_EQ(
+      run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out.string()}), 2);
   EXPECT_NE(err().find("ingest: "), std::string::npos) << err();
   EXPECT_NE(err().find("imu.csv"), std::string::npos) << err();
   EXPECT_FALSE(fs::exists(out / "report.json"));
@@ -100,8 +103,8 @@ TEST_F(WorkerCliTest, StageFailureExitsTwoWithTheStageMessage) {
 
 TEST_F(WorkerCliTest, BadStageOptionFailsTheStage) {
   const fs::path mission = write_tiny_mission();
-  EXPECT_EQ(run({"run", "--mission", mission.string(), "--out", (dir_ / "out").string(), "--set",
-                 "ingest.no_such_option=1"}),
+  EXPECT_EQ(run({"run", "--mission", mission.string(), "--stages", "ingest", "--out",
+                 (dir_ / "out").string(), "--set", "ingest.no_such_option=1"}),
             2);
   EXPECT_NE(err().find("ingest: "), std::string::npos) << err();
   EXPECT_NE(err().find("no_such_option"), std::string::npos) << err();
@@ -127,8 +130,8 @@ TEST_F(WorkerCliTest, SigintDuringAStageExits130) {
   const fs::path m = dir_ / "mission";
   keel::testing::write_long_mission(m);
   const fs::path out = dir_ / "out";
-  Child child({"run", "--mission", m.string(), "--out", out.string()}, dir_ / "stdout.txt",
-              dir_ / "stderr.txt");
+  Child child({"run", "--mission", m.string(), "--stages", "ingest", "--out", out.string()},
+              dir_ / "stdout.txt", dir_ / "stderr.txt");
   // Interrupt once the stage has started.
   for (int i = 0;
        i < 24000 && read_text(dir_ / "stdout.txt").find("[ingest] 0%") == std::string::npos; ++i)

@@ -1,0 +1,266 @@
+// Stage `map` on keel-sim usv-bridge (seed 000 Sec. VI): the inspection map against the SLAM
+// map (Table V: density x95, roughness -29 %, planarity +40 %; target: better on all three),
+// input points/s of the whole stage (target >= 2 M/s on 2 cores), metrics points/s (>= 1 M/s)
+// and the peak RSS of a 30-minute vs a 5-minute survey of the same bridge (target <= 1.5x).
+//
+// Each stage run is a fresh process (`bench_map_sim --stage MISSION WORK`), so its peak RSS is
+// its own. On a shared machine wall time includes waiting for a core: CPU seconds are printed
+// too, and "per 2 cores" = 2 x points / CPU seconds.
+// Run build-*/tests/bench/bench_map_sim [--keep] [--skip-rss] [--dir DIR].
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/sim/scenarios.h"
+#include "tests/sim/simulator.h"
+#include "worker/io/scan_file.h"
+#include "worker/mapping/map_metrics.h"
+#include "worker/pipeline/map_stage.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+double cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+         1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Child mode: runs the stage, prints one JSON line {wall_s, cpu_s, peak_rss_mib, report}.
+int run_stage_child(const fs::path& mission, const fs::path& work, const std::string& options) {
+  fs::create_directories(work);
+  keel::pipeline::StageContext context;
+  context.mission_dir = mission;
+  context.work_dir = work;
+  context.options = options.empty() ? json::object() : json::parse(options);
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = cpu_seconds();
+  const auto result = keel::pipeline::make_map_stage()->run(context);
+  const double wall = seconds_since(start), cpu = cpu_seconds() - cpu_start;
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const json out = {{"wall_s", wall},
+                    {"cpu_s", cpu},
+                    {"peak_rss_mib", usage.ru_maxrss / 1024.0},
+                    {"report", result.report}};
+  std::printf("%s\n", out.dump().c_str());
+  return 0;
+}
+
+json stage_in_child(const fs::path& mission, const fs::path& work, const json& options) {
+  const std::string command = "/proc/" + std::to_string(getpid()) + "/exe --stage '" +
+                              mission.string() + "' '" + work.string() + "' '" + options.dump() +
+                              "'";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) throw std::runtime_error("cannot start " + command);
+  std::string text;
+  char buffer[65536];
+  while (size_t n = fread(buffer, 1, sizeof(buffer), pipe)) text.append(buffer, n);
+  if (pclose(pipe) != 0) throw std::runtime_error("stage child failed: " + command);
+  return json::parse(text);
+}
+
+// Path length of usv-bridge (so a mission of T seconds surveys the whole bridge once).
+double bridge_path_length_m() {
+  const keel::sim::Scenario s = keel::sim::make_scenario("usv-bridge", 1);
+  keel::sim::MotionOptions m;
+  return (s.motion->end_time() - m.start_rest_s - m.ramp_s) * m.cruise_speed_mps;
+}
+
+double simulate(const fs::path& dir, double duration_s, const std::vector<std::string>& sensors,
+                const std::vector<std::string>& settings) {
+  if (fs::exists(dir / "mission.yaml")) return 0.0;
+  keel::sim::SimOptions o;
+  o.scenario = "usv-bridge";
+  o.seed = 1;
+  o.out_dir = dir.string();
+  o.duration_s = duration_s;
+  o.sensors = sensors;
+  o.settings = settings;
+  const auto start = std::chrono::steady_clock::now();
+  const auto summary = keel::sim::run_simulation(o);
+  const double seconds = seconds_since(start);
+  std::printf("simulated %s: %.0f s, %.0f m, %zu scans, %zu points in %.1f s\n",
+              dir.filename().c_str(), summary.duration_s, summary.path_length_m, summary.scans,
+              summary.scan_points, seconds);
+  return seconds;
+}
+
+void print_distribution_row(const char* label, const json& maps, const char* metric,
+                            const std::vector<std::string>& columns) {
+  std::printf("  %-16s", label);
+  for (const auto& c : columns) std::printf(" %14.5g", maps[c][metric]["mean"].get<double>());
+  std::printf("   (median");
+  for (const auto& c : columns) std::printf(" %.4g", maps[c][metric]["median"].get<double>());
+  std::printf("; p05-p95");
+  for (const auto& c : columns)
+    std::printf(" [%.3g, %.3g]", maps[c][metric]["p05"].get<double>(),
+                maps[c][metric]["p95"].get<double>());
+  std::printf(")\n");
+}
+
+void print_table_v(const json& report) {
+  const json& metrics = report["metrics"];
+  const json& table = metrics["table_v"];
+  std::vector<std::string> columns;
+  for (const auto& c : table["columns"]) columns.push_back(c.get<std::string>());
+  std::printf("Table V (r = %.2f m, means over <= %zu query points per map):\n  %-16s",
+              metrics["radius_m"].get<double>(), metrics["max_query_points"].get<size_t>(), "");
+  for (const auto& c : columns) std::printf(" %14s", c.c_str());
+  std::printf("\n");
+  print_distribution_row("density /m^2", metrics["maps"], "surface_density", columns);
+  print_distribution_row("roughness m", metrics["maps"], "roughness", columns);
+  print_distribution_row("planarity", metrics["maps"], "planarity", columns);
+  std::printf("  points        ");
+  for (const auto& c : columns)
+    std::printf(" %14zu", metrics["maps"][c]["points"].get<size_t>());
+  std::printf("\n");
+  const json& r = table["ratios"];
+  const json& paper = r["paper_table_v"];
+  std::printf(
+      "  %s vs slam_map: density x%.1f (paper x%.1f), roughness %+.1f %% (paper %+.1f %%), "
+      "planarity %+.1f %% (paper %+.1f %%)\n",
+      table["inspection_map"].get<std::string>().c_str(), r["density_factor"].get<double>(),
+      paper["density_factor"].get<double>(), r["roughness_change_percent"].get<double>(),
+      paper["roughness_change_percent"].get<double>(), r["planarity_change_percent"].get<double>(),
+      paper["planarity_change_percent"].get<double>());
+  const json& beats = table["inspection_beats_slam"];
+  std::printf("  inspection beats SLAM: density %s, roughness %s, planarity %s (target: all)\n",
+              beats["surface_density"].get<bool>() ? "yes" : "NO",
+              beats["roughness"].get<bool>() ? "yes" : "NO",
+              beats["planarity"].get<bool>() ? "yes" : "NO");
+}
+
+void print_stage_figures(const json& run) {
+  const json& report = run["report"];
+  const json& timing = report["timing"];
+  const double points = timing["input_points"].get<double>();
+  const double wall = run["wall_s"].get<double>(), cpu = run["cpu_s"].get<double>();
+  std::printf(
+      "stage: %.0f input points; whole stage wall %.1f s = %.2f M points/s, cpu %.1f s = %.2f M "
+      "points/s per 2 cores (target >= 2); scan phase %.1f s = %.2f M points/s; peak RSS %.0f "
+      "MiB\n",
+      points, wall, points / wall / 1e6, cpu, 2.0 * points / cpu / 1e6,
+      timing["scans_seconds"].get<double>(), timing["input_points_per_second"].get<double>() / 1e6,
+      run["peak_rss_mib"].get<double>());
+  for (const auto& [sensor, entry] : report["sensors"].items()) {
+    if (entry["stats"].is_null()) continue;
+    const json& s = entry["stats"];
+    std::printf("  %-8s %6zu scans (%zu outside), %10zu points in -> %9zu out", sensor.c_str(),
+                s["scans"].get<size_t>(), s["scans_outside_trajectory"].get<size_t>(),
+                s["points_in"].get<size_t>(), s["points_out"].get<size_t>());
+    if (entry.contains("map"))
+      std::printf("; draco %.1f MB (%.2f B/pt), max error %.3f mm",
+                  entry["map"]["draco"]["bytes"].get<double>() / 1e6,
+                  entry["map"]["draco"]["bytes_per_point"].get<double>(),
+                  entry["map"]["draco"]["max_position_error_m"].get<double>() * 1e3);
+    std::printf("\n");
+    for (const char* stage : {"scan_stage", "intermediary_stage", "final_stage"})
+      for (const auto& f : s[stage]["filters"])
+        std::printf("      %-18s %-10s %10zu -> %10zu\n", stage,
+                    f["filter"].get<std::string>().c_str(), f["points_in"].get<size_t>(),
+                    f["points_out"].get<size_t>());
+  }
+  const json& combined = report["combined"];
+  std::printf("  combined %zu points; draco %.1f MB, max error %.3f mm (bound %.3f mm, range %.1f m)\n",
+              combined["points"].get<size_t>(), combined["draco"]["bytes"].get<double>() / 1e6,
+              combined["draco"]["max_position_error_m"].get<double>() * 1e3,
+              combined["draco"]["position_error_bound_m"].get<double>() * 1e3,
+              combined["draco"]["position_range_m"].get<double>());
+  std::printf("  metrics in the stage: %.1f s, %.2f M query points/s\n",
+              timing["metrics_seconds"].get<double>(),
+              timing["metrics_query_points_per_second"].get<double>() / 1e6);
+}
+
+// Metrics on the whole lidar_h inspection map (every point a query point).
+void metrics_throughput(const fs::path& ply) {
+  const keel::PointCloud map = keel::io::read_scan_file(ply, 0);
+  keel::mapping::MapMetricsOptions options;  // r = 0.25 m, 2 threads, every point
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = cpu_seconds();
+  const auto metrics = keel::mapping::compute_map_metrics(map, options);
+  const double wall = seconds_since(start), cpu = cpu_seconds() - cpu_start;
+  std::printf(
+      "metrics on %s (every point, r = 0.25 m): %zu points, wall %.1f s = %.2f M points/s, cpu "
+      "%.1f s = %.2f M points/s per 2 cores (target >= 1); mean neighbours %.0f\n",
+      ply.filename().c_str(), metrics.query_points, wall, metrics.query_points / wall / 1e6, cpu,
+      2.0 * metrics.query_points / cpu / 1e6, metrics.surface_density.mean * M_PI * 0.0625);
+}
+
+void memory_scaling(const fs::path& root, bool keep) {
+  // The same survey of the bridge at two speeds; lidar resolution reduced (450 points per
+  // ring) so the 30-minute mission stays ~1 GB on disk.
+  const double length = bridge_path_length_m();
+  const std::vector<std::string> sensors = {"lidar_h", "sonar"};
+  json runs = json::array();
+  for (const double minutes : {5.0, 30.0}) {
+    const double duration = minutes * 60.0;
+    const double speed = length / (duration - 6.0);  // 2 s rest + 4 s ramp
+    const fs::path mission = root / ("bridge_" + std::to_string(int(minutes)) + "min");
+    simulate(mission, duration, sensors,
+             {"lidar.points_per_ring=450", "motion.speed=" + std::to_string(speed)});
+    const json run = stage_in_child(mission, root / ("work_" + std::to_string(int(minutes))),
+                                    {{"metrics_max_points", 200000}});
+    std::printf("%2.0f-minute survey (%.2f m/s): ", minutes, speed);
+    print_stage_figures(run);
+    runs.push_back(run);
+    if (!keep) fs::remove_all(mission);
+  }
+  const double short_mib = runs[0]["peak_rss_mib"].get<double>();
+  const double long_mib = runs[1]["peak_rss_mib"].get<double>();
+  std::printf("peak RSS: 5 min %.0f MiB (%zu map points), 30 min %.0f MiB (%zu map points): "
+              "ratio %.2f (target <= 1.5)\n",
+              short_mib, runs[0]["report"]["combined"]["points"].get<size_t>(), long_mib,
+              runs[1]["report"]["combined"]["points"].get<size_t>(), long_mib / short_mib);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 4 && std::string(argv[1]) == "--stage")
+    return run_stage_child(argv[2], argv[3], argc >= 5 ? argv[4] : "");
+  bool keep = false, skip_rss = false;
+  fs::path root = fs::temp_directory_path() / ("keel_bench_map_sim_" + std::to_string(getpid()));
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--keep") keep = true;
+    if (a == "--skip-rss") skip_rss = true;
+    if (a == "--dir" && i + 1 < argc) root = argv[++i];
+  }
+  fs::create_directories(root);
+  try {
+    // Full usv-bridge mission, the three range sensors of seed 000 Sec. VI.
+    const fs::path mission = root / "bridge_full";
+    simulate(mission, 0.0, {"lidar_h", "lidar_v", "sonar"}, {});
+    const json run = stage_in_child(mission, root / "work_full", json::object());
+    std::printf("usv-bridge 220 s, lidar_h + lidar_v + sonar, default map options, poses: %s\n",
+                run["report"]["poses"]["source"].get<std::string>().c_str());
+    print_stage_figures(run);
+    print_table_v(run["report"]);
+    metrics_throughput(root / "work_full" / keel::pipeline::map_ply_file("lidar_h"));
+    if (!skip_rss) memory_scaling(root, keep);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_map_sim: %s\n", e.what());
+    if (!keep) fs::remove_all(root);
+    return 1;
+  }
+  if (!keep) fs::remove_all(root);
+  return 0;
+}

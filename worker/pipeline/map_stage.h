@@ -1,0 +1,78 @@
+// Stage `map` (seed 000 Sec. VI): the dense inspection map, decoupled from SLAM. Every scan of
+// every lidar and sonar is streamed through MapBuilder (deskew with the TF tree, the filters of
+// Table IV, intermediary maps of N_I scans, final filters) with poses from the chain of
+// Sec. VI-C: keyframe poses (`trajectory_refined.tum` of an earlier `refine` stage, else the
+// recorded `map` poses) correcting the recorded high-rate `odometry` by Algorithm 2, so every
+// scan gets a pose. The first lidar's keyframe scans also build the SLAM-map baseline, and the
+// report compares both maps by the metrics of Eqs. (23)-(26), as Table V does.
+//
+// Artifacts: map_<sensor>.drc / .ply per sensor, map_combined.drc / .ply (Eq. (21)).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "worker/mapping/map_builder.h"
+#include "worker/pipeline/stage.h"
+
+namespace keel::pipeline {
+
+inline constexpr const char* kCombinedMapName = "combined";
+
+// `map_<sensor>.drc` / `map_<sensor>.ply` (sensor "combined" for the union).
+std::string map_draco_file(const std::string& sensor);
+std::string map_ply_file(const std::string& sensor);
+
+// `--set map.<name>=<value>`.
+struct MapStageOptions {
+  // Scan sensors to map; empty = every lidar and sonar of the mission (sensors riding a servo
+  // tray are then skipped and reported, see map_stage.cc).
+  std::vector<std::string> sensors;
+  // Per sensor type, then per sensor name: mapping::sensor_map_options_from_json objects
+  // ({"scan_filters": [...], "intermediary_filters": [...], "final_filters": [...],
+  // "deskew": bool}); each key given replaces that part of the defaults below.
+  nlohmann::json lidar_filters = nlohmann::json::object();
+  nlohmann::json sonar_filters = nlohmann::json::object();
+  nlohmann::json sensor_filters = nlohmann::json::object();  // {"<sensor>": {...}}
+  // Stage-3 voxel leaf added to every default chain (0: none, Table IV exactly). Without a
+  // final voxel grid the map (and memory) grows with the mission; with it, memory grows with
+  // the surveyed structure (MapBuilder accumulates voxel sums).
+  double final_voxel_leaf_m = 0.02;
+  int scans_per_intermediary = 10;  // N_I of Eq. (22)
+  bool deskew = true;
+  double max_sweep_duration_s = 1.0;
+  bool odometry_correction = true;  // Algorithm 2 when the mission records `odometry`
+
+  // Draco: 18 bits keep the quantization error <= sqrt(3)/2 * 200 m / (2^18 - 1) = 0.66 mm
+  // on a 200 m map (<= 1 mm up to a 302 m extent).
+  int draco_position_bits = 18;
+  int draco_compression_level = 7;
+  bool write_ply = true;
+
+  // Table V metrics (Eqs. (23)-(26)).
+  double metrics_radius_m = 0.25;
+  // Query points per map, strided evenly over it (neighbours always come from the whole map);
+  // 0 = every point. Bounds report time on maps of tens of millions of points.
+  size_t metrics_max_points = 1000000;
+  // SLAM-map baseline: the keyframe scans of `slam_sensor` (empty = the first lidar mapped).
+  std::string slam_sensor;
+  double slam_keyframe_leaf_m = 0.2;
+  int threads = 2;
+
+  // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
+  static MapStageOptions from_json(const nlohmann::json& options);
+  static std::vector<std::string> known_options();
+  nlohmann::json to_json() const;
+  // The defaults of a sensor of type "lidar" or "sonar" (Table IV scan filters, the final
+  // voxel grid, deskew), then `lidar_filters`/`sonar_filters`, then `sensor_filters[sensor]`.
+  mapping::SensorMapOptions sensor_options(const std::string& sensor,
+                                           const std::string& type) const;
+};
+
+std::unique_ptr<Stage> make_map_stage();
+
+}  // namespace keel::pipeline
