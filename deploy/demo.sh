@@ -11,7 +11,6 @@ duration="${KEEL_DEMO_DURATION:-60}"
 stages="${KEEL_DEMO_STAGES:-ingest}"
 
 bash "$here/deploy/setup.sh"
-export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/keel-ccache}"
 cmake -G Ninja -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 ninja -C "$build" keel-server keel-worker keel keel-sim
 

@@ -6,8 +6,6 @@ here="$(cd "$(dirname "$0")/.." && pwd)"
 build="${KEEL_BUILD_DIR:-$here/build}"
 
 bash "$here/deploy/setup.sh"
-export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/keel-ccache}"
-export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-5G}"
 cmake -G Ninja -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 ninja -C "$build" -j "$(nproc)"
 ctest --test-dir "$build" --output-on-failure -j "$(nproc)" "$@"

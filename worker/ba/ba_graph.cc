@@ -4,8 +4,6 @@
 
 #include <array>
 #include <chrono>
-#include <cstdio>  // TEMP
-#include <cstdlib>  // TEMP
 #include <memory>
 #include <stdexcept>
 
@@ -73,7 +71,6 @@ class BaGraph {
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
     ceres::Solve(solver, &ceres_problem_, &summary);
-    if (getenv("KEEL_BA_DEBUG_REPORT")) std::printf("%s\n", summary.FullReport().c_str());  // TEMP
     result.solve_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
@@ -215,9 +212,10 @@ class BaGraph {
     } else if (options_.linear_solver == "dense_schur") {
       s.linear_solver_type = ceres::DENSE_SCHUR;
     } else {
-      throw std::invalid_argument("ba options: linear_solver: expected sparse_schur, "
-                                  "iterative_schur or dense_schur, got '" +
-                                  options_.linear_solver + "'");
+      throw std::invalid_argument(
+          "ba options: linear_solver: expected sparse_schur, "
+          "iterative_schur or dense_schur, got '" +
+          options_.linear_solver + "'");
     }
     // Schur elimination: landmarks first, then every other variable.
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
@@ -250,13 +248,14 @@ class BaGraph {
     result.T_world_model = from_pose_block(model_.data());
     result.T_servo_camera = from_pose_block(extrinsic_.data());
     for (size_t i = 0; i < poses_.size(); ++i) {
-      result.T_world_camera.push_back(world_camera_pose(result.T_world_vehicle[i], servo_[i],
-                                                        mount_, result.T_servo_camera));
+      result.T_world_camera.push_back(
+          world_camera_pose(result.T_world_vehicle[i], servo_[i], mount_, result.T_servo_camera));
     }
     // h and lambda at the final state, Eq. (5) and (7).
     const Pose3 T_model_world = result.T_world_model.inverse();
     std::vector<Eigen::Vector3d> in_model;
-    for (const auto& l : landmarks_) in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
+    for (const auto& l : landmarks_)
+      in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
     const std::vector<double> h = mesh_.signed_distances(in_model, options_.num_threads);
     const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
     for (size_t k = 0; k < landmarks_.size(); ++k) {
@@ -308,7 +307,8 @@ BaInitialisation refine_initial_state(const BaProblem& problem, const MeshQuery&
   state.T_world_vehicle = r.T_world_vehicle;
   state.servo_angle_rad = r.servo_angle_rad;
   state.T_servo_camera = r.T_servo_camera;
-  for (size_t k = 0; k < r.landmarks.size(); ++k) state.landmarks_world[k] = r.landmarks[k].position_world;
+  for (size_t k = 0; k < r.landmarks.size(); ++k)
+    state.landmarks_world[k] = r.landmarks[k].position_world;
   return {true, r.iterations, r.solve_time_s, r.initial_cost, r.final_cost};
 }
 

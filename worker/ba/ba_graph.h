@@ -28,8 +28,8 @@ struct BaInitialState {
   std::vector<double> servo_angle_rad;  // measured (Eq. 10's z), also the start
   Pose3 T_servo_camera = Pose3::Identity();
   Pose3 T_world_model = Pose3::Identity();
-  std::vector<FeatureTrack> tracks;               // landmarks' observations
-  std::vector<Eigen::Vector3d> landmarks_world;   // parallel to tracks
+  std::vector<FeatureTrack> tracks;              // landmarks' observations
+  std::vector<Eigen::Vector3d> landmarks_world;  // parallel to tracks
   std::vector<DvlBeam> beams;
   std::vector<int> beam_keyframe;  // parallel to beams
 };

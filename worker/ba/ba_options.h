@@ -22,12 +22,12 @@ constexpr double kDegToRad = 0.017453292519943295;
 // RANSAC with an essential matrix scored by Sampson distance, or rigid alignment of
 // triangulated stereo points); the numbers are ours.
 struct FrontendOptions {
-  int max_features = 2000;         // SIFT features per image (strongest kept)
-  double ratio_test = 0.8;         // Lowe's ratio between the best and second-best match
-  int match_window = 2;            // match keyframe i with i+1 .. i+match_window
+  int max_features = 2000;              // SIFT features per image (strongest kept)
+  double ratio_test = 0.8;              // Lowe's ratio between the best and second-best match
+  int match_window = 2;                 // match keyframe i with i+1 .. i+match_window
   double essential_threshold_px = 1.0;  // RANSAC Sampson distance threshold (monocular)
   double ransac_confidence = 0.999;
-  int min_inliers = 15;            // a keyframe pair with fewer verified matches is dropped
+  int min_inliers = 15;  // a keyframe pair with fewer verified matches is dropped
   // Stereo: a top-bottom match must reproject onto both detections (rectified pair).
   double stereo_max_reprojection_px = 2.0;
   // Stereo: RANSAC rigid alignment of triangulated points between keyframes.
@@ -83,7 +83,7 @@ struct BaOptions {
   // Eq. (11): odometry sigmas proportional to the keyframes' time difference.
   double odometry_sigma_m_per_s = 0.005;
   double odometry_sigma_rad_per_s = 80.0 * kDegToRad / 3600.0;
-  double odometry_min_sigma_m = 1e-4;      // floor for near-simultaneous keyframes
+  double odometry_min_sigma_m = 1e-4;  // floor for near-simultaneous keyframes
   double odometry_min_sigma_rad = 1e-5;
 
   // Eq. (12)-(13): reprojection, sigma_c = 2 px, with a Huber M-estimator (Sec. 2.6.5).

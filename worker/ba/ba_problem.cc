@@ -64,7 +64,8 @@ void validate_keyframes(const BaProblem& problem) {
     if (!std::isfinite(k.servo_angle_rad)) fail(at("keyframes", i) + ".servo_angle_rad", "finite");
     if (k.depth_pitch_roll) {
       const DepthPitchRoll& z = *k.depth_pitch_roll;
-      if (!std::isfinite(z.z_world_m) || !std::isfinite(z.pitch_rad) || !std::isfinite(z.roll_rad)) {
+      if (!std::isfinite(z.z_world_m) || !std::isfinite(z.pitch_rad) ||
+          !std::isfinite(z.roll_rad)) {
         fail(at("keyframes", i) + ".depth_pitch_roll", "finite values");
       }
     }
@@ -84,15 +85,16 @@ void validate_tracks(const BaProblem& problem) {
   for (size_t t = 0; t < problem.tracks.size(); ++t) {
     const FeatureTrack& track = problem.tracks[t];
     if (!ids.insert(track.landmark_id).second) {
-      fail(at("tracks", t) + ".landmark_id", "unique ids, " + std::to_string(track.landmark_id) +
-                                                 " repeats");
+      fail(at("tracks", t) + ".landmark_id",
+           "unique ids, " + std::to_string(track.landmark_id) + " repeats");
     }
     std::unordered_set<int> seen;
     for (size_t o = 0; o < track.observations.size(); ++o) {
       const FeatureObservation& obs = track.observations[o];
       const std::string field = at(at("tracks", t) + ".observations", o);
       check_keyframe_index(obs.keyframe, n, field + ".keyframe");
-      if (!seen.insert(obs.keyframe).second) fail(field + ".keyframe", "one observation per keyframe");
+      if (!seen.insert(obs.keyframe).second)
+        fail(field + ".keyframe", "one observation per keyframe");
       check_pixel(obs.pixel, field + ".pixel");
       if (obs.pixel_bottom) {
         if (!problem.rig.camera_bottom) fail(field + ".pixel_bottom", "a rig.camera_bottom");

@@ -44,11 +44,11 @@ struct BaRig {
   PinholeCamera camera_top;
   // Present for a stereo rig (Eq. 12); absent for a monocular camera (Eq. 13).
   std::optional<PinholeCamera> camera_bottom;
-  Pose3 T_top_bottom = Pose3::Identity();  // x_cT_cB: bottom camera in the top camera frame
+  Pose3 T_top_bottom = Pose3::Identity();          // x_cT_cB: bottom camera in the top camera frame
   Pose3 T_vehicle_servo_zero = Pose3::Identity();  // tray pose at servo angle 0
   Eigen::Vector3d servo_axis = Eigen::Vector3d::UnitY();  // unit, in the servo frame
-  Pose3 T_servo_camera = Pose3::Identity();  // initial guess of x_sc_T (refined by BA)
-  Pose3 T_servo_dvl = Pose3::Identity();     // fixed
+  Pose3 T_servo_camera = Pose3::Identity();               // initial guess of x_sc_T (refined by BA)
+  Pose3 T_servo_dvl = Pose3::Identity();                  // fixed
 };
 
 // Depth, pitch and roll observed by the pressure sensor and the IMU (Eq. 9). z_world_m is
@@ -61,9 +61,9 @@ struct DepthPitchRoll {
 };
 
 struct BaKeyframe {
-  TimeNs t_ns = 0;                          // strictly increasing over keyframes
+  TimeNs t_ns = 0;                            // strictly increasing over keyframes
   Pose3 T_world_vehicle = Pose3::Identity();  // initial guess (SLAM-corrected pose)
-  double servo_angle_rad = 0;               // instrumented servo angle, Eq. (10)
+  double servo_angle_rad = 0;                 // instrumented servo angle, Eq. (10)
   // Eq. (9) measurement; when absent it is read off the initial pose (which the SLAM
   // estimated from the same depth and IMU data).
   std::optional<DepthPitchRoll> depth_pitch_roll;

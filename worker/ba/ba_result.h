@@ -50,9 +50,9 @@ struct BaModeResult {
   std::vector<double> dvl_residuals_initial_m;
   std::vector<double> dvl_residuals_final_m;
 
-  std::vector<Pose3> T_world_vehicle;  // per keyframe, x_gv_i
-  std::vector<double> servo_angle_rad;  // per keyframe, theta_v_i_s_i
-  std::vector<Pose3> T_world_camera;    // per keyframe, top camera
+  std::vector<Pose3> T_world_vehicle;        // per keyframe, x_gv_i
+  std::vector<double> servo_angle_rad;       // per keyframe, theta_v_i_s_i
+  std::vector<Pose3> T_world_camera;         // per keyframe, top camera
   Pose3 T_world_model = Pose3::Identity();   // x_gM
   Pose3 T_servo_camera = Pose3::Identity();  // x_sc_T
   std::vector<BaLandmark> landmarks;
@@ -77,15 +77,15 @@ struct BaInitialisation {
 struct BaResult {
   BaFrontendStats frontend;
   BaInitialisation initialisation;  // BaOptions::slam_initialisation
-  int tracks_in = 0;              // tracks handed to triangulation
-  int landmarks_triangulated = 0;  // tracks kept as landmarks
+  int tracks_in = 0;                // tracks handed to triangulation
+  int landmarks_triangulated = 0;   // tracks kept as landmarks
   int dvl_ranges_in = 0;
   int dvl_ranges_used = 0;  // after the gate of BaOptions::dvl_gate_m
   bool gicp_ran = false;
   bool gicp_converged = false;
   double gicp_fitness = 0;  // PCL's mean squared correspondence distance (m^2)
   Pose3 T_world_model_initial = Pose3::Identity();  // x_gM prior (GICP or the guess)
-  std::vector<BaModeResult> modes;  // in BaOptions::modes order
+  std::vector<BaModeResult> modes;                  // in BaOptions::modes order
 
   const BaModeResult* find(BaMode mode) const;
 };

@@ -14,7 +14,8 @@ namespace {
 template <typename T>
 void beam_in_model(const ServoMount& mount, const DvlBeam& beam, const T* pose, const T* theta,
                    const T* T_world_model, Vec3<T>& origin_model, Vec3<T>& direction_model) {
-  const Vec3<T> origin_world = mount.servo_to_world(pose, theta[0], Vec3<T>(beam.origin_servo.cast<T>()));
+  const Vec3<T> origin_world =
+      mount.servo_to_world(pose, theta[0], Vec3<T>(beam.origin_servo.cast<T>()));
   const Vec3<T> direction_world =
       mount.servo_direction_to_world(pose, theta[0], Vec3<T>(beam.direction_servo.cast<T>()));
   // H_g^M of Eq. (5): world -> model is x_gM^-1.

@@ -25,7 +25,7 @@
 namespace keel::ba {
 
 struct DvlBeam {
-  Eigen::Vector3d origin_servo = Eigen::Vector3d::Zero();     // T_servo_dvl translation
+  Eigen::Vector3d origin_servo = Eigen::Vector3d::Zero();      // T_servo_dvl translation
   Eigen::Vector3d direction_servo = Eigen::Vector3d::UnitZ();  // unit
   double range_m = 0;                                          // measured
 };

@@ -95,7 +95,8 @@ KeyframeFeatures features_of(const BaKeyframe& keyframe, size_t index, const BaR
   const Pose3 T_bottom_top = rig.T_top_bottom.inverse();
   for (const cv::DMatch& m : ratio_matches(descriptors, descriptors_bottom, options.ratio_test)) {
     const Eigen::Vector2d top(keypoints[m.queryIdx].pt.x, keypoints[m.queryIdx].pt.y);
-    const Eigen::Vector2d bottom(keypoints_bottom[m.trainIdx].pt.x, keypoints_bottom[m.trainIdx].pt.y);
+    const Eigen::Vector2d bottom(keypoints_bottom[m.trainIdx].pt.x,
+                                 keypoints_bottom[m.trainIdx].pt.y);
     const Eigen::Vector3d p = triangulate_stereo(rig, top, bottom);
     const Eigen::Vector3d p_bottom = T_bottom_top * p;
     if (p.z() <= 0 || p_bottom.z() <= 0) continue;
@@ -129,7 +130,8 @@ std::vector<bool> verify_essential(const KeyframeFeatures& a, const KeyframeFeat
                                          options.essential_threshold_px, mask);
   std::vector<bool> inliers(matches.size(), false);
   if (E.empty() || mask.empty()) return inliers;
-  for (size_t i = 0; i < matches.size(); ++i) inliers[i] = mask.at<uint8_t>(static_cast<int>(i)) != 0;
+  for (size_t i = 0; i < matches.size(); ++i)
+    inliers[i] = mask.at<uint8_t>(static_cast<int>(i)) != 0;
   return inliers;
 }
 
@@ -142,8 +144,8 @@ std::vector<bool> verify_rigid(const KeyframeFeatures& a, const KeyframeFeatures
     pa.push_back(a.points_camera[m.queryIdx]);
     pb.push_back(b.points_camera[m.trainIdx]);
   }
-  const auto fit = rigid_ransac(pa, pb, options.rigid_inlier_threshold_m,
-                                options.rigid_ransac_iterations);
+  const auto fit =
+      rigid_ransac(pa, pb, options.rigid_inlier_threshold_m, options.rigid_ransac_iterations);
   return fit ? fit->inliers : std::vector<bool>(matches.size(), false);
 }
 
@@ -168,9 +170,9 @@ FrontendOutput run_frontend(const std::vector<BaKeyframe>& keyframes, const BaRi
           ratio_matches(features[i].descriptors, features[j].descriptors, options.ratio_test);
       if (static_cast<int>(matches.size()) < options.min_inliers) continue;
       ++out.stats.keyframe_pairs_matched;
-      const std::vector<bool> inliers = stereo ? verify_rigid(features[i], features[j], matches, options)
-                                               : verify_essential(features[i], features[j], matches,
-                                                                  rig, options);
+      const std::vector<bool> inliers =
+          stereo ? verify_rigid(features[i], features[j], matches, options)
+                 : verify_essential(features[i], features[j], matches, rig, options);
       PairMatches pair{static_cast<int>(i), static_cast<int>(j), {}};
       for (size_t m = 0; m < matches.size(); ++m) {
         if (inliers[m]) pair.matches.emplace_back(matches[m].queryIdx, matches[m].trainIdx);

@@ -40,7 +40,8 @@ GicpAlignment align_dvl_returns_to_model(const std::vector<Eigen::Vector3d>& dvl
     Pose3 T_model_world = Pose3::Identity();
     T_model_world.matrix() = gicp.getFinalTransformation().cast<double>();
     // Re-orthonormalise the float rotation.
-    T_model_world.linear() = Eigen::Quaterniond(T_model_world.linear()).normalized().toRotationMatrix();
+    T_model_world.linear() =
+        Eigen::Quaterniond(T_model_world.linear()).normalized().toRotationMatrix();
     out.T_world_model = T_model_world.inverse();
   }
   return out;

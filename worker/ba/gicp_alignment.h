@@ -16,9 +16,9 @@ namespace keel::ba {
 
 struct GicpAlignment {
   Pose3 T_world_model = Pose3::Identity();
-  bool ran = false;        // false: too few returns, the guess is returned
+  bool ran = false;  // false: too few returns, the guess is returned
   bool converged = false;
-  double fitness = 0;      // PCL's mean squared correspondence distance (m^2)
+  double fitness = 0;  // PCL's mean squared correspondence distance (m^2)
 };
 
 GicpAlignment align_dvl_returns_to_model(const std::vector<Eigen::Vector3d>& dvl_points_world,

@@ -87,8 +87,10 @@ BaResult run_model_assisted_ba(const BaProblem& problem, const BaOptions& option
   triangulate(tracks, problem, options, state);  // step 3
   result.landmarks_triangulated = static_cast<int>(state.tracks.size());
   if (state.tracks.empty()) {
-    throw std::invalid_argument("ba: no feature track could be triangulated from the initial "
-                                "poses (" + std::to_string(tracks.size()) + " tracks)");
+    throw std::invalid_argument(
+        "ba: no feature track could be triangulated from the initial "
+        "poses (" +
+        std::to_string(tracks.size()) + " tracks)");
   }
 
   if (options.slam_initialisation) {  // step 4

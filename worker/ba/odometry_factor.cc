@@ -21,7 +21,8 @@ struct Odometry {
     const Eigen::Quaternion<T> q_i = block_rotation(pose_i).normalized();
     const Eigen::Quaternion<T> q_j = block_rotation(pose_j).normalized();
     const Eigen::Quaternion<T> q_pred = q_i.conjugate() * q_j;
-    const Vec3<T> t_pred = q_i.conjugate() * (block_translation(pose_j) - block_translation(pose_i));
+    const Vec3<T> t_pred =
+        q_i.conjugate() * (block_translation(pose_j) - block_translation(pose_i));
     // Error in the measurement's frame: E = measured^-1 * predicted.
     const Eigen::Quaternion<T> q_meas_inv = q_ij.cast<T>().conjugate();
     const Vec3<T> dphi = rotation_vector(q_meas_inv * q_pred);
@@ -48,9 +49,8 @@ OdometrySigmas odometry_sigmas(double dt_s, double sigma_m_per_s, double sigma_r
 
 ceres::CostFunction* make_odometry_factor(const Pose3& T_i_j_measured,
                                           const OdometrySigmas& sigmas) {
-  return new ceres::AutoDiffCostFunction<Odometry, 6, kPoseBlockSize, kPoseBlockSize>(
-      new Odometry{Eigen::Quaterniond(T_i_j_measured.linear()), T_i_j_measured.translation(),
-                   sigmas});
+  return new ceres::AutoDiffCostFunction<Odometry, 6, kPoseBlockSize, kPoseBlockSize>(new Odometry{
+      Eigen::Quaterniond(T_i_j_measured.linear()), T_i_j_measured.translation(), sigmas});
 }
 
 }  // namespace keel::ba

@@ -20,6 +20,7 @@ OdometrySigmas odometry_sigmas(double dt_s, double sigma_m_per_s, double sigma_r
 
 // Parameters: pose_i, pose_j (pose_block.h). With E = T_i_j_measured^-1 * x_gi^-1 * x_gj,
 //   r = [ Log(R_E) / sigma_rad ; t_E / sigma_m ]   (6).
-ceres::CostFunction* make_odometry_factor(const Pose3& T_i_j_measured, const OdometrySigmas& sigmas);
+ceres::CostFunction* make_odometry_factor(const Pose3& T_i_j_measured,
+                                          const OdometrySigmas& sigmas);
 
 }  // namespace keel::ba

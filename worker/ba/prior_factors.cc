@@ -23,7 +23,8 @@ struct PosePrior {
   template <typename T>
   bool operator()(const T* pose, T* residual) const {
     // Eq. (8): the prior's error in the tangent space of the prior.
-    const Eigen::Quaternion<T> dq = q_prior.cast<T>().conjugate() * block_rotation(pose).normalized();
+    const Eigen::Quaternion<T> dq =
+        q_prior.cast<T>().conjugate() * block_rotation(pose).normalized();
     const Vec3<T> dphi = rotation_vector(dq);
     const Vec3<T> dt = block_translation(pose) - t_prior.cast<T>();
     for (int k = 0; k < 3; ++k) {
@@ -65,8 +66,8 @@ struct ServoAnglePrior {
 }  // namespace
 
 ceres::CostFunction* make_pose_prior_factor(const Pose3& prior, double sigma_m, double sigma_rad) {
-  return new ceres::AutoDiffCostFunction<PosePrior, 6, kPoseBlockSize>(new PosePrior{
-      Eigen::Quaterniond(prior.linear()), prior.translation(), sigma_m, sigma_rad});
+  return new ceres::AutoDiffCostFunction<PosePrior, 6, kPoseBlockSize>(
+      new PosePrior{Eigen::Quaterniond(prior.linear()), prior.translation(), sigma_m, sigma_rad});
 }
 
 ceres::CostFunction* make_depth_pitch_roll_factor(const DepthPitchRoll& measured, double sigma_m,

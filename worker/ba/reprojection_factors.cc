@@ -44,7 +44,7 @@ struct Stereo {
     const Vec3<T> p_top = landmark_in_camera(mount, pose, theta, T_servo_camera, landmark);
     // x_cT_cB^-1 maps top-camera points into the bottom camera.
     const Vec3<T> p_bottom = q_top_bottom.cast<T>().conjugate() * (p_top - t_top_bottom.cast<T>());
-    const Eigen::Matrix<T, 2, 1> uv_top = project(top, p_top);  // Eq. (12), upper block
+    const Eigen::Matrix<T, 2, 1> uv_top = project(top, p_top);           // Eq. (12), upper block
     const Eigen::Matrix<T, 2, 1> uv_bottom = project(bottom, p_bottom);  // lower block
     residual[0] = (uv_top[0] - T(pixel_top[0])) / T(sigma_px);
     residual[1] = (uv_top[1] - T(pixel_top[1])) / T(sigma_px);
@@ -67,8 +67,8 @@ ceres::CostFunction* make_stereo_factor(const PinholeCamera& top, const PinholeC
                                         const Eigen::Vector2d& pixel_top,
                                         const Eigen::Vector2d& pixel_bottom, double sigma_px) {
   return new ceres::AutoDiffCostFunction<Stereo, 4, kPoseBlockSize, 1, kPoseBlockSize, 3>(
-      new Stereo{top, bottom, Eigen::Quaterniond(T_top_bottom.linear()),
-                 T_top_bottom.translation(), mount, pixel_top, pixel_bottom, sigma_px});
+      new Stereo{top, bottom, Eigen::Quaterniond(T_top_bottom.linear()), T_top_bottom.translation(),
+                 mount, pixel_top, pixel_bottom, sigma_px});
 }
 
 }  // namespace keel::ba

@@ -31,8 +31,8 @@ struct ServoMount {
   template <typename T>
   Vec3<T> world_to_servo(const T* T_world_vehicle, const T& theta, const Vec3<T>& p_world) const {
     const Vec3<T> p_vehicle = inverse_transform_point(T_world_vehicle, p_world);
-    const Vec3<T> p_servo_zero = q_vehicle_servo_zero.cast<T>().conjugate() *
-                                 (p_vehicle - t_vehicle_servo_zero.cast<T>());
+    const Vec3<T> p_servo_zero =
+        q_vehicle_servo_zero.cast<T>().conjugate() * (p_vehicle - t_vehicle_servo_zero.cast<T>());
     return axis_angle_rotation(axis, theta).conjugate() * p_servo_zero;
   }
 

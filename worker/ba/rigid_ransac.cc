@@ -50,8 +50,8 @@ std::optional<RigidRansacResult> rigid_ransac(const std::vector<Eigen::Vector3d>
     // A degenerate (collinear) sample leaves the rotation about the line free.
     const Eigen::Vector3d cross = (points_b[j] - points_b[i]).cross(points_b[k] - points_b[i]);
     if (cross.norm() < 1e-9) continue;
-    std::vector<int> inliers =
-        inliers_of(points_a, points_b, fit_rigid(points_a, points_b, {i, j, k}), inlier_threshold_m);
+    std::vector<int> inliers = inliers_of(
+        points_a, points_b, fit_rigid(points_a, points_b, {i, j, k}), inlier_threshold_m);
     if (inliers.size() > best.size()) best = std::move(inliers);
   }
   if (best.size() < 3) return std::nullopt;

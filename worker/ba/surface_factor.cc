@@ -37,14 +37,14 @@ struct Surface {
   bool operator()(const T* T_world_model, const T* landmark, T* residual) const {
     const Vec3<T> l_world(landmark[0], landmark[1], landmark[2]);
     const Vec3<T> l_model = inverse_transform_point(T_world_model, l_world);  // H_g^M l_i
-    const T error = T(offset_m) - signed_distance(*mesh, l_model);          // z_s - h
-    const int label = mixture.label(jet_value(error));                      // Eq. (7)
+    const T error = T(offset_m) - signed_distance(*mesh, l_model);            // z_s - h
+    const int label = mixture.label(jet_value(error));                        // Eq. (7)
     if constexpr (is_jet<T>()) {
       if (label_slot != nullptr) *label_slot = static_cast<uint8_t>(label);
     }
     const int used = mode == SurfaceMode::kOnModel ? 1 : label;
-    residual[0] = error / T(mixture.sigma(used));                 // Eq. (4)
-    residual[1] = T(mixture.normalisation_residual(used));        // log-normaliser of Eq. (7)
+    residual[0] = error / T(mixture.sigma(used));           // Eq. (4)
+    residual[1] = T(mixture.normalisation_residual(used));  // log-normaliser of Eq. (7)
     return true;
   }
 };

@@ -31,8 +31,8 @@ std::vector<std::vector<TrackNode>> build_tracks(const std::vector<PairMatches>&
     offset[k + 1] = offset[k] + features_per_keyframe[k];
   }
   const auto node = [&](int keyframe, int feature) {
-    if (keyframe < 0 || keyframe >= static_cast<int>(features_per_keyframe.size()) ||
-        feature < 0 || feature >= features_per_keyframe[keyframe]) {
+    if (keyframe < 0 || keyframe >= static_cast<int>(features_per_keyframe.size()) || feature < 0 ||
+        feature >= features_per_keyframe[keyframe]) {
       throw std::out_of_range("build_tracks: match references a missing feature");
     }
     return offset[keyframe] + feature;
@@ -57,12 +57,15 @@ std::vector<std::vector<TrackNode>> build_tracks(const std::vector<PairMatches>&
   for (auto& [root, nodes] : components) {
     // Nodes were appended in keyframe order; a repeated keyframe means a conflict.
     bool consistent = true;
-    for (size_t i = 1; i < nodes.size(); ++i) consistent &= nodes[i].keyframe != nodes[i - 1].keyframe;
-    if (consistent && static_cast<int>(nodes.size()) >= min_length) tracks.push_back(std::move(nodes));
+    for (size_t i = 1; i < nodes.size(); ++i)
+      consistent &= nodes[i].keyframe != nodes[i - 1].keyframe;
+    if (consistent && static_cast<int>(nodes.size()) >= min_length)
+      tracks.push_back(std::move(nodes));
   }
   // Deterministic order regardless of the hash map: by first node.
   std::sort(tracks.begin(), tracks.end(), [](const auto& a, const auto& b) {
-    return std::make_pair(a[0].keyframe, a[0].feature) < std::make_pair(b[0].keyframe, b[0].feature);
+    return std::make_pair(a[0].keyframe, a[0].feature) <
+           std::make_pair(b[0].keyframe, b[0].feature);
   });
   return tracks;
 }

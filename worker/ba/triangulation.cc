@@ -21,8 +21,8 @@ std::vector<View> views_of(const FeatureTrack& track, const std::vector<Pose3>& 
     const Pose3& T_world_top = T_world_camera.at(obs.keyframe);
     views.push_back({T_world_top.inverse(), &rig.camera_top, obs.pixel});
     if (obs.pixel_bottom && rig.camera_bottom) {
-      views.push_back({(T_world_top * rig.T_top_bottom).inverse(), &*rig.camera_bottom,
-                       *obs.pixel_bottom});
+      views.push_back(
+          {(T_world_top * rig.T_top_bottom).inverse(), &*rig.camera_bottom, *obs.pixel_bottom});
     }
   }
   return views;
@@ -50,7 +50,8 @@ std::optional<Eigen::Vector3d> linear_triangulation(const std::vector<View>& vie
 double max_parallax_rad(const std::vector<View>& views, const Eigen::Vector3d& point) {
   double best = 0;
   for (size_t i = 0; i < views.size(); ++i) {
-    const Eigen::Vector3d ri = (point - views[i].T_camera_world.inverse().translation()).normalized();
+    const Eigen::Vector3d ri =
+        (point - views[i].T_camera_world.inverse().translation()).normalized();
     for (size_t j = i + 1; j < views.size(); ++j) {
       const Eigen::Vector3d rj =
           (point - views[j].T_camera_world.inverse().translation()).normalized();

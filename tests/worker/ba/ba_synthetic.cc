@@ -32,7 +32,8 @@ Eigen::Vector3d surface_point(const SyntheticHullOptions& o, double x, double y,
 Pose3 rotation_pose(const Eigen::Vector3d& rotation_vector, const Eigen::Vector3d& t) {
   Pose3 T = Pose3::Identity();
   if (rotation_vector.norm() > 0) {
-    T.linear() = Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix();
+    T.linear() =
+        Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix();
   }
   T.translation() = t;
   return T;
@@ -65,7 +66,8 @@ std::vector<Eigen::Vector3d> janus_beams() {
   const double tilt = 30.0 * M_PI / 180.0;
   for (int k = 0; k < 4; ++k) {
     const double az = (45.0 + 90.0 * k) * M_PI / 180.0;
-    beams.emplace_back(std::sin(tilt) * std::cos(az), std::sin(tilt) * std::sin(az), std::cos(tilt));
+    beams.emplace_back(std::sin(tilt) * std::cos(az), std::sin(tilt) * std::sin(az),
+                       std::cos(tilt));
   }
   return beams;
 }
@@ -98,7 +100,8 @@ void add_keyframes(const SyntheticHullOptions& o, Noise& noise, SyntheticHull& o
     const keel::ba::DepthPitchRoll truth = keel::ba::DepthPitchRoll{
         out.T_world_vehicle[i].translation().z(),
         std::atan2(-out.T_world_vehicle[i].linear()(2, 0),
-                   std::hypot(out.T_world_vehicle[i].linear()(2, 1), out.T_world_vehicle[i].linear()(2, 2))),
+                   std::hypot(out.T_world_vehicle[i].linear()(2, 1),
+                              out.T_world_vehicle[i].linear()(2, 2))),
         std::atan2(out.T_world_vehicle[i].linear()(2, 1), out.T_world_vehicle[i].linear()(2, 2))};
     k.depth_pitch_roll = keel::ba::DepthPitchRoll{truth.z_world_m + noise(o.depth_noise_m),
                                                   truth.pitch_rad + noise(o.attitude_noise_rad),
@@ -118,7 +121,8 @@ void add_keyframes(const SyntheticHullOptions& o, Noise& noise, SyntheticHull& o
   Pose3 error = Pose3::Identity();
   for (size_t i = 0; i < kf.size(); ++i) {
     if (i > 0) {
-      error = error * rotation_pose(noise.vec(o.initial_pose_drift_rad), noise.vec(o.initial_pose_drift_m));
+      error = error *
+              rotation_pose(noise.vec(o.initial_pose_drift_rad), noise.vec(o.initial_pose_drift_m));
     }
     kf[i].T_world_vehicle = out.T_world_vehicle[i] * error;
   }
@@ -152,7 +156,8 @@ void add_observations(const SyntheticHullOptions& o, Noise& noise, SyntheticHull
   const auto in_image = [&](const Eigen::Vector3d& p_c, Eigen::Vector2d& uv) {
     if (p_c.z() < 0.2) return false;
     uv = keel::ba::project(o.camera, p_c);
-    return uv.x() >= 5 && uv.y() >= 5 && uv.x() < o.camera.width - 5 && uv.y() < o.camera.height - 5;
+    return uv.x() >= 5 && uv.y() >= 5 && uv.x() < o.camera.width - 5 &&
+           uv.y() < o.camera.height - 5;
   };
   const Pose3 T_bottom_top = out.problem.rig.T_top_bottom.inverse();
   std::vector<Pose3> T_camera_world;
@@ -230,19 +235,22 @@ TriangleMesh make_hull_patch(const SyntheticHullOptions& o, bool with_bump) {
 SyntheticHull make_synthetic_hull(const SyntheticHullOptions& o) {
   SyntheticHull out;
   Noise noise{std::mt19937(o.seed)};
-  out.T_world_model = rotation_pose(Eigen::Vector3d(0.02, -0.03, 0.05), Eigen::Vector3d(3.0, -2.0, -4.0));
+  out.T_world_model =
+      rotation_pose(Eigen::Vector3d(0.02, -0.03, 0.05), Eigen::Vector3d(3.0, -2.0, -4.0));
   out.T_servo_camera = rotation_pose(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1, 0.0, 0.1));
   out.real_surface_model = make_hull_patch(o, true);
   out.problem.rig = make_rig(o);
   // The calibration handed to the BA is off by ~2 cm and ~0.6 degrees.
   out.problem.rig.T_servo_camera =
-      out.T_servo_camera * rotation_pose(o.extrinsic_error_scale * Eigen::Vector3d(0.006, -0.008, 0.004),
-                                         o.extrinsic_error_scale * Eigen::Vector3d(0.012, -0.01, 0.015));
+      out.T_servo_camera *
+      rotation_pose(o.extrinsic_error_scale * Eigen::Vector3d(0.006, -0.008, 0.004),
+                    o.extrinsic_error_scale * Eigen::Vector3d(0.012, -0.01, 0.015));
   out.problem.cad_mesh = make_hull_patch(o, false);
   // The CAD-to-world guess GICP starts from: ~15 cm and ~2 degrees off.
   out.problem.T_world_model_guess =
-      out.T_world_model * rotation_pose(o.model_guess_error_scale * Eigen::Vector3d(0.02, 0.015, -0.02),
-                                     o.model_guess_error_scale * Eigen::Vector3d(0.1, -0.08, 0.08));
+      out.T_world_model *
+      rotation_pose(o.model_guess_error_scale * Eigen::Vector3d(0.02, 0.015, -0.02),
+                    o.model_guess_error_scale * Eigen::Vector3d(0.1, -0.08, 0.08));
   add_keyframes(o, noise, out);
   add_landmarks(o, noise, out);
   add_observations(o, noise, out);

@@ -3,8 +3,9 @@
 // an HAUV flying lawnmower lanes below it with its sensor tray servoed up at the hull, SIFT-like
 // feature tracks of landmarks on the real surface (monocular or stereo, pixel noise), noisy
 // dead-reckoning odometry (5 mm/s, 80 deg/h), noisy depth/pitch/roll, servo slop, four-beam
-// Janus DVL ranges cast against the real surface, SLAM-corrected initial poses, a miscalibrated servo-camera extrinsic and a
-// CAD-to-world misalignment. Everything is generated from a seed; ground truth is returned.
+// Janus DVL ranges cast against the real surface, SLAM-corrected initial poses, a miscalibrated
+// servo-camera extrinsic and a CAD-to-world misalignment. Everything is generated from a seed;
+// ground truth is returned.
 #pragma once
 
 #include <Eigen/Core>
@@ -71,8 +72,8 @@ struct SyntheticHull {
   Pose3 T_world_model = Pose3::Identity();
   Pose3 T_servo_camera = Pose3::Identity();
   std::vector<Eigen::Vector3d> landmarks_world;  // index = FeatureTrack::landmark_id
-  std::vector<double> landmark_height_m;  // true signed distance to the CAD (bump height)
-  TriangleMesh real_surface_model;        // CAD + bump, model frame
+  std::vector<double> landmark_height_m;         // true signed distance to the CAD (bump height)
+  TriangleMesh real_surface_model;               // CAD + bump, model frame
 };
 
 SyntheticHull make_synthetic_hull(const SyntheticHullOptions& options);

@@ -42,24 +42,28 @@ std::optional<double> brute_force_range(const TriangleMesh& mesh, const Eigen::V
 Pose3 random_rotation(std::mt19937& rng, double angle) {
   std::normal_distribution<double> n;
   Pose3 T = Pose3::Identity();
-  T.linear() =
-      Eigen::AngleAxisd(angle, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized()).toRotationMatrix();
+  T.linear() = Eigen::AngleAxisd(angle, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized())
+                   .toRotationMatrix();
   return T;
 }
 
-void expect_factor_matches_brute_force(const TriangleMesh& mesh, const Pose3& T_model_vehicle_nominal,
-                                       int trials, int* hits) {
+void expect_factor_matches_brute_force(const TriangleMesh& mesh,
+                                       const Pose3& T_model_vehicle_nominal, int trials,
+                                       int* hits) {
   const MeshQuery query(mesh);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
-  const ServoMount mount{make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ())),
-                                   Eigen::Vector3d(0.4, 0.05, 0.2)),
-                         Eigen::Vector3d(0.1, 1.0, 0.0).normalized()};
-  const Pose3 T_servo_dvl = make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX())),
-                                      Eigen::Vector3d(-0.1, 0.02, 0.1));
+  const ServoMount mount{
+      make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ())),
+                Eigen::Vector3d(0.4, 0.05, 0.2)),
+      Eigen::Vector3d(0.1, 1.0, 0.0).normalized()};
+  const Pose3 T_servo_dvl =
+      make_pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX())),
+                Eigen::Vector3d(-0.1, 0.02, 0.1));
   for (int trial = 0; trial < trials; ++trial) {
-    const Pose3 T_world_model = random_rotation(rng, 0.5) *
-                                make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const Pose3 T_world_model =
+        random_rotation(rng, 0.5) *
+        make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(u(rng), u(rng), u(rng)));
     Pose3 T_model_vehicle = T_model_vehicle_nominal * random_rotation(rng, 0.15);
     T_model_vehicle.translation() += 0.3 * Eigen::Vector3d(u(rng), u(rng), u(rng));
     const Pose3 T_world_vehicle = T_world_model * T_model_vehicle;
@@ -69,10 +73,10 @@ void expect_factor_matches_brute_force(const TriangleMesh& mesh, const Pose3& T_
     // Independent chain: model <- world <- vehicle <- servo(theta) <- dvl.
     Pose3 R_theta = Pose3::Identity();
     R_theta.linear() = Eigen::AngleAxisd(theta, mount.axis).toRotationMatrix();
-    const Pose3 T_model_dvl =
-        T_world_model.inverse() * T_world_vehicle * mount.T_vehicle_servo_zero * R_theta * T_servo_dvl;
-    const auto expected = brute_force_range(mesh, T_model_dvl.translation(),
-                                            T_model_dvl.linear() * direction_dvl);
+    const Pose3 T_model_dvl = T_world_model.inverse() * T_world_vehicle *
+                              mount.T_vehicle_servo_zero * R_theta * T_servo_dvl;
+    const auto expected =
+        brute_force_range(mesh, T_model_dvl.translation(), T_model_dvl.linear() * direction_dvl);
     const double measured = 1.7;
     const DvlBeam beam = make_dvl_beam(T_servo_dvl, direction_dvl, measured);
     const auto predicted =
@@ -82,7 +86,8 @@ void expect_factor_matches_brute_force(const TriangleMesh& mesh, const Pose3& T_
     ++*hits;
     EXPECT_NEAR(*predicted, *expected, 1e-9) << "trial " << trial;
     // The Ceres factor's residual is (measured - predicted) / sigma.
-    std::unique_ptr<ceres::CostFunction> f(make_dvl_raycast_factor(query, mount, beam, 0.003, 30.0, 0.5));
+    std::unique_ptr<ceres::CostFunction> f(
+        make_dvl_raycast_factor(query, mount, beam, 0.003, 30.0, 0.5));
     PoseBlock vehicle = to_pose_block(T_world_vehicle), model = to_pose_block(T_world_model);
     double* blocks[3] = {vehicle.data(), const_cast<double*>(&theta), model.data()};
     double r = 0;
@@ -112,7 +117,8 @@ TEST(DvlRaycast, MissGivesTheGateResidual) {
   const MeshQuery query(testing::make_box(Eigen::Vector3d(-1, -1, 5), Eigen::Vector3d(1, 1, 6)));
   const ServoMount mount;
   const DvlBeam beam = make_dvl_beam(Pose3::Identity(), Eigen::Vector3d(0, 0, -1), 2.0);  // away
-  std::unique_ptr<ceres::CostFunction> f(make_dvl_raycast_factor(query, mount, beam, 0.003, 30.0, 0.5));
+  std::unique_ptr<ceres::CostFunction> f(
+      make_dvl_raycast_factor(query, mount, beam, 0.003, 30.0, 0.5));
   PoseBlock vehicle = to_pose_block(Pose3::Identity()), model = to_pose_block(Pose3::Identity());
   double theta = 0;
   double* blocks[3] = {vehicle.data(), &theta, model.data()};

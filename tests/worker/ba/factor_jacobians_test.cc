@@ -22,7 +22,8 @@
 namespace keel::ba {
 namespace {
 
-using PoseManifold = ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
+using PoseManifold =
+    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
 
 class FactorJacobians : public ::testing::Test {
  protected:
@@ -72,15 +73,17 @@ class FactorJacobians : public ::testing::Test {
           } else {
             for (int i = 0; i < ambient; ++i) blocks[b][i] = x0[i] + delta[i];
           }
-          ASSERT_TRUE(factor->Evaluate(blocks.data(), sign > 0 ? r_plus.data() : r_minus.data(),
-                                       nullptr));
+          ASSERT_TRUE(
+              factor->Evaluate(blocks.data(), sign > 0 ? r_plus.data() : r_minus.data(), nullptr));
         }
         std::copy(x0.begin(), x0.end(), blocks[b]);
         numeric.col(k) = (r_plus - r_minus) / (2 * h);
       }
       const double scale = std::max(1.0, analytic.cwiseAbs().maxCoeff());
       EXPECT_LE((analytic - numeric).cwiseAbs().maxCoeff(), tolerance * scale)
-          << "block " << b << "\nanalytic\n" << analytic << "\nnumeric\n" << numeric;
+          << "block " << b << "\nanalytic\n"
+          << analytic << "\nnumeric\n"
+          << numeric;
     }
   }
 
@@ -137,7 +140,8 @@ class ReprojectionJacobians : public FactorJacobians {
     const Pose3 T_servo_camera = random_pose(0.05, 0.1);
     s.vehicle = to_pose_block(T_world_vehicle);
     s.extrinsic = to_pose_block(T_servo_camera);
-    const Pose3 T_world_camera = world_camera_pose(T_world_vehicle, s.theta, mount_, T_servo_camera);
+    const Pose3 T_world_camera =
+        world_camera_pose(T_world_vehicle, s.theta, mount_, T_servo_camera);
     s.landmark = T_world_camera * Eigen::Vector3d(0.2, -0.1, 1.5);
     return s;
   }
@@ -150,10 +154,9 @@ class ReprojectionJacobians : public FactorJacobians {
 TEST_F(ReprojectionJacobians, MonocularEq13) {
   for (int trial = 0; trial < 5; ++trial) {
     CameraState s = state();
-    expect_jacobians_match(
-        make_monocular_factor(camera_, mount_, Eigen::Vector2d(300, 250), 2.0),
-        {s.vehicle.data(), &s.theta, s.extrinsic.data(), s.landmark.data()},
-        {&pose_manifold_, nullptr, &pose_manifold_, nullptr});
+    expect_jacobians_match(make_monocular_factor(camera_, mount_, Eigen::Vector2d(300, 250), 2.0),
+                           {s.vehicle.data(), &s.theta, s.extrinsic.data(), s.landmark.data()},
+                           {&pose_manifold_, nullptr, &pose_manifold_, nullptr});
   }
 }
 
@@ -180,8 +183,8 @@ TEST_F(FactorJacobians, DvlRaycastEq14) {
   int probed = 0;
   for (int trial = 0; trial < 20; ++trial) {
     const Pose3 T_world_model = random_pose(0.1, 1.0);
-    const Pose3 T_model_vehicle = make_pose(Eigen::Quaterniond::Identity(),
-                                            Eigen::Vector3d(0.2 * trial / 20.0, 0.1, -1.5));
+    const Pose3 T_model_vehicle =
+        make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.2 * trial / 20.0, 0.1, -1.5));
     PoseBlock vehicle = to_pose_block(T_world_model * T_model_vehicle * random_pose(0.05, 0.05));
     PoseBlock model = to_pose_block(T_world_model);
     double theta = 0.04;
@@ -206,7 +209,8 @@ TEST_F(FactorJacobians, SurfaceEq5BothComponentsAndModes) {
     for (SurfaceMode mode : {SurfaceMode::kMaxMixture, SurfaceMode::kOnModel}) {
       const Pose3 T_world_model = random_pose(0.2, 1.0);
       // A point above a face's interior, and one above the bump's slope (edges, vertices).
-      for (const Eigen::Vector2d& xy : {Eigen::Vector2d(-0.913, 0.377), Eigen::Vector2d(0.47, 0.05)}) {
+      for (const Eigen::Vector2d& xy :
+           {Eigen::Vector2d(-0.913, 0.377), Eigen::Vector2d(0.47, 0.05)}) {
         const Eigen::Vector3d on_surface(xy.x(), xy.y(), 0.0);
         const ClosestPoint c = mesh.closest_point(on_surface + Eigen::Vector3d(0, 0, -1.0));
         const Eigen::Vector3d l_model = c.point + offset * c.normal;

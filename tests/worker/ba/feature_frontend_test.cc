@@ -23,8 +23,8 @@
 namespace keel::ba {
 namespace {
 
-constexpr double kPlateZ = 1.5;        // the plate is the plane z = 1.5 m (world)
-constexpr double kTextureHalf = 2.0;   // covering x, y in +-2 m
+constexpr double kPlateZ = 1.5;          // the plate is the plane z = 1.5 m (world)
+constexpr double kTextureHalf = 2.0;     // covering x, y in +-2 m
 constexpr double kTexturePixel = 0.002;  // 2 mm texels
 
 // Blobby random texture at several scales: plenty of SIFT keypoints.
@@ -98,8 +98,9 @@ RenderedSurvey render_survey(bool stereo) {
 void expect_tracks_are_plate_points(bool stereo) {
   const RenderedSurvey s = render_survey(stereo);
   const FrontendOutput out = run_frontend(s.keyframes, s.rig, FrontendOptions{});
-  std::printf("pairs matched %d verified %d, matches %d, tracks %d\n", out.stats.keyframe_pairs_matched,
-              out.stats.keyframe_pairs_verified, out.stats.verified_matches, out.stats.tracks);
+  std::printf("pairs matched %d verified %d, matches %d, tracks %d\n",
+              out.stats.keyframe_pairs_matched, out.stats.keyframe_pairs_verified,
+              out.stats.verified_matches, out.stats.tracks);
   ASSERT_GE(out.tracks.size(), 100u);
   TriangulationOptions gates;
   gates.max_reprojection_px = 1e9;  // judge the points here, not in the triangulation
@@ -120,15 +121,19 @@ void expect_tracks_are_plate_points(bool stereo) {
   }
   const double fraction = double(good) / out.tracks.size();
   std::printf("%s: %zu tracks, %.2f observations per track, %.3f on the plate\n",
-              stereo ? "stereo" : "mono", out.tracks.size(), double(observations) / out.tracks.size(),
-              fraction);
+              stereo ? "stereo" : "mono", out.tracks.size(),
+              double(observations) / out.tracks.size(), fraction);
   EXPECT_GE(fraction, 0.97);
   EXPECT_GE(double(observations) / out.tracks.size(), 2.5);  // tracks span several keyframes
 }
 
-TEST(FeatureFrontend, MonocularTracksAreConsistentPlatePoints) { expect_tracks_are_plate_points(false); }
+TEST(FeatureFrontend, MonocularTracksAreConsistentPlatePoints) {
+  expect_tracks_are_plate_points(false);
+}
 
-TEST(FeatureFrontend, StereoTracksAreConsistentPlatePoints) { expect_tracks_are_plate_points(true); }
+TEST(FeatureFrontend, StereoTracksAreConsistentPlatePoints) {
+  expect_tracks_are_plate_points(true);
+}
 
 TEST(FeatureFrontend, StereoWithoutBottomImageNamesTheKeyframe) {
   RenderedSurvey s = render_survey(true);
@@ -160,10 +165,12 @@ TEST(FeatureFrontend, ImagesRunThroughTheWholePipeline) {
   }
   problem.odometry = odometry_from_initial_poses(problem.keyframes);
   // The plate, normals down to the cameras.
-  problem.cad_mesh.vertices = {{-3, -3, kPlateZ}, {3, -3, kPlateZ}, {3, 3, kPlateZ}, {-3, 3, kPlateZ}};
+  problem.cad_mesh.vertices = {
+      {-3, -3, kPlateZ}, {3, -3, kPlateZ}, {3, 3, kPlateZ}, {-3, 3, kPlateZ}};
   problem.cad_mesh.faces = {{0, 2, 1}, {0, 3, 2}};
   for (int x = -30; x <= 30; ++x) {  // dense vertices for GICP's target cloud
-    for (int y = -30; y <= 30; ++y) problem.cad_mesh.vertices.emplace_back(0.1 * x, 0.1 * y, kPlateZ);
+    for (int y = -30; y <= 30; ++y)
+      problem.cad_mesh.vertices.emplace_back(0.1 * x, 0.1 * y, kPlateZ);
   }
   BaOptions options;
   options.gicp.min_points = 10;
@@ -173,7 +180,8 @@ TEST(FeatureFrontend, ImagesRunThroughTheWholePipeline) {
   const BaModeResult* proposed = result.find(BaMode::kProposed);
   ASSERT_NE(proposed, nullptr);
   int on_plate = 0;
-  for (const BaLandmark& l : proposed->landmarks) on_plate += std::abs(l.signed_distance_m) < 0.01 && l.lambda == 1;
+  for (const BaLandmark& l : proposed->landmarks)
+    on_plate += std::abs(l.signed_distance_m) < 0.01 && l.lambda == 1;
   EXPECT_GE(on_plate, 0.95 * proposed->landmarks.size());
   // Algorithm 1's input: landmarks seen from keyframe 0, in its camera frame, 1.5 m ahead.
   const auto in_camera = landmarks_in_camera(*proposed, 0);
@@ -193,7 +201,8 @@ TEST(RigidRansac, RecoversMotionDespiteOutliers) {
     const Eigen::Vector3d p(u(rng), u(rng), 1.5 + 0.2 * u(rng));
     const bool outlier = i % 3 == 0;  // a third are wrong matches
     b.push_back(p);
-    a.push_back(outlier ? Eigen::Vector3d(u(rng), u(rng), 1.5 + u(rng)) : T * p + 0.002 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    a.push_back(outlier ? Eigen::Vector3d(u(rng), u(rng), 1.5 + u(rng))
+                        : T * p + 0.002 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
     truth.push_back(!outlier);
   }
   const auto fit = rigid_ransac(a, b, 0.02, 300);
@@ -231,7 +240,8 @@ TEST(Triangulation, ExactObservationsGiveThePoint) {
     T.translation() = Eigen::Vector3d(0.25 * i, 0.0, 0.0);
     cameras.push_back(T);
     const Eigen::Vector3d c = T.inverse() * point;
-    track.observations.push_back({i, Eigen::Vector2d(600 * c.x() / c.z() + 320, 600 * c.y() / c.z() + 240), {}});
+    track.observations.push_back(
+        {i, Eigen::Vector2d(600 * c.x() / c.z() + 320, 600 * c.y() / c.z() + 240), {}});
   }
   const auto p = triangulate_track(track, cameras, rig, TriangulationOptions{});
   ASSERT_TRUE(p);

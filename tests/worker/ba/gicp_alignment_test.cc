@@ -37,8 +37,8 @@ TEST(GicpAlignment, RegistersTheCadSurfaceToTheDvlReturns) {
   const testing::SyntheticHull sim = testing::make_synthetic_hull(o);
   const auto points = true_dvl_returns(sim);
   ASSERT_GT(points.size(), 100u);
-  const GicpAlignment a = align_dvl_returns_to_model(points, sim.problem.cad_mesh,
-                                                     sim.problem.T_world_model_guess, GicpOptions{});
+  const GicpAlignment a = align_dvl_returns_to_model(
+      points, sim.problem.cad_mesh, sim.problem.T_world_model_guess, GicpOptions{});
   ASSERT_TRUE(a.ran);
   EXPECT_TRUE(a.converged);
   // True surface points over the surveyed area, and their distance to the CAD when placed
@@ -57,7 +57,8 @@ TEST(GicpAlignment, RegistersTheCadSurfaceToTheDvlReturns) {
   };
   const double before = surface_rms(sim.problem.T_world_model_guess);
   const double after = surface_rms(a.T_world_model);
-  std::printf("surface rms: guess %.4f m -> gicp %.4f m (fitness %.3g)\n", before, after, a.fitness);
+  std::printf("surface rms: guess %.4f m -> gicp %.4f m (fitness %.3g)\n", before, after,
+              a.fitness);
   EXPECT_GT(before, 0.05);
   EXPECT_LT(after, 0.005);
 }
@@ -66,8 +67,8 @@ TEST(GicpAlignment, TooFewReturnsKeepTheGuess) {
   TriangleMesh mesh = testing::make_hull_patch(testing::SyntheticHullOptions{}, false);
   Pose3 guess = Pose3::Identity();
   guess.translation() = Eigen::Vector3d(1, 2, 3);
-  const GicpAlignment a =
-      align_dvl_returns_to_model({Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX()}, mesh, guess, {});
+  const GicpAlignment a = align_dvl_returns_to_model(
+      {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX()}, mesh, guess, {});
   EXPECT_FALSE(a.ran);
   EXPECT_TRUE(a.T_world_model.isApprox(guess));
 }

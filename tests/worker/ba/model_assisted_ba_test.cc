@@ -18,11 +18,11 @@ namespace keel::ba {
 namespace {
 
 struct ModeMetrics {
-  double bump_mean_height_error_m = 0;    // mean |h_est - h_true| on the bump's top
+  double bump_mean_height_error_m = 0;  // mean |h_est - h_true| on the bump's top
   double bump_median_height_error_m = 0;
-  double bump_mean_signed_error_m = 0;    // mean (h_est - h_true): < 0 is flattening
+  double bump_mean_signed_error_m = 0;  // mean (h_est - h_true): < 0 is flattening
   double bump_lambda0_fraction = 0;
-  double on_model_rms_error_m = 0;        // RMS of h_est - h_true where h_true ~ 0
+  double on_model_rms_error_m = 0;  // RMS of h_est - h_true where h_true ~ 0
   double on_model_lambda1_fraction = 0;
   int bump_count = 0, on_model_count = 0;
 };
@@ -67,12 +67,12 @@ ModeMetrics metrics(const testing::SyntheticHull& sim, const BaModeResult& r) {
 }
 
 void print(const char* name, const BaModeResult& r, const ModeMetrics& m) {
-  std::printf("%-9s iters %3d  time %.2fs  cost %.1f -> %.1f  bump |dh| mean %.4f med %.4f "
-              "signed %.4f  lambda0 %.2f (n=%d)  on-model rms %.4f lambda1 %.2f (n=%d)\n",
-              name, r.iterations, r.solve_time_s, r.initial_cost, r.final_cost,
-              m.bump_mean_height_error_m, m.bump_median_height_error_m, m.bump_mean_signed_error_m,
-              m.bump_lambda0_fraction, m.bump_count, m.on_model_rms_error_m,
-              m.on_model_lambda1_fraction, m.on_model_count);
+  std::printf(
+      "%-9s iters %3d  time %.2fs  cost %.1f -> %.1f  bump |dh| mean %.4f med %.4f "
+      "signed %.4f  lambda0 %.2f (n=%d)  on-model rms %.4f lambda1 %.2f (n=%d)\n",
+      name, r.iterations, r.solve_time_s, r.initial_cost, r.final_cost, m.bump_mean_height_error_m,
+      m.bump_median_height_error_m, m.bump_mean_signed_error_m, m.bump_lambda0_fraction,
+      m.bump_count, m.on_model_rms_error_m, m.on_model_lambda1_fraction, m.on_model_count);
 }
 
 double rms(const std::vector<double>& v) {
@@ -102,16 +102,18 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
   double servo_sq = 0, servo_sq_measured = 0;
   for (size_t i = 0; i < sim.servo_angle_rad.size(); ++i) {
     servo_sq += std::pow(proposed.servo_angle_rad[i] - sim.servo_angle_rad[i], 2);
-    servo_sq_measured += std::pow(sim.problem.keyframes[i].servo_angle_rad - sim.servo_angle_rad[i], 2);
+    servo_sq_measured +=
+        std::pow(sim.problem.keyframes[i].servo_angle_rad - sim.servo_angle_rad[i], 2);
   }
   const double servo_rms = std::sqrt(servo_sq / sim.servo_angle_rad.size());
   const double servo_rms_measured = std::sqrt(servo_sq_measured / sim.servo_angle_rad.size());
-  std::printf("landmarks %d/%d, dvl %d/%d, gicp %d fitness %.4g, dvl |r| median initial %.4f "
-              "final %.4f, servo rms error %.3f deg (measured %.3f deg)\n",
-              result.landmarks_triangulated, result.tracks_in, result.dvl_ranges_used,
-              result.dvl_ranges_in, result.gicp_converged, result.gicp_fitness,
-              median_abs(proposed.dvl_residuals_initial_m), median_abs(proposed.dvl_residuals_final_m),
-              servo_rms / kDegToRad, servo_rms_measured / kDegToRad);
+  std::printf(
+      "landmarks %d/%d, dvl %d/%d, gicp %d fitness %.4g, dvl |r| median initial %.4f "
+      "final %.4f, servo rms error %.3f deg (measured %.3f deg)\n",
+      result.landmarks_triangulated, result.tracks_in, result.dvl_ranges_used, result.dvl_ranges_in,
+      result.gicp_converged, result.gicp_fitness, median_abs(proposed.dvl_residuals_initial_m),
+      median_abs(proposed.dvl_residuals_final_m), servo_rms / kDegToRad,
+      servo_rms_measured / kDegToRad);
 
   ASSERT_GE(mp.bump_count, 30);
   ASSERT_GE(mp.on_model_count, 100);
@@ -138,14 +140,14 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
     EXPECT_LE(f, 1.0);
   }
   // The last Fig. 16 entry is the final state's label fraction.
-  const double final_fraction =
-      std::count_if(proposed.landmarks.begin(), proposed.landmarks.end(),
-                    [](const BaLandmark& l) { return l.lambda == 1; }) /
-      double(proposed.landmarks.size());
+  const double final_fraction = std::count_if(proposed.landmarks.begin(), proposed.landmarks.end(),
+                                              [](const BaLandmark& l) { return l.lambda == 1; }) /
+                                double(proposed.landmarks.size());
   EXPECT_NEAR(proposed.lambda1_fraction_per_iteration.back(), final_fraction, 0.01);
   // Fig. 18: BA tightens the DVL residuals to about their 3 mm noise; the servo slop (1 deg)
   // is estimated.
-  EXPECT_LT(median_abs(proposed.dvl_residuals_final_m), 0.5 * median_abs(proposed.dvl_residuals_initial_m));
+  EXPECT_LT(median_abs(proposed.dvl_residuals_final_m),
+            0.5 * median_abs(proposed.dvl_residuals_initial_m));
   EXPECT_LT(median_abs(proposed.dvl_residuals_final_m), 0.004);
   EXPECT_LT(servo_rms, 0.5 * servo_rms_measured);
 }

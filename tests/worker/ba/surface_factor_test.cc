@@ -74,7 +74,8 @@ TEST(MaxMixture, CostIsContinuousAcrossTheSwitch) {
 // (face, edge and vertex regions, inside and outside), residuals per component and mode.
 class SurfaceFactorOnBox : public ::testing::Test {
  protected:
-  SurfaceFactorOnBox() : mesh_(testing::make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones())) {
+  SurfaceFactorOnBox()
+      : mesh_(testing::make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones())) {
     T_world_model_ = make_pose(
         Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -2, 0.5).normalized())),
         Eigen::Vector3d(2.0, -1.0, 0.5));
@@ -100,12 +101,12 @@ TEST_F(SurfaceFactorOnBox, SignedDistanceMatchesClosedForm) {
     double h;
   };
   const Case cases[] = {
-      {{0.5, 0.5, 1.3}, 0.3},                    // above the top face
-      {{0.5, 0.5, 0.9}, -0.1},                   // inside, nearest the top face
-      {{0.3, -0.02, 0.4}, 0.02},                 // just outside a side face
-      {{1.2, 0.5, 1.2}, std::sqrt(0.08)},        // edge region
-      {{-0.1, -0.2, 1.2}, std::sqrt(0.09)},      // vertex region
-      {{0.5, 0.45, 0.5}, -0.45},                 // deep inside
+      {{0.5, 0.5, 1.3}, 0.3},                // above the top face
+      {{0.5, 0.5, 0.9}, -0.1},               // inside, nearest the top face
+      {{0.3, -0.02, 0.4}, 0.02},             // just outside a side face
+      {{1.2, 0.5, 1.2}, std::sqrt(0.08)},    // edge region
+      {{-0.1, -0.2, 1.2}, std::sqrt(0.09)},  // vertex region
+      {{0.5, 0.45, 0.5}, -0.45},             // deep inside
   };
   for (const Case& c : cases) {
     EXPECT_NEAR(signed_distance_to_model(mesh_, T_world_model_, T_world_model_ * c.p), c.h, 1e-9)
