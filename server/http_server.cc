@@ -64,6 +64,9 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   void start() {
+    // Beast sizes each socket read by the buffer's spare capacity (at most 64 KiB): without
+    // this an upload body arrives ~1 KiB per read() and uploads crawl.
+    buffer_.reserve(64 * 1024);
     {
       std::lock_guard<std::mutex> lock(core_.sessions_mutex);
       core_.sessions[this] = weak_from_this();

@@ -75,12 +75,6 @@ void print(const char* name, const BaModeResult& r, const ModeMetrics& m) {
       m.bump_count, m.on_model_rms_error_m, m.on_model_lambda1_fraction, m.on_model_count);
 }
 
-double rms(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
-  return std::sqrt(s / std::max<size_t>(1, v.size()));
-}
-
 // Median absolute value: the few beams that hit the bump (not in the CAD) are outliers.
 double median_abs(std::vector<double> v) {
   for (double& x : v) x = std::abs(x);
