@@ -64,7 +64,7 @@ class BaGraph {
   BaModeResult solve() {
     BaModeResult result;
     result.mode = mode_;
-    result.dvl_residuals_initial_m = residuals_now();
+    if (!model_free_) result.dvl_residuals_initial_m = residuals_now();
     ceres::Solver::Options solver = solver_options();
     LabelFractionCallback callback(labels_, result.lambda1_fraction_per_iteration);
     if (!labels_.empty()) solver.callbacks.push_back(&callback);
@@ -79,7 +79,7 @@ class BaGraph {
     result.converged = summary.termination_type == ceres::CONVERGENCE;
     result.termination = summary.message;
     read_back(result);
-    result.dvl_residuals_final_m = residuals_now();
+    if (!model_free_) result.dvl_residuals_final_m = residuals_now();
     return result;
   }
 
@@ -256,7 +256,9 @@ class BaGraph {
     std::vector<Eigen::Vector3d> in_model;
     for (const auto& l : landmarks_)
       in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
-    const std::vector<double> h = mesh_.signed_distances(in_model, options_.num_threads);
+    // The model-free initialisation has no x_gM yet: no h, no labels.
+    const std::vector<double> h = model_free_ ? std::vector<double>(in_model.size(), 0.0)
+                                              : mesh_.signed_distances(in_model, options_.num_threads);
     const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
     for (size_t k = 0; k < landmarks_.size(); ++k) {
       BaLandmark l;

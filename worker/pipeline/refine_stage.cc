@@ -154,6 +154,32 @@ void require_keyframes(const Trajectory& keyframes, const std::string& why) {
                              std::to_string(keyframes.size()));
 }
 
+// Per-axis RMS of the odometry increments' disagreement with the MAP increments, [t, phi] in
+// the frame of keyframe i; added in quadrature to every odometry edge's sigmas.
+void widen_by_map_disagreement(Inputs& in) {
+  const auto& edges = in.solver.odometry;
+  const Trajectory& keyframes = in.solver.keyframes;
+  if (edges.size() != keyframes.size() - 1) return;
+  Eigen::Matrix<double, 6, 1> sum = Eigen::Matrix<double, 6, 1>::Zero();
+  for (size_t k = 0; k < edges.size(); ++k) {
+    const Pose3 T_map = keyframes[k].T_world_body.inverse() * keyframes[k + 1].T_world_body;
+    const Pose3& T_odo = edges[k].T_i_j;
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = T_odo.translation() - T_map.translation();
+    e.tail<3>() = slam::so3_log(T_map.linear().transpose() * T_odo.linear());
+    sum += e.cwiseProduct(e);
+  }
+  const Eigen::Matrix<double, 6, 1> rms = (sum / static_cast<double>(edges.size())).cwiseSqrt();
+  for (auto& edge : in.solver.odometry) {
+    const Eigen::Matrix<double, 6, 1> variance =
+        edge.information.diagonal().cwiseInverse() + rms.cwiseProduct(rms);
+    edge.information = variance.cwiseInverse().asDiagonal();
+  }
+  in.report["odometry"]["disagreement_with_map_rms"] = {
+      {"translation_m", {rms[0], rms[1], rms[2]}},
+      {"rotation_deg", {rms[3] * kRadToDeg, rms[4] * kRadToDeg, rms[5] * kRadToDeg}}};
+}
+
 // Step 3a: the recorded odometry at the keyframe stamps; keyframes outside it are dropped.
 void recorded_odometry(const io::MissionReader& reader, const RefineStageOptions& options,
                        Inputs& in) {
@@ -176,6 +202,7 @@ void recorded_odometry(const io::MissionReader& reader, const RefineStageOptions
   std::vector<TimeNs> stamps;
   for (const auto& p : in.solver.keyframes) stamps.push_back(p.t_ns);
   in.solver.odometry = slam::relative_poses_from_trajectory(odometry, stamps, noise);
+  if (options.odometry_noise_from_map) widen_by_map_disagreement(in);
   in.report["odometry"] = span_json(odometry.front().t_ns, odometry.back().t_ns);
   in.report["odometry"]["source"] = "recorded";
   in.report["odometry"]["poses"] = odometry.size();
@@ -270,6 +297,29 @@ void loop_closures(const io::MissionReader& reader, const slam::RefineOptions& s
                           " loop closures match no keyframe stamp and were left out");
 }
 
+// Step 4c: MAP anchors T_0_k = T_world_0^-1 T_world_k from the recorded keyframe poses, as
+// relative measurements from the first keyframe (see RefineStageOptions::map_anchors).
+void map_anchors(const RefineStageOptions& options, Inputs& in) {
+  const Trajectory& keyframes = in.solver.keyframes;
+  slam::Matrix6d information = slam::Matrix6d::Zero();
+  information.topLeftCorner<3, 3>().diagonal().setConstant(
+      1.0 / (options.map_sigma_translation_m * options.map_sigma_translation_m));
+  information.bottomRightCorner<3, 3>().diagonal().setConstant(
+      1.0 / (options.map_sigma_rotation_rad * options.map_sigma_rotation_rad));
+  const Pose3 T_0_world = keyframes.front().T_world_body.inverse();
+  for (size_t k = 2; k < keyframes.size(); ++k) {
+    slam::RelativePoseMeasurement m;
+    m.t_i_ns = keyframes.front().t_ns;
+    m.t_j_ns = keyframes[k].t_ns;
+    m.T_i_j = T_0_world * keyframes[k].T_world_body;
+    m.information = information;
+    in.solver.loop_closures.push_back(m);
+  }
+  in.report["map_anchors"] = {{"count", keyframes.size() > 2 ? keyframes.size() - 2 : 0},
+                              {"sigma_translation_m", options.map_sigma_translation_m},
+                              {"sigma_rotation_rad", options.map_sigma_rotation_rad}};
+}
+
 // Step 4b: IMU and DVL samples with their extrinsics and noise figures.
 void inertial_inputs(const io::MissionReader& reader, const RefineStageOptions& options,
                      slam::RefineOptions& solver_options, Inputs& in) {
@@ -358,6 +408,10 @@ Inputs gather_inputs(const io::MissionReader& reader, const RefineStageOptions& 
     loop_closures(reader, solver_options, in);
   else
     in.report["loop_closures"] = {{"used", 0}, {"disabled", true}};
+  if (options.map_anchors)
+    map_anchors(options, in);
+  else
+    in.report["map_anchors"] = {{"count", 0}, {"disabled", true}};
   in.report["keyframes"]["used"] = in.solver.keyframes.size();
   return in;
 }
@@ -618,7 +672,11 @@ class RefineStage : public Stage {
             {"estimate_dvl_rotation", o.estimate_dvl_rotation},
             {"odometry", o.odometry},
             {"loop_closures", o.loop_closures},
+            {"odometry_noise_from_map", o.odometry_noise_from_map},
             {"degeneracy", o.degeneracy},
+            {"map_anchors", o.map_anchors},
+            {"map_sigma_translation_m", o.map_sigma_translation_m},
+            {"map_sigma_rotation_rad", o.map_sigma_rotation_rad},
             {"max_dvl_gap_s", o.max_dvl_gap_s},
             {"rpe_delta_m", o.rpe_delta_m}};
   }
@@ -643,7 +701,11 @@ std::vector<std::string> RefineStageOptions::known_options() {
           "odometry_sigma_translation_per_m",
           "odometry_sigma_rotation_rad",
           "odometry_sigma_rotation_per_rad",
+          "odometry_noise_from_map",
           "degeneracy",
+          "map_anchors",
+          "map_sigma_translation_m",
+          "map_sigma_rotation_rad",
           "max_iterations",
           "relinearization_passes",
           "threads",
@@ -685,7 +747,13 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
       r.optional<double>("odometry_sigma_rotation_rad", o.odometry_sigma_rotation_rad);
   o.odometry_sigma_rotation_per_rad =
       r.optional<double>("odometry_sigma_rotation_per_rad", o.odometry_sigma_rotation_per_rad);
+  o.odometry_noise_from_map =
+      r.optional<bool>("odometry_noise_from_map", o.odometry_noise_from_map);
   o.degeneracy = r.optional<std::string>("degeneracy", o.degeneracy);
+  o.map_anchors = r.optional<bool>("map_anchors", o.map_anchors);
+  o.map_sigma_translation_m =
+      r.optional<double>("map_sigma_translation_m", o.map_sigma_translation_m);
+  o.map_sigma_rotation_rad = r.optional<double>("map_sigma_rotation_rad", o.map_sigma_rotation_rad);
   o.max_iterations = r.optional<int>("max_iterations", o.max_iterations);
   o.relinearization_passes = r.optional<int>("relinearization_passes", o.relinearization_passes);
   o.threads = r.optional<int>("threads", o.threads);
@@ -708,6 +776,8 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   require(
       o.degeneracy == "drop" || o.degeneracy == "keep_well_conditioned" || o.degeneracy == "ignore",
       "degeneracy", "drop, keep_well_conditioned or ignore, got '" + o.degeneracy + "'");
+  require(o.map_sigma_translation_m > 0.0, "map_sigma_translation_m", "> 0");
+  require(o.map_sigma_rotation_rad > 0.0, "map_sigma_rotation_rad", "> 0");
   require(o.max_iterations >= 1 && o.max_iterations <= 10000, "max_iterations",
           "an integer in [1, 10000]");
   require(o.relinearization_passes >= 1 && o.relinearization_passes <= 10, "relinearization_passes",

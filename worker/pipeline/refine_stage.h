@@ -41,7 +41,19 @@ struct RefineStageOptions {
   double odometry_sigma_translation_per_m = 0.01;
   double odometry_sigma_rotation_rad = 0.002;
   double odometry_sigma_rotation_per_rad = 0.01;
+  // Beyond the paper: widen the odometry sigmas per axis by the RMS disagreement between the
+  // odometry increments and the MAP poses' increments (a per-mission variance estimate), so an
+  // odometry that degenerated (a corridor) stops outvoting the DVL. false: the fixed model above.
+  bool odometry_noise_from_map = true;
   std::string degeneracy = "drop";  // drop (seed 000) | keep_well_conditioned | ignore
+  // Beyond the paper: offline, the global constraints of the online SLAM (scan-to-map matching,
+  // its loop closures) survive only in its MAP poses, so each keyframe is anchored to its MAP
+  // pose (expressed relative to the first keyframe, which the prior r_0 holds at its MAP pose)
+  // with these sigmas, Cauchy-robustified like loop closures. Without them nothing bounds the
+  // heading drift of odometry + IMU + DVL dead reckoning.
+  bool map_anchors = true;
+  double map_sigma_translation_m = 0.05;
+  double map_sigma_rotation_rad = 0.01;
 
   int max_iterations = 50;
   int relinearization_passes = 2;

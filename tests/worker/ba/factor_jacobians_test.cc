@@ -200,23 +200,50 @@ TEST_F(FactorJacobians, DvlRaycastEq14) {
   EXPECT_EQ(probed, 20);
 }
 
+// Landmarks at `offset` along the normal from a face's centroid (face region) and from a
+// grid vertex (vertex region, outside only: the solid is convex, so inside a vertex every
+// point is on the medial axis, where the distance has no derivative).
 TEST_F(FactorJacobians, SurfaceEq5BothComponentsAndModes) {
   testing::SyntheticHullOptions hull;
-  const MeshQuery mesh(testing::make_hull_patch(hull, true));
+  const TriangleMesh patch = testing::make_hull_patch(hull, false);
+  const MeshQuery mesh(patch);
   const MaxMixture mixture{1.0, 0.02};
-  // Offsets below and above the 5.6 cm switch: lambda = 1 and lambda = 0 components.
-  for (double offset : {0.01, -0.03, 0.2, -0.4}) {
-    for (SurfaceMode mode : {SurfaceMode::kMaxMixture, SurfaceMode::kOnModel}) {
-      const Pose3 T_world_model = random_pose(0.2, 1.0);
-      // Above a face's interior, above a grid vertex (vertex/edge regions) and above the
-      // bump's flat top; away from its 8 cm fall-off, whose bends are sharper than the
-      // offsets (points there would sit on the medial axis, where h has no derivative).
-      for (const Eigen::Vector2d& xy : {Eigen::Vector2d(-0.913, 0.377), Eigen::Vector2d(-1.0, 0.5),
-                                        Eigen::Vector2d(0.25, 0.05)}) {
-        const Eigen::Vector3d on_surface(xy.x(), xy.y(), 0.0);
-        const ClosestPoint c = mesh.closest_point(on_surface + Eigen::Vector3d(0, 0, -1.0));
-        const Eigen::Vector3d l_model = c.point + offset * c.normal;
-        Eigen::Vector3d landmark = T_world_model * l_model;
+  const auto face_near = [&](const Eigen::Vector2d& xy) {
+    Eigen::Vector3d best_centroid, best_normal;
+    double best = 1e9;
+    for (const auto& f : patch.faces) {
+      const Eigen::Vector3d a = patch.vertices[f[0]], b = patch.vertices[f[1]],
+                            c = patch.vertices[f[2]];
+      const Eigen::Vector3d centroid = (a + b + c) / 3.0;
+      if ((centroid.head<2>() - xy).norm() < best) {
+        best = (centroid.head<2>() - xy).norm();
+        best_centroid = centroid;
+        best_normal = (b - a).cross(c - a).normalized();
+      }
+    }
+    return std::pair{best_centroid, best_normal};
+  };
+  struct Case {
+    Eigen::Vector3d point, normal;
+    std::vector<double> offsets;  // below and above the 5.6 cm switch: both components
+  };
+  const auto [centroid_a, normal_a] = face_near({-0.913, 0.377});
+  const auto [centroid_b, normal_b] = face_near({1.2, -0.6});
+  // The grid vertex at (-1, 0.5), approached along the analytic surface normal.
+  const Eigen::Vector3d grid_vertex(-1.0, 0.5, hull.curvature_x + 0.25 * hull.curvature_y);
+  const Eigen::Vector3d analytic_normal =
+      Eigen::Vector3d(-2.0 * hull.curvature_x, 2.0 * hull.curvature_y * 0.5, -1.0).normalized();
+  const ClosestPoint vertex = mesh.closest_point(grid_vertex + 0.01 * analytic_normal);
+  ASSERT_EQ(vertex.feature, MeshFeature::kVertex);
+  ASSERT_LT((vertex.point - grid_vertex).norm(), 1e-9);
+  const Case cases[] = {{centroid_a, normal_a, {0.01, -0.03, 0.2, -0.4}},
+                        {centroid_b, normal_b, {-0.01, 0.03, -0.2, 0.4}},
+                        {vertex.point, vertex.normal, {0.01, 0.04, 0.2, 0.5}}};
+  for (const Case& c : cases) {
+    for (double offset : c.offsets) {
+      for (SurfaceMode mode : {SurfaceMode::kMaxMixture, SurfaceMode::kOnModel}) {
+        const Pose3 T_world_model = random_pose(0.2, 1.0);
+        Eigen::Vector3d landmark = T_world_model * (c.point + offset * c.normal);
         PoseBlock model = to_pose_block(T_world_model);
         expect_jacobians_match(make_surface_factor(mesh, mixture, mode, 0.0),
                                {model.data(), landmark.data()}, {&pose_manifold_, nullptr}, 1e-5);
