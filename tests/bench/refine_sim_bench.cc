@@ -70,29 +70,32 @@ struct Mean {
 
 void table_ii(const std::string& scenario, int seeds) {
   std::printf("\n%s: ATE rmse (m), SE(3) Umeyama, keyframes vs ground truth\n", scenario.c_str());
-  std::printf("%6s %10s %12s %10s %10s %8s %10s\n", "seed", "MAP", "refined-noDVL", "refined",
-              "reduction", "s_d", "solve_s");
-  Mean map, without, with, reduction;
+  // The target (issue 4, paper Table II) is what DVL fusion adds: with vs without DVL.
+  std::printf("%6s %10s %12s %10s %12s %10s %8s %10s\n", "seed", "MAP", "refined-noDVL", "refined",
+              "DVL-vs-noDVL", "vs-MAP", "s_d", "solve_s");
+  Mean map, without, with, reduction, reduction_vs_map;
   for (int seed = 1; seed <= seeds; ++seed) {
     const fs::path mission = simulate(scenario, seed, 1.0);
     const json r = run_refine(mission, json::object());
     const double a_map = ate(r, "map"), a_without = ate(r, "refined_without_dvl"),
                  a_with = ate(r, "refined_with_dvl");
-    const double red = 100.0 * (1.0 - a_with / a_map);
-    std::printf("%6d %10.4f %12.4f %10.4f %9.1f%% %8.4f %10.2f\n", seed, a_map, a_without, a_with,
-                red, r["dvl"]["dvl_scale"]["value"].get<double>(),
+    const double red = 100.0 * (1.0 - a_with / a_without);
+    const double red_map = 100.0 * (1.0 - a_with / a_map);
+    std::printf("%6d %10.4f %12.4f %10.4f %11.1f%% %9.1f%% %8.4f %10.2f\n", seed, a_map, a_without,
+                a_with, red, red_map, r["dvl"]["dvl_scale"]["value"].get<double>(),
                 r["solver"]["total_time_s"].get<double>());
     map.add(a_map);
     without.add(a_without);
     with.add(a_with);
     reduction.add(red);
+    reduction_vs_map.add(red_map);
     fs::remove_all(mission);
   }
   std::printf(
-      "%6s %10.4f %12.4f %10.4f %9.1f%%   (mean; reduction of the mean ATE: %.1f%%, "
-      "target >= 40%%)\n",
+      "%6s %10.4f %12.4f %10.4f %11.1f%% %9.1f%%   (means; DVL fusion lowers the mean ATE by "
+      "%.1f%%, target >= 40%%)\n",
       "mean", map.value(), without.value(), with.value(), reduction.value(),
-      100.0 * (1.0 - with.value() / map.value()));
+      reduction_vs_map.value(), 100.0 * (1.0 - with.value() / without.value()));
 }
 
 void scale_error(const std::string& scenario, int seeds) {
