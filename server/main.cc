@@ -90,7 +90,7 @@ int run(const Settings& settings) {
           : url;
   supervisor.start(
       {"--server", worker_url, "--token-file", (settings.data_dir / "token").string(),
-       "--lease-seconds", std::to_string(settings.worker_lease_seconds)});
+       "--lease-seconds", std::to_string(settings.worker_lease_seconds), "--exit-with-parent", std::to_string(::getpid())});
 
   std::cout << url << std::endl;
   spdlog::info("keel-server listening on {} with {} io threads, {} workers, data in {}", url,

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <fstream>
 #include <random>
 #include <regex>
@@ -193,6 +194,35 @@ TEST_F(EndToEnd, ServerKilledDuringRunningJobRunsAgainAfterRestart) {
     api.download("/v1/artifacts/" + artifact.id, copy, artifact.sha256);
     EXPECT_EQ(storage::sha256_file(copy), artifact.sha256);
   }
+}
+
+// The pids of keel-worker processes whose command line names this data folder's token.
+std::vector<int> workers_of(const fs::path& data_dir) {
+  std::vector<int> pids;
+  const std::string token_file = (data_dir / "token").string();
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string cmdline = read_file(entry.path() / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.find("keel-worker") != std::string::npos && cmdline.find(token_file) != std::string::npos)
+      pids.push_back(std::stoi(name));
+  }
+  return pids;
+}
+
+// Local workers die with their server, even a SIGKILLed one: no orphans lease jobs later.
+TEST_F(EndToEnd, LocalWorkersDoNotOutliveAKilledServer) {
+  Cluster cluster(root_.path(), /*workers=*/2);
+  for (int i = 0; i < 100 && workers_of(cluster.data_dir()).size() < 2; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_EQ(workers_of(cluster.data_dir()).size(), 2u);
+  cluster.kill_server();
+  for (int i = 0; i < 100 && !workers_of(cluster.data_dir()).empty(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  for (int pid : workers_of(cluster.data_dir()))
+    ADD_FAILURE() << "worker " << pid << " outlived its server: "
+                  << read_file("/proc/" + std::to_string(pid) + "/status").substr(0, 120);
 }
 
 }  // namespace

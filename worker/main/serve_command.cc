@@ -1,6 +1,9 @@
 // `keel-worker [serve] --server URL (--token T | --token-file F | env KEEL_TOKEN) ...`:
 // lease jobs from a server and run them until SIGINT/SIGTERM.
+#include <signal.h>
 #include <spdlog/spdlog.h>
+#include <sys/prctl.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -21,7 +24,16 @@ struct ServeArgs {
   std::string cache_dir;
   LeaseLoopOptions loop;
   double request_timeout_s = 60.0;
+  int parent_pid = 0;  // --exit-with-parent PID
 };
+
+// A worker started by keel-server must not outlive it: a SIGKILLed server would otherwise
+// leave orphans leasing jobs from whatever listens on its old port next.
+// The parent's pid comes from the parent itself: read here it could already be init's.
+void stop_with_parent(pid_t parent) {
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+  if (::getppid() != parent) ::raise(SIGTERM);  // the parent died before prctl took effect
+}
 
 std::filesystem::path default_cache_dir() {
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
@@ -63,6 +75,7 @@ int serve(const ServeArgs& args) {
   options.cache_dir =
       args.cache_dir.empty() ? default_cache_dir() : std::filesystem::path(args.cache_dir);
   install_stop_signals();
+  if (args.parent_pid > 0) stop_with_parent(args.parent_pid);
   try {
     LeaseLoop loop(config, options);
     return loop.run(stop_requested);
@@ -100,6 +113,10 @@ Subcommand add_serve_command(CLI::App& app) {
   cmd->add_option("--name", args->loop.worker_name, "Worker name (default host:pid)");
   cmd->add_flag("--once", args->loop.once, "Handle one job (waiting for it), then exit");
   cmd->add_flag("--keep-work", args->loop.keep_work, "Keep each job's work folder");
+  cmd->add_option("--exit-with-parent", args->parent_pid,
+                  "Stop (as on SIGTERM) when the parent process with this pid dies; keel-server "
+                  "sets it")
+      ->check(CLI::PositiveNumber);
   return {cmd, [args] { return serve(*args); }};
 }
 

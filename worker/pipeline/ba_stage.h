@@ -1,0 +1,83 @@
+// Stage `ba` (seed 001, Sec. 2 and the comparison of Sec. 4): model-assisted bundle
+// adjustment of a hull mission against its CAD mesh (worker/ba/model_assisted_ba.h).
+//
+// Keyframes are the camera's images; their initial poses are the recorded `map` keyframe poses
+// correcting the recorded `odometry` (Algorithm 2 of seed 000, as the map stage does), the
+// servo angle and pressure depth are interpolated at each image, and the DVL range sample
+// nearest to each image (within `dvl_max_dt_s`) becomes that keyframe's Eq. (14) returns.
+// Feature tracks come from the SIFT frontend on the images (`tracks=frontend`, default) or from
+// the simulator's ground-truth tracks listed in truth.yaml (`tracks=ground_truth`).
+//
+// Artifacts: `trajectory_ba.tum` (keyframe poses of the `proposed` mode, else of the last mode
+// run) and `ba_solution.json` (that mode's landmarks, camera poses and x_gM, which the
+// `inspect` stage reads). The report has one section per mode: iterations, time, cost, the
+// lambda = 1 fraction per iteration (Fig. 16), the DVL range residuals after GICP alone and
+// after the mode (Fig. 18), and x_gM against truth.yaml's T_world_cad when present.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "worker/ba/ba_options.h"
+#include "worker/core/pose.h"
+#include "worker/pipeline/stage.h"
+
+namespace keel::pipeline {
+
+inline constexpr const char* kBaTrajectoryFile = "trajectory_ba.tum";
+inline constexpr const char* kBaSolutionFile = "ba_solution.json";
+
+// `--set ba.<name>=<value>`.
+struct BaStageOptions {
+  std::string mode = "all";         // proposed | geva | naive | all (Sec. 4 compares all three)
+  std::string tracks = "frontend";  // frontend | ground_truth (truth.yaml feature_tracks)
+  // Sensors: empty = the first sensor of that type in mission.yaml.
+  std::string camera_sensor;
+  std::string dvl_ranges_sensor;
+  std::string servo_sensor;
+  std::string depth_sensor;
+  bool use_depth = true;       // Eq. (9) z from the pressure sensor (else off the initial pose)
+  double dvl_max_dt_s = 0.05;  // a DVL ping further than this from every image is not used
+  int max_keyframes = 0;       // 0 = every image; else the first N (short test runs)
+  // Solver figures passed through to keel::ba::BaOptions (paper defaults there).
+  int max_iterations = 100;
+  int threads = 2;
+  std::string linear_solver = "sparse_schur";
+  // Fig. 18 histogram of DVL range residuals: bins of this width over [-range, +range].
+  double histogram_bin_m = 0.005;
+  double histogram_range_m = 0.05;
+
+  // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
+  static BaStageOptions from_json(const nlohmann::json& options);
+  static std::vector<std::string> known_options();
+  std::vector<ba::BaMode> modes() const;
+};
+
+// ba_solution.json <-> its contents (also what the inspect stage reads).
+struct BaSolutionLandmark {
+  int64_t id = 0;
+  Eigen::Vector3d point_world = Eigen::Vector3d::Zero();
+  double h_m = 0.0;        // Eq. (5) signed distance to the CAD mesh, positive outside
+  int lambda = 0;          // Eq. (7) label, 1 = on the model
+  std::vector<int> views;  // indices into BaSolution::T_world_camera
+};
+struct BaSolution {
+  std::string mode;
+  Pose3 T_world_model = Pose3::Identity();  // x_gM
+  std::vector<TimeNs> t_ns;                 // per keyframe
+  std::vector<Pose3> T_world_camera;        // per keyframe, top camera
+  std::vector<BaSolutionLandmark> landmarks;
+};
+nlohmann::json ba_solution_to_json(const BaSolution& solution);
+// Throws ContractError naming `source` and the field.
+BaSolution ba_solution_from_json(const nlohmann::json& document, const std::string& source);
+
+nlohmann::json pose_to_json(const Pose3& T);
+Pose3 pose_from_json(const nlohmann::json& value, const std::string& path);
+
+std::unique_ptr<Stage> make_ba_stage();
+
+}  // namespace keel::pipeline
