@@ -11,6 +11,8 @@ duration="${KEEL_DEMO_DURATION:-60}"
 stages="${KEEL_DEMO_STAGES:-ingest}"
 
 bash "$here/deploy/setup.sh"
+# Paths relative to the checkout, so a fresh clone elsewhere hits the same ccache entries.
+export CCACHE_BASEDIR="$here"
 cmake -G Ninja -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 ninja -C "$build" keel-server keel-worker keel keel-sim
 
