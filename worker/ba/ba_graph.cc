@@ -257,8 +257,9 @@ class BaGraph {
     for (const auto& l : landmarks_)
       in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
     // The model-free initialisation has no x_gM yet: no h, no labels.
-    const std::vector<double> h = model_free_ ? std::vector<double>(in_model.size(), 0.0)
-                                              : mesh_.signed_distances(in_model, options_.num_threads);
+    const std::vector<double> h = model_free_
+                                      ? std::vector<double>(in_model.size(), 0.0)
+                                      : mesh_.signed_distances(in_model, options_.num_threads);
     const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
     for (size_t k = 0; k < landmarks_.size(); ++k) {
       BaLandmark l;

@@ -98,8 +98,10 @@ double max_nearest_distance(const std::vector<Vector>& originals, const std::vec
   };
   Eigen::Vector3d origin = decoded[0].cast<double>();
   for (const auto& p : decoded) origin = origin.cwiseMin(p.cast<double>());
+  // Cells centred on the grid nodes (round, not floor): a decoded point is alone in its cell,
+  // and an original's own node is in the cell it rounds to, so one lookup usually suffices.
   auto cell_of = [&](const Eigen::Vector3d& p) -> Eigen::Vector3i {
-    return ((p - origin) / step).array().floor().cast<int>();
+    return ((p - origin) / step).array().round().cast<int>();
   };
   std::unordered_map<Eigen::Vector3i, std::vector<Eigen::Vector3d>, CellHash, CellEqual> grid;
   for (const auto& p : decoded) {
@@ -115,7 +117,10 @@ double max_nearest_distance(const std::vector<Vector>& originals, const std::vec
     const Eigen::Vector3d p = originals[i].template cast<double>();
     const Eigen::Vector3i cell = cell_of(p);
     double best = std::numeric_limits<double>::infinity();
-    for (int dx = -1; dx <= 1; ++dx) {
+    if (const auto own = grid.find(cell); own != grid.end()) {
+      for (const auto& q : own->second) best = std::min(best, (q - p).norm());
+    }
+    for (int dx = -1; dx <= 1 && !(best <= tolerance); ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
           const auto it = grid.find(cell + Eigen::Vector3i(dx, dy, dz));
