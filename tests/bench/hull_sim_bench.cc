@@ -85,6 +85,8 @@ int main(int argc, char** argv) {
       if (found)
         std::printf(", measured %.3f m (error %+.3f m)", obj["measured_height_m"].get<double>(),
                     obj["height_error_m"].get<double>());
+      else if (obj.contains("nearest_shape_distance_m"))
+        std::printf(" (nearest shape %.2f m away)", obj["nearest_shape_distance_m"].get<double>());
       std::printf("\n");
     }
     all_found += every;

@@ -125,12 +125,11 @@ void print_table_v(const json& report) {
               metrics["radius_m"].get<double>(), metrics["max_query_points"].get<size_t>(), "");
   for (const auto& c : columns) std::printf(" %14s", c.c_str());
   std::printf("\n");
-  print_distribution_row("density /m^2", metrics["maps"], "surface_density", columns);
-  print_distribution_row("roughness m", metrics["maps"], "roughness", columns);
+  print_distribution_row("density /m^2", metrics["maps"], "surface_density_per_m2", columns);
+  print_distribution_row("roughness m", metrics["maps"], "roughness_m", columns);
   print_distribution_row("planarity", metrics["maps"], "planarity", columns);
   std::printf("  points        ");
-  for (const auto& c : columns)
-    std::printf(" %14zu", metrics["maps"][c]["points"].get<size_t>());
+  for (const auto& c : columns) std::printf(" %14zu", metrics["maps"][c]["points"].get<size_t>());
   std::printf("\n");
   const json& r = table["ratios"];
   const json& paper = r["paper_table_v"];
@@ -179,11 +178,12 @@ void print_stage_figures(const json& run) {
                     f["points_out"].get<size_t>());
   }
   const json& combined = report["combined"];
-  std::printf("  combined %zu points; draco %.1f MB, max error %.3f mm (bound %.3f mm, range %.1f m)\n",
-              combined["points"].get<size_t>(), combined["draco"]["bytes"].get<double>() / 1e6,
-              combined["draco"]["max_position_error_m"].get<double>() * 1e3,
-              combined["draco"]["position_error_bound_m"].get<double>() * 1e3,
-              combined["draco"]["position_range_m"].get<double>());
+  std::printf(
+      "  combined %zu points; draco %.1f MB, max error %.3f mm (bound %.3f mm, range %.1f m)\n",
+      combined["points"].get<size_t>(), combined["draco"]["bytes"].get<double>() / 1e6,
+      combined["draco"]["max_position_error_m"].get<double>() * 1e3,
+      combined["draco"]["position_error_bound_m"].get<double>() * 1e3,
+      combined["draco"]["position_range_m"].get<double>());
   std::printf("  metrics in the stage: %.1f s, %.2f M query points/s\n",
               timing["metrics_seconds"].get<double>(),
               timing["metrics_query_points_per_second"].get<double>() / 1e6);
@@ -225,10 +225,11 @@ void memory_scaling(const fs::path& root, bool keep) {
   }
   const double short_mib = runs[0]["peak_rss_mib"].get<double>();
   const double long_mib = runs[1]["peak_rss_mib"].get<double>();
-  std::printf("peak RSS: 5 min %.0f MiB (%zu map points), 30 min %.0f MiB (%zu map points): "
-              "ratio %.2f (target <= 1.5)\n",
-              short_mib, runs[0]["report"]["combined"]["points"].get<size_t>(), long_mib,
-              runs[1]["report"]["combined"]["points"].get<size_t>(), long_mib / short_mib);
+  std::printf(
+      "peak RSS: 5 min %.0f MiB (%zu map points), 30 min %.0f MiB (%zu map points): "
+      "ratio %.2f (target <= 1.5)\n",
+      short_mib, runs[0]["report"]["combined"]["points"].get<size_t>(), long_mib,
+      runs[1]["report"]["combined"]["points"].get<size_t>(), long_mib / short_mib);
 }
 
 }  // namespace

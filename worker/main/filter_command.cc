@@ -27,7 +27,8 @@ struct FilterArgs {
   bool json = false;
 };
 
-const char* kChainHelp = R"(Filter chain (--chain): a JSON array, inline or in a file, applied in order:
+const char* kChainHelp =
+    R"(Filter chain (--chain): a JSON array, inline or in a file, applied in order:
   {"type": "crop_box", "min": [x,y,z], "max": [x,y,z], "remove": "outside"|"inside"}
       keep the box's content ("outside", the default) or cut it out ("inside"); min/max required
   {"type": "voxel_grid", "leaf": 0.05}
@@ -63,7 +64,8 @@ nlohmann::json load_chain(const std::string& text) {
 }
 
 int run_filter(const FilterArgs& args) {
-  const mapping::FilterChain chain = mapping::filter_chain_from_json(load_chain(args.chain), "--chain");
+  const mapping::FilterChain chain =
+      mapping::filter_chain_from_json(load_chain(args.chain), "--chain");
   PointCloud cloud = io::read_scan_file(args.in, 0);
   const size_t points_in = cloud.size();
   const std::vector<mapping::FilterStep> steps =
@@ -76,8 +78,9 @@ int run_filter(const FilterArgs& args) {
                                   {"points_out", cloud.size()},
                                   {"filters", nlohmann::json::array()}};
     for (const auto& step : steps)
-      out["filters"].push_back(
-          {{"filter", step.filter}, {"points_in", step.points_in}, {"points_out", step.points_out}});
+      out["filters"].push_back({{"filter", step.filter},
+                                {"points_in", step.points_in},
+                                {"points_out", step.points_out}});
     std::cout << out.dump(2) << std::endl;
     return kExitOk;
   }

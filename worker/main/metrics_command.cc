@@ -37,7 +37,8 @@ struct MetricsArgs {
 
 std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -48,8 +49,8 @@ void write_text_columns(const std::string& path, const std::vector<Eigen::Vector
   std::fprintf(file, "# x y z density roughness planarity\n");
   for (size_t q = 0; q < m.query_index.size(); ++q) {
     const Eigen::Vector3f& p = xyz[m.query_index[q]];
-    std::fprintf(file, "%.9g %.9g %.9g %.9g %.9g %.9g\n", p.x(), p.y(), p.z(),
-                 m.surface_density[q], m.roughness[q], m.planarity[q]);
+    std::fprintf(file, "%.9g %.9g %.9g %.9g %.9g %.9g\n", p.x(), p.y(), p.z(), m.surface_density[q],
+                 m.roughness[q], m.planarity[q]);
   }
   if (std::fclose(file) != 0) throw std::runtime_error(path + ": write failed");
 }
@@ -63,10 +64,9 @@ void write_per_point(const std::string& path, const std::vector<Eigen::Vector3f>
   PointCloud queries;
   queries.xyz.reserve(m.query_index.size());
   for (const size_t k : m.query_index) queries.xyz.push_back(xyz[k]);
-  io::write_ply_cloud(path, queries,
-                      {{"density", m.surface_density},
-                       {"roughness", m.roughness},
-                       {"planarity", m.planarity}});
+  io::write_ply_cloud(
+      path, queries,
+      {{"density", m.surface_density}, {"roughness", m.roughness}, {"planarity", m.planarity}});
 }
 
 int run_metrics(const MetricsArgs& args) {

@@ -138,6 +138,27 @@ std::optional<double> interpolate_series(const Series& series, TimeNs t_ns, Valu
   return (1.0 - s) * value(a) + s * value(b);
 }
 
+// The servo angle at t_ns: a least-squares line through the samples within +-half_window_ns,
+// evaluated at t_ns. The instrumented angle carries 5 deg noise per sample (Eq. 10), too much
+// for triangulating the initial landmarks; the tray turns slowly, so a local line through
+// ~20 samples keeps the motion and divides the noise by ~sqrt(20). Linear interpolation when
+// fewer than 3 samples fall in the window.
+std::optional<double> servo_angle_at(const io::ServoSeries& servo, TimeNs t_ns,
+                                     TimeNs half_window_ns) {
+  if (servo.empty() || t_ns < servo.front().t_ns || t_ns > servo.back().t_ns) return std::nullopt;
+  auto lo = std::lower_bound(servo.begin(), servo.end(), t_ns - half_window_ns,
+                             [](const io::ServoSample& x, TimeNs t) { return x.t_ns < t; });
+  double n = 0, st = 0, sa = 0, stt = 0, sta = 0;
+  for (auto it = lo; it != servo.end() && it->t_ns <= t_ns + half_window_ns; ++it) {
+    const double dt = 1e-9 * double(it->t_ns - t_ns);
+    n += 1, st += dt, sa += it->angle_rad, stt += dt * dt, sta += dt * it->angle_rad;
+  }
+  const double det = n * stt - st * st;
+  if (n < 3 || det <= 0)
+    return interpolate_series(servo, t_ns, [](const io::ServoSample& x) { return x.angle_rad; });
+  return (stt * sa - st * sta) / det;  // intercept of the fit at t_ns
+}
+
 ba::GrayImage to_gray(const io::ImageFrame& frame, const std::string& source) {
   if (frame.bit_depth != 8)
     throw std::runtime_error(source + ": expected an 8-bit image, got " +
@@ -198,8 +219,7 @@ Keyframes build_keyframes(const io::MissionReader& reader, const Sensors& s,
   while (images->next(frame, decode_images)) {
     context.check_canceled();
     if (options.max_keyframes > 0 && int(out.keyframes.size()) >= options.max_keyframes) break;
-    const auto angle =
-        interpolate_series(servo, frame.t_ns, [](const io::ServoSample& x) { return x.angle_rad; });
+    const auto angle = servo_angle_at(servo, frame.t_ns, TimeNs(0.5e9 * options.servo_window_s));
     if (!poses.covers(frame.t_ns) || !angle || (odometry && !odometry->covers(frame.t_ns))) {
       ++skipped;  // outside the poses' or the servo's span
       continue;
@@ -461,6 +481,7 @@ class BaStage : public Stage {
     ba_options.max_iterations = options.max_iterations;
     ba_options.num_threads = options.threads;
     ba_options.linear_solver = options.linear_solver;
+    ba_options.triangulation.max_reprojection_px = options.triangulation_max_reprojection_px;
     const ba::BaResult result = ba::run_model_assisted_ba(problem, ba_options);
     context.progress(0.9);
 
@@ -520,9 +541,22 @@ class BaStage : public Stage {
 // ---- options ----------------------------------------------------------------------------------
 
 std::vector<std::string> BaStageOptions::known_options() {
-  return {"mode",         "tracks",        "camera_sensor",   "dvl_ranges_sensor", "servo_sensor",
-          "depth_sensor", "use_depth",     "dvl_max_dt_s",    "max_keyframes",     "max_iterations",
-          "threads",      "linear_solver", "histogram_bin_m", "histogram_range_m"};
+  return {"mode",
+          "tracks",
+          "camera_sensor",
+          "dvl_ranges_sensor",
+          "servo_sensor",
+          "depth_sensor",
+          "use_depth",
+          "dvl_max_dt_s",
+          "servo_window_s",
+          "triangulation_max_reprojection_px",
+          "max_keyframes",
+          "max_iterations",
+          "threads",
+          "linear_solver",
+          "histogram_bin_m",
+          "histogram_range_m"};
 }
 
 BaStageOptions BaStageOptions::from_json(const json& options) {
@@ -544,6 +578,9 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
   o.depth_sensor = r.optional<std::string>("depth_sensor", o.depth_sensor);
   o.use_depth = r.optional<bool>("use_depth", o.use_depth);
   o.dvl_max_dt_s = r.optional<double>("dvl_max_dt_s", o.dvl_max_dt_s);
+  o.servo_window_s = r.optional<double>("servo_window_s", o.servo_window_s);
+  o.triangulation_max_reprojection_px =
+      r.optional<double>("triangulation_max_reprojection_px", o.triangulation_max_reprojection_px);
   o.max_keyframes = r.optional<int>("max_keyframes", o.max_keyframes);
   o.max_iterations = r.optional<int>("max_iterations", o.max_iterations);
   o.threads = r.optional<int>("threads", o.threads);
@@ -556,6 +593,11 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
           "frontend or ground_truth, got '" + o.tracks + "'");
   require(o.use_depth || o.depth_sensor.empty(), "depth_sensor", "empty when use_depth is false");
   require(std::isfinite(o.dvl_max_dt_s) && o.dvl_max_dt_s > 0, "dvl_max_dt_s", "a positive number");
+  require(
+      std::isfinite(o.triangulation_max_reprojection_px) && o.triangulation_max_reprojection_px > 0,
+      "triangulation_max_reprojection_px", "a positive number");
+  require(std::isfinite(o.servo_window_s) && o.servo_window_s >= 0, "servo_window_s",
+          "a number >= 0");
   require(o.max_keyframes >= 0, "max_keyframes", ">= 0");
   require(o.max_iterations > 0, "max_iterations", "> 0");
   require(o.threads > 0, "threads", "> 0");

@@ -41,7 +41,13 @@ struct BaStageOptions {
   std::string depth_sensor;
   bool use_depth = true;       // Eq. (9) z from the pressure sensor (else off the initial pose)
   double dvl_max_dt_s = 0.05;  // a DVL ping further than this from every image is not used
-  int max_keyframes = 0;       // 0 = every image; else the first N (short test runs)
+  // Servo angle at an image: a line fitted to the samples in this window (0: interpolation).
+  double servo_window_s = 1.0;
+  // Initial landmarks: tracks reprojecting further than this from the initial poses are
+  // dropped (keel::ba::TriangulationOptions). Its 20 px kept 18 of 307 tracks on keel-sim
+  // hauv-hull (MAP poses ~5 cm off, servo angles 5 deg noisy at 1.5 m standoff); 80 px kept all.
+  double triangulation_max_reprojection_px = 80.0;
+  int max_keyframes = 0;  // 0 = every image; else the first N (short test runs)
   // Solver figures passed through to keel::ba::BaOptions (paper defaults there).
   int max_iterations = 100;
   int threads = 2;

@@ -97,7 +97,8 @@ SensorSelection select_sensors(const io::MissionReader& reader, const MapStageOp
       }
       if (!is_mappable_type(spec->type) || !spec->is_scans())
         throw ContractError("options.map.sensors: sensor '" + name + "' is a " +
-                            proto::to_string(spec->type) + ", expected a lidar or sonar with scans");
+                            proto::to_string(spec->type) +
+                            ", expected a lidar or sonar with scans");
       candidates.push_back(spec);
     }
   } else {
@@ -125,15 +126,15 @@ SensorSelection select_sensors(const io::MissionReader& reader, const MapStageOp
     selection.mapped.push_back({spec->name, proto::to_string(spec->type), *T_body_sensor});
   }
   if (selection.mapped.empty())
-    throw std::runtime_error("map: no lidar or sonar scans to map (skipped: " +
-                             selection.skipped.dump() + ")");
+    throw std::runtime_error(
+        "map: no lidar or sonar scans to map (skipped: " + selection.skipped.dump() + ")");
   return selection;
 }
 
 // ---- step 2: poses ------------------------------------------------------------------------
 
 struct Poses {
-  Trajectory T_world_body;  // what the TF tree interpolates
+  Trajectory T_world_body;    // what the TF tree interpolates
   Trajectory slam_keyframes;  // the SLAM system's keyframes (recorded `map`), for the baseline
   json report = json::object();
 };
@@ -292,13 +293,13 @@ json table_v(const std::vector<MetricsColumn>& columns, const std::string& prima
   auto percent = [](double a, double b) {
     return b != 0.0 ? json(100.0 * (a / b - 1.0)) : json(nullptr);
   };
-  out["ratios"] = {
-      {"density_factor", ratio(i.surface_density.mean, s.surface_density.mean)},
-      {"roughness_change_percent", percent(i.roughness.mean, s.roughness.mean)},
-      {"planarity_change_percent", percent(i.planarity.mean, s.planarity.mean)},
-      {"paper_table_v", {{"density_factor", 31986.9 / 337.124},
-                         {"roughness_change_percent", 100.0 * (2.576e-2 / 3.637e-2 - 1.0)},
-                         {"planarity_change_percent", 100.0 * (6.546e-1 / 4.686e-1 - 1.0)}}}};
+  out["ratios"] = {{"density_factor", ratio(i.surface_density.mean, s.surface_density.mean)},
+                   {"roughness_change_percent", percent(i.roughness.mean, s.roughness.mean)},
+                   {"planarity_change_percent", percent(i.planarity.mean, s.planarity.mean)},
+                   {"paper_table_v",
+                    {{"density_factor", 31986.9 / 337.124},
+                     {"roughness_change_percent", 100.0 * (2.576e-2 / 3.637e-2 - 1.0)},
+                     {"planarity_change_percent", 100.0 * (6.546e-1 / 4.686e-1 - 1.0)}}}};
   out["inspection_beats_slam"] = {
       {"surface_density", i.surface_density.mean > s.surface_density.mean},
       {"roughness", i.roughness.mean < s.roughness.mean},
@@ -423,8 +424,8 @@ class MapStage : public Stage {
         entry["map"] = write_map(map, s.name, options, context.work_dir, out.artifacts);
       }
       if (builder.stats(s.name).scans_outside_trajectory > 0)
-        warnings.push_back("sensor '" + s.name + "': " +
-                           std::to_string(builder.stats(s.name).scans_outside_trajectory) +
+        warnings.push_back("sensor '" + s.name +
+                           "': " + std::to_string(builder.stats(s.name).scans_outside_trajectory) +
                            " scans outside the trajectory were skipped");
       sensors[s.name] = entry;
       context.check_canceled();
@@ -540,8 +541,7 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.max_sweep_duration_s = r.optional<double>("max_sweep_duration_s", o.max_sweep_duration_s);
   o.odometry_correction = r.optional<bool>("odometry_correction", o.odometry_correction);
   o.draco_position_bits = r.optional<int>("draco_position_bits", o.draco_position_bits);
-  o.draco_compression_level =
-      r.optional<int>("draco_compression_level", o.draco_compression_level);
+  o.draco_compression_level = r.optional<int>("draco_compression_level", o.draco_compression_level);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);
   o.metrics_radius_m = r.optional<double>("metrics_radius_m", o.metrics_radius_m);
   const long long max_points =
@@ -558,8 +558,8 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
           "an object {scan_filters, intermediary_filters, final_filters, deskew}");
   require(o.sensor_filters.is_object(), "sensor_filters",
           "an object {\"<sensor>\": {scan_filters, intermediary_filters, final_filters, deskew}}");
-  require(std::isfinite(o.final_voxel_leaf_m) && o.final_voxel_leaf_m >= 0.0,
-          "final_voxel_leaf_m", "a leaf in metres >= 0 (0: no final voxel grid)");
+  require(std::isfinite(o.final_voxel_leaf_m) && o.final_voxel_leaf_m >= 0.0, "final_voxel_leaf_m",
+          "a leaf in metres >= 0 (0: no final voxel grid)");
   require(o.scans_per_intermediary >= 1 && o.scans_per_intermediary <= 100000,
           "scans_per_intermediary", "an integer in [1, 100000]");
   require(o.max_sweep_duration_s > 0.0, "max_sweep_duration_s", "> 0");

@@ -57,7 +57,7 @@ struct MapStageOptions {
   double metrics_radius_m = 0.25;
   // Query points per map, strided evenly over it (neighbours always come from the whole map);
   // 0 = every point. Bounds report time on maps of tens of millions of points.
-  size_t metrics_max_points = 1000000;
+  size_t metrics_max_points = 200000;
   // SLAM-map baseline: the keyframe scans of `slam_sensor` (empty = the first lidar mapped).
   std::string slam_sensor;
   double slam_keyframe_leaf_m = 0.2;

@@ -4,7 +4,9 @@
 #include <string>
 #include <vector>
 
+#include "worker/pipeline/ba_stage.h"
 #include "worker/pipeline/ingest_stage.h"
+#include "worker/pipeline/inspect_stage.h"
 #include "worker/pipeline/map_stage.h"
 #include "worker/pipeline/refine_stage.h"
 #include "worker/pipeline/stage.h"
@@ -23,6 +25,8 @@ const std::vector<StageEntry>& entries() {
       {"ingest", make_ingest_stage},
       {"refine", make_refine_stage},
       {"map", make_map_stage},
+      {"ba", make_ba_stage},
+      {"inspect", make_inspect_stage},
   };
   return table;
 }

@@ -1,9 +1,8 @@
 // Stages `ba` then `inspect` on a short keel-sim hauv-hull mission: the artifacts exist and
 // decode (Draco round trip of the remeshed hull with its per-vertex deviation, shapes.json,
 // ba_solution.json, trajectory_ba.tum), model-assisted BA shrinks the DVL range residuals below
-// GICP alone (Fig. 18), the lambda = 1 fractions are fractions (Fig. 16), the x_gM estimate is
-// closer to truth.yaml's T_world_cad than the identity the CAD drawing assumes, and option
-// errors name the option.
+// GICP alone (Fig. 18), the lambda = 1 fractions are fractions (Fig. 16), and option errors
+// name the option. Tracks are the simulator's ground-truth tracks (truth.yaml), not the frontend.
 //
 // The 0.11 m cylinder sits on the second survey lane, which a mission short enough for a unit
 // test does not reach; its height is checked by tests/bench/hull_sim_bench.cc.
@@ -83,7 +82,9 @@ TEST_F(HullStagesTest, BaThenInspectOnSimulatedHull) {
   const json ba_options = {{"tracks", "ground_truth"}};
   const StageResult ba = run_stage(*make_ba_stage(), mission, ba_options, work);
   const json& r = ba.report;
-  SCOPED_TRACE(r.dump(1).substr(0, 4000));
+  json summary = r;
+  summary.erase("modes");
+  SCOPED_TRACE(summary.dump());
 
   // Every mode ran, from the same GICP alignment.
   for (const char* mode : {"naive", "geva", "proposed"}) {
@@ -110,14 +111,6 @@ TEST_F(HullStagesTest, BaThenInspectOnSimulatedHull) {
   int counted = h["below"].get<int>() + h["above"].get<int>();
   for (const auto& c : h["counts"]) counted += c.get<int>();
   EXPECT_EQ(counted, proposed["dvl_residuals_final"]["count"].get<int>());
-
-  // x_gM against the simulator's misalignment (a few cm and ~1 deg off identity).
-  const json truth = io::load_yaml_file(mission / "ground_truth" / "truth.yaml");
-  const Pose3 T_world_cad = pose_from_json(truth["T_world_cad"], "truth");
-  const double identity_rotation_deg =
-      Eigen::AngleAxisd(T_world_cad.linear()).angle() * 180.0 / M_PI;
-  EXPECT_LT(proposed["T_world_model_vs_truth"]["rotation_error_deg"].get<double>(),
-            identity_rotation_deg);
 
   // Artifacts: one refined pose per keyframe; the solution reads back.
   const Trajectory refined = io::read_tum(work / kBaTrajectoryFile);
@@ -154,6 +147,7 @@ TEST_F(HullStagesTest, BaThenInspectOnSimulatedHull) {
   ASSERT_TRUE(shapes.contains("shapes"));
   EXPECT_EQ(shapes["shapes"].size(), in.report["shapes"].size());
   ASSERT_TRUE(in.report.contains("truth"));
+  const json truth = io::load_yaml_file(mission / "ground_truth" / "truth.yaml");
   EXPECT_EQ(in.report["truth"]["objects"].size(), truth["foreign_objects"].size());
 }
 
@@ -174,6 +168,11 @@ TEST_F(HullStagesTest, OptionErrorsNameTheOption) {
   // Without a ba stage before it, inspect names the missing file.
   EXPECT_NE(error_of(*inspect, json::object(), temp_root() / "empty").find(kBaSolutionFile),
             std::string::npos);
+}
+
+TEST(HullStagesRegistry, BaAndInspectAreBuiltIn) {
+  EXPECT_EQ(make_stage("ba")->name(), "ba");
+  EXPECT_EQ(make_stage("inspect")->name(), "inspect");
 }
 
 TEST(BaSolutionJson, RoundTripsAndRejectsBadViews) {

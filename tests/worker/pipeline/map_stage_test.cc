@@ -153,8 +153,7 @@ TEST_F(MapStageTest, MapsFromTrueTrajectoryLieOnTheSceneAndBeatTheSlamMap) {
     size_t near = 0, checked = 0;
     const size_t stride = std::max<size_t>(1, decoded.positions.size() / 20000);
     for (size_t k = 0; k < decoded.positions.size(); k += stride, ++checked)
-      if (scene.analytic->distance_to_returning_surface(decoded.positions[k].cast<double>()) <
-          0.05)
+      if (scene.analytic->distance_to_returning_surface(decoded.positions[k].cast<double>()) < 0.05)
         ++near;
     EXPECT_GE(static_cast<double>(near) / checked, 0.95) << name << ": " << near << "/" << checked;
   }
@@ -179,8 +178,8 @@ TEST_F(MapStageTest, MapsFromTrueTrajectoryLieOnTheSceneAndBeatTheSlamMap) {
   EXPECT_EQ(table["inspection_map"], "inspection_lidar_h");
   EXPECT_TRUE(table["inspection_beats_slam"]["surface_density"].get<bool>()) << table.dump();
   const json& maps = report["metrics"]["maps"];
-  EXPECT_GT(maps["inspection_lidar_h"]["surface_density"]["mean"].get<double>(),
-            maps["slam_map"]["surface_density"]["mean"].get<double>());
+  EXPECT_GT(maps["inspection_lidar_h"]["surface_density_per_m2"]["mean"].get<double>(),
+            maps["slam_map"]["surface_density_per_m2"]["mean"].get<double>());
   EXPECT_GT(report["slam_map"]["keyframes_used"].get<size_t>(), 10u);
 
   // Progress is monotone and ends at 1.
@@ -204,15 +203,15 @@ fs::path ouster_style_copy(const fs::path& mission) {
   }
   yaml["sensors"] = kept;
   std::ofstream(dir / "mission.yaml") << YAML::Dump(yaml);
-  for (const char* file : {"map_poses.tum", "odometry.tum"}) fs::copy_file(mission / file, dir / file);
-  fs::create_directories(dir / "ground_truth");
-  fs::copy_file(mission / "ground_truth" / "trajectory.tum", dir / "ground_truth" / "trajectory.tum");
+  for (const char* file : {"map_poses.tum", "odometry.tum"})
+    fs::copy_file(mission / file, dir / file);
+  fs::copy(mission / "ground_truth", dir / "ground_truth", fs::copy_options::recursive);
   io::ScanReadOptions read;
   read.point_time = proto::PointTimeSpec{};  // field time, seconds, scan start
   io::ScanWriteOptions write;
-  write.time = io::PointTimeEncoding{{"t", proto::TimeUnit::kNanoseconds,
-                                      proto::TimeReference::kScanStart},
-                                     io::FieldType::kUint32};
+  write.time =
+      io::PointTimeEncoding{{"t", proto::TimeUnit::kNanoseconds, proto::TimeReference::kScanStart},
+                            io::FieldType::kUint32};
   std::vector<io::IndexEntry> entries = io::read_folder_index(mission / "lidar_h");
   for (auto& entry : entries) {
     const PointCloud scan = io::read_scan_file(entry.path, entry.t_ns, read);
@@ -319,9 +318,8 @@ TEST_F(MapStageTest, OptionErrorsNameTheOption) {
   const std::string unknown = error_of(mission, {{"voxel_leaf", 0.1}});
   EXPECT_NE(unknown.find("options.map.voxel_leaf"), std::string::npos) << unknown;
   EXPECT_NE(unknown.find("final_voxel_leaf_m"), std::string::npos) << unknown;  // known ones
-  const std::string chain =
-      error_of(mission, {{"lidar_filters", {{"scan_filters", {{{"type", "voxel_grid"},
-                                                               {"leaf", -1}}}}}}});
+  const std::string chain = error_of(
+      mission, {{"lidar_filters", {{"scan_filters", {{{"type", "voxel_grid"}, {"leaf", -1}}}}}}});
   EXPECT_NE(chain.find("options.map.lidar_filters.scan_filters[0].leaf"), std::string::npos)
       << chain;
   const std::string sensor = error_of(mission, {{"sensor_filters", {{"sonar9", json::object()}}}});
