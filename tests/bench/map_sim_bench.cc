@@ -6,7 +6,7 @@
 // Each stage run is a fresh process (`bench_map_sim --stage MISSION WORK`), so its peak RSS is
 // its own. On a shared machine wall time includes waiting for a core: CPU seconds are printed
 // too, and "per 2 cores" = 2 x points / CPU seconds.
-// Run build-*/tests/bench/bench_map_sim [--keep] [--skip-rss] [--dir DIR].
+// Run build-*/tests/bench/bench_map_sim [--keep] [--skip-rss | --rss-only] [--dir DIR].
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -204,32 +204,53 @@ void metrics_throughput(const fs::path& ply) {
       2.0 * metrics.query_points / cpu / 1e6, metrics.surface_density.mean * M_PI * 0.0625);
 }
 
+// Table IV's lidar scan filters with DROR's alpha set to the reduced lidar's horizontal
+// resolution (360 deg / 450 points): with VLP-16's 0.2 deg, DROR would remove every point.
+json reduced_lidar_options(double final_leaf_m) {
+  return {{"metrics_max_points", 200000},
+          {"final_voxel_leaf_m", final_leaf_m},
+          {"lidar_filters",
+           {{"scan_filters", json::parse(R"([
+              {"type": "crop_box", "min": [-60, -60, -60], "max": [60, 60, 60], "remove": "outside"},
+              {"type": "crop_box", "min": [-2, -2, -2], "max": [2, 2, 2], "remove": "inside"},
+              {"type": "dror", "beta": 3.0, "alpha_deg": 0.8, "k_min": 4, "sr_min": 0.01}])")}}}};
+}
+
 void memory_scaling(const fs::path& root, bool keep) {
   // The same survey of the bridge at two speeds; lidar resolution reduced (450 points per
   // ring) so the 30-minute mission stays ~1 GB on disk.
   const double length = bridge_path_length_m();
   const std::vector<std::string> sensors = {"lidar_h", "sonar"};
-  json runs = json::array();
+  std::vector<fs::path> missions;
+  std::vector<double> speeds;
   for (const double minutes : {5.0, 30.0}) {
     const double duration = minutes * 60.0;
-    const double speed = length / (duration - 6.0);  // 2 s rest + 4 s ramp
-    const fs::path mission = root / ("bridge_" + std::to_string(int(minutes)) + "min");
-    simulate(mission, duration, sensors,
-             {"lidar.points_per_ring=450", "motion.speed=" + std::to_string(speed)});
-    const json run = stage_in_child(mission, root / ("work_" + std::to_string(int(minutes))),
-                                    {{"metrics_max_points", 200000}});
-    std::printf("%2.0f-minute survey (%.2f m/s): ", minutes, speed);
-    print_stage_figures(run);
-    runs.push_back(run);
-    if (!keep) fs::remove_all(mission);
+    speeds.push_back(length / (duration - 6.0));  // 2 s rest + 4 s ramp
+    missions.push_back(root / ("bridge_" + std::to_string(int(minutes)) + "min"));
+    simulate(missions.back(), duration, sensors,
+             {"lidar.points_per_ring=450", "motion.speed=" + std::to_string(speeds.back())});
   }
-  const double short_mib = runs[0]["peak_rss_mib"].get<double>();
-  const double long_mib = runs[1]["peak_rss_mib"].get<double>();
-  std::printf(
-      "peak RSS: 5 min %.0f MiB (%zu map points), 30 min %.0f MiB (%zu map points): "
-      "ratio %.2f (target <= 1.5)\n",
-      short_mib, runs[0]["report"]["combined"]["points"].get<size_t>(), long_mib,
-      runs[1]["report"]["combined"]["points"].get<size_t>(), long_mib / short_mib);
+  for (const double leaf : {0.02, 0.05}) {
+    json runs = json::array();
+    for (size_t k = 0; k < 2; ++k) {
+      const int minutes = k == 0 ? 5 : 30;
+      const json run = stage_in_child(
+          missions[k], root / ("work_" + std::to_string(minutes) + "_" + std::to_string(leaf)),
+          reduced_lidar_options(leaf));
+      std::printf("%2d-minute survey (%.2f m/s), final voxel %.2f m: ", minutes, speeds[k], leaf);
+      print_stage_figures(run);
+      runs.push_back(run);
+    }
+    const double short_mib = runs[0]["peak_rss_mib"].get<double>();
+    const double long_mib = runs[1]["peak_rss_mib"].get<double>();
+    std::printf(
+        "peak RSS, final voxel %.2f m: 5 min %.0f MiB (%zu map points), 30 min %.0f MiB (%zu map "
+        "points): ratio %.2f (target <= 1.5)\n",
+        leaf, short_mib, runs[0]["report"]["combined"]["points"].get<size_t>(), long_mib,
+        runs[1]["report"]["combined"]["points"].get<size_t>(), long_mib / short_mib);
+  }
+  if (!keep)
+    for (const auto& m : missions) fs::remove_all(m);
 }
 
 }  // namespace
@@ -237,16 +258,22 @@ void memory_scaling(const fs::path& root, bool keep) {
 int main(int argc, char** argv) {
   if (argc >= 4 && std::string(argv[1]) == "--stage")
     return run_stage_child(argv[2], argv[3], argc >= 5 ? argv[4] : "");
-  bool keep = false, skip_rss = false;
+  bool keep = false, skip_rss = false, rss_only = false;
   fs::path root = fs::temp_directory_path() / ("keel_bench_map_sim_" + std::to_string(getpid()));
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--keep") keep = true;
     if (a == "--skip-rss") skip_rss = true;
+    if (a == "--rss-only") rss_only = true;
     if (a == "--dir" && i + 1 < argc) root = argv[++i];
   }
   fs::create_directories(root);
   try {
+    if (rss_only) {
+      memory_scaling(root, keep);
+      if (!keep) fs::remove_all(root);
+      return 0;
+    }
     // Full usv-bridge mission, the three range sensors of seed 000 Sec. VI.
     const fs::path mission = root / "bridge_full";
     simulate(mission, 0.0, {"lidar_h", "lidar_v", "sonar"}, {});
