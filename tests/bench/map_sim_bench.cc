@@ -209,8 +209,7 @@ void metrics_throughput(const fs::path& ply) {
 json reduced_lidar_options(double final_leaf_m) {
   return {{"metrics_max_points", 200000},
           {"final_voxel_leaf_m", final_leaf_m},
-          {"lidar_filters",
-           {{"scan_filters", json::parse(R"([
+          {"lidar_filters", {{"scan_filters", json::parse(R"([
               {"type": "crop_box", "min": [-60, -60, -60], "max": [60, 60, 60], "remove": "outside"},
               {"type": "crop_box", "min": [-2, -2, -2], "max": [2, 2, 2], "remove": "inside"},
               {"type": "dror", "beta": 3.0, "alpha_deg": 0.8, "k_min": 4, "sr_min": 0.01}])")}}}};

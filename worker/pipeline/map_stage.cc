@@ -212,6 +212,20 @@ json stats_json(const mapping::SensorMapStats& s) {
           {"points_out", s.points_out}};
 }
 
+// The filter that removed every remaining point (a DROR whose alpha_deg does not match the
+// sensor's angular resolution, typically), or "" when the map kept points.
+std::string emptied_by(const mapping::SensorMapStats& s) {
+  const std::pair<const char*, const mapping::StageStats*> stages[] = {
+      {"scan", &s.scan_stage}, {"intermediary", &s.intermediary_stage}, {"final", &s.final_stage}};
+  for (const auto& [stage, stats] : stages)
+    for (const auto& step : stats->steps)
+      if (step.points_in > 0 && step.points_out == 0)
+        return std::string(stage) + "-stage filter '" + step.filter + "' removed all " +
+               std::to_string(step.points_in) +
+               " points (check its parameters against the sensor, e.g. DROR's alpha_deg)";
+  return "";
+}
+
 // Writes map_<name>.drc (and .ply) and returns their figures.
 json write_map(const PointCloud& map, const std::string& name, const MapStageOptions& options,
                const fs::path& work_dir, std::vector<std::string>& artifacts) {
@@ -427,6 +441,8 @@ class MapStage : public Stage {
         warnings.push_back("sensor '" + s.name +
                            "': " + std::to_string(builder.stats(s.name).scans_outside_trajectory) +
                            " scans outside the trajectory were skipped");
+      if (const std::string w = emptied_by(builder.stats(s.name)); !w.empty())
+        warnings.push_back("sensor '" + s.name + "': " + w);
       sensors[s.name] = entry;
       context.check_canceled();
     }
