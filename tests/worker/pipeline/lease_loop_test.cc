@@ -105,7 +105,7 @@ class LeaseLoopTest : public ::testing::Test {
     proto::Job job;
     for (int i = 0; i < 2400; ++i) {
       job = api_->get_job(id);
-      if (done(job)) break;
+      if (done(job) || proto::is_terminal(job.state)) break;
       std::this_thread::sleep_for(50ms);
     }
     return job;
@@ -188,7 +188,8 @@ TEST_F(LeaseLoopTest, CancelStopsTheRunningStage) {
 }
 
 TEST_F(LeaseLoopTest, SigtermAbandonsTheJobAndAnotherWorkerResumesIt) {
-  testing::write_long_mission(dir_ / "long", 20000);
+  // Long enough that the job is still running when the test sees it (idle machines are fast).
+  testing::write_long_mission(dir_ / "long", 200000);
   const proto::Job job = submit(dir_ / "long");
   auto first = start_worker("w1", {"--lease-seconds", "2"});
   const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
