@@ -8,6 +8,7 @@
 //   5. run_model_assisted_ba for the chosen modes;
 //   6. artifacts and the report (per mode, Fig. 16 and Fig. 18 figures, x_gM vs truth).
 #include "worker/pipeline/ba_stage.h"
+#include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
 #include <cmath>
@@ -35,12 +36,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using proto::ContractError;
 using proto::SensorType;
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 void require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.ba." + option + ": expected " + expected);
@@ -562,13 +557,7 @@ std::vector<std::string> BaStageOptions::known_options() {
 BaStageOptions BaStageOptions::from_json(const json& options) {
   BaStageOptions o;
   if (options.is_null()) return o;
-  if (!options.is_object())
-    throw ContractError("options.ba: expected an object, got " + proto::json_type_name(options));
-  const auto known = known_options();
-  for (const auto& item : options.items())
-    if (std::find(known.begin(), known.end(), item.key()) == known.end())
-      throw ContractError("options.ba." + item.key() + ": unknown option (known: " + join(known) +
-                          ")");
+  check_stage_options(options, "ba", known_options());
   proto::FieldReader r(options, "options.ba");
   o.mode = r.optional<std::string>("mode", o.mode);
   o.tracks = r.optional<std::string>("tracks", o.tracks);

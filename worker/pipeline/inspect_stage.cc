@@ -5,6 +5,7 @@
 //   3. artifacts: mesh_remeshed.drc / .ply with the per-vertex deviation, shapes.json;
 //   4. report: shapes and heights; with truth.yaml, foreign objects found / missed.
 #include "worker/pipeline/inspect_stage.h"
+#include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
 #include <cmath>
@@ -29,12 +30,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using proto::ContractError;
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 void require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.inspect." + option + ": expected " + expected);
@@ -220,14 +215,7 @@ std::vector<std::string> InspectStageOptions::known_options() {
 InspectStageOptions InspectStageOptions::from_json(const json& options) {
   InspectStageOptions o;
   if (options.is_null()) return o;
-  if (!options.is_object())
-    throw ContractError("options.inspect: expected an object, got " +
-                        proto::json_type_name(options));
-  const auto known = known_options();
-  for (const auto& item : options.items())
-    if (std::find(known.begin(), known.end(), item.key()) == known.end())
-      throw ContractError("options.inspect." + item.key() +
-                          ": unknown option (known: " + join(known) + ")");
+  check_stage_options(options, "inspect", known_options());
   proto::FieldReader r(options, "options.inspect");
   auto& in = o.inspect;
   in.tau_m = r.optional<double>("tau_m", in.tau_m);

@@ -12,6 +12,7 @@
 //   5. metrics of the SLAM map and the inspection maps (Eqs. (23)-(26)), side by side as
 //      Table V, with the ratios.
 #include "worker/pipeline/map_stage.h"
+#include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
 #include <chrono>
@@ -42,12 +43,6 @@ using proto::SensorType;
 // Progress: scans take [0, kScansDone], outputs up to kOutputsDone, metrics the rest.
 constexpr double kScansDone = 0.75;
 constexpr double kOutputsDone = 0.85;
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 void require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.map." + option + ": expected " + expected);
@@ -93,7 +88,7 @@ SensorSelection select_sensors(const io::MissionReader& reader, const MapStageOp
         std::vector<std::string> names;
         for (const auto& s : manifest.sensors) names.push_back(s.name);
         throw ContractError("options.map.sensors: mission has no sensor '" + name +
-                            "' (it has: " + join(names) + ")");
+                            "' (it has: " + join_names(names) + ")");
       }
       if (!is_mappable_type(spec->type) || !spec->is_scans())
         throw ContractError("options.map.sensors: sensor '" + name + "' is a " +
@@ -339,7 +334,7 @@ class MapStage : public Stage {
         std::vector<std::string> names;
         for (const auto& s : selection.mapped) names.push_back(s.name);
         throw ContractError("options.map.sensor_filters." + item.key() +
-                            ": no such sensor is mapped (mapped: " + join(names) + ")");
+                            ": no such sensor is mapped (mapped: " + join_names(names) + ")");
       }
     }
     context.check_canceled();
@@ -534,13 +529,7 @@ std::vector<std::string> MapStageOptions::known_options() {
 MapStageOptions MapStageOptions::from_json(const json& options) {
   MapStageOptions o;
   if (options.is_null()) return o;
-  if (!options.is_object())
-    throw ContractError("options.map: expected an object, got " + proto::json_type_name(options));
-  const auto known = known_options();
-  for (const auto& item : options.items())
-    if (std::find(known.begin(), known.end(), item.key()) == known.end())
-      throw ContractError("options.map." + item.key() + ": unknown option (known: " + join(known) +
-                          ")");
+  check_stage_options(options, "map", known_options());
   proto::FieldReader r(options, "options.map");
   if (r.has("sensors")) {
     // `--set map.sensors=lidar_h` arrives as a string; `["lidar_h","sonar"]` as an array.

@@ -9,6 +9,7 @@
 //   6. trajectory_refined.tum and the report section (inputs, solver, degeneracy, s_d, the
 //      DVL-IMU rotation, DVL gaps, ATE/RPE against ground truth).
 #include "worker/pipeline/refine_stage.h"
+#include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
 #include <cmath>
@@ -33,12 +34,6 @@ using proto::SensorType;
 constexpr double kRadToDeg = 180.0 / M_PI;
 
 // ---- options ------------------------------------------------------------------------------
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 void require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.refine." + option + ": expected " + expected);
@@ -717,14 +712,7 @@ std::vector<std::string> RefineStageOptions::known_options() {
 RefineStageOptions RefineStageOptions::from_json(const json& options) {
   RefineStageOptions o;
   if (options.is_null()) return o;
-  if (!options.is_object())
-    throw ContractError("options.refine: expected an object, got " +
-                        proto::json_type_name(options));
-  const auto known = known_options();
-  for (const auto& item : options.items())
-    if (std::find(known.begin(), known.end(), item.key()) == known.end())
-      throw ContractError("options.refine." + item.key() +
-                          ": unknown option (known: " + join(known) + ")");
+  check_stage_options(options, "refine", known_options());
   proto::FieldReader r(options, "options.refine");
   o.imu_sensor = r.optional<std::string>("imu_sensor", o.imu_sensor);
   o.dvl_sensor = r.optional<std::string>("dvl_sensor", o.dvl_sensor);
