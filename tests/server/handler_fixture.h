@@ -9,40 +9,18 @@
 #include <iterator>
 #include <map>
 #include <memory>
-#include <random>
 #include <string>
 
 #include "server/http_handler.h"
 #include "storage/sha256.h"
 #include "storage/store.h"
 #include "tests/server/tar_builder.h"
+#include "tests/storage/store_fixture.h"
 
 namespace keel::server::testing {
 
-class TempDir {
- public:
-  TempDir() {
-    std::random_device device;
-    path_ = std::filesystem::temp_directory_path() /
-            ("keel-server-test-" + std::to_string(device()) + std::to_string(device()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
-inline std::string random_bytes(size_t size, unsigned seed) {
-  std::mt19937 generator(seed);
-  std::string bytes(size, '\0');
-  for (char& c : bytes) c = static_cast<char>(generator() & 0xff);
-  return bytes;
-}
+using storage::testing::random_bytes;
+using storage::testing::TempDir;
 
 inline std::string read_region(const FileRegion& region) {
   std::ifstream in(region.path, std::ios::binary);

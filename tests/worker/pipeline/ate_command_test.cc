@@ -1,63 +1,28 @@
 // `keel-worker ate` / `keel-worker rpe` as programs: evo's published KITTI 00 answer, and TUM
 // files and bag topics whose errors have closed forms.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "tests/sim/bag_writer.h"
+#include "tests/worker/pipeline/worker_program_fixture.h"
 #include "worker/io/tum.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kWorker = KEEL_WORKER_BIN;
+using Output = keel::testing::ProgramOutput;
+using keel::testing::read_text;
 
-struct Output {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class TrajectoryToolTest : public ::testing::Test {
+class TrajectoryToolTest : public keel::testing::WorkerProgramTest {
  protected:
-  void SetUp() override {
-    if (!fs::exists(kWorker)) GTEST_SKIP() << kWorker << " not built";
-    dir_ = fs::temp_directory_path() /
-           ("keel_ate_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Output run(const std::vector<std::string>& args) {
-    std::string command = kWorker.string();
-    for (const auto& a : args) command += " '" + a + "'";
-    command += " >" + (dir_ / "out.txt").string() + " 2>" + (dir_ / "err.txt").string();
-    Output o;
-    const int status = std::system(command.c_str());
-    o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    o.out = read_text(dir_ / "out.txt");
-    o.err = read_text(dir_ / "err.txt");
-    return o;
-  }
-
   // A 3D path: a helix with changing heading, 1 pose per second from t0.
   static keel::Trajectory helix(size_t n, double t0_s = 100.0) {
     keel::Trajectory t;
@@ -78,8 +43,6 @@ class TrajectoryToolTest : public ::testing::Test {
     keel::io::write_tum(path, t);
     return path;
   }
-
-  fs::path dir_;
 };
 
 double json_stat(const std::string& out, const char* key) {

@@ -2,8 +2,6 @@
 // for the filter chain, and a planar grid whose metrics have closed forms (planarity 1,
 // roughness 0, density = the grid points within r, counted by brute force, / (pi r^2)).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Geometry>
@@ -12,55 +10,21 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "tests/worker/pipeline/worker_program_fixture.h"
 #include "worker/io/scan_file.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kWorker = KEEL_WORKER_BIN;
+using Output = keel::testing::ProgramOutput;
+using keel::testing::read_text;
 
-struct Output {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-class MapToolsTest : public ::testing::Test {
+class MapToolsTest : public keel::testing::WorkerProgramTest {
  protected:
-  void SetUp() override {
-    if (!fs::exists(kWorker)) GTEST_SKIP() << kWorker << " not built";
-    dir_ = fs::temp_directory_path() /
-           ("keel_map_tools_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  Output run(const std::vector<std::string>& args) {
-    std::string command = kWorker.string();
-    for (const auto& a : args) command += " '" + a + "'";
-    command += " >" + (dir_ / "out.txt").string() + " 2>" + (dir_ / "err.txt").string();
-    Output o;
-    const int status = std::system(command.c_str());
-    o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    o.out = read_text(dir_ / "out.txt");
-    o.err = read_text(dir_ / "err.txt");
-    return o;
-  }
-
-  fs::path dir_;
 };
 
 fs::path bun0() { return fs::path(KEEL_SHARED_DIR) / "data" / "bun0.pcd"; }
