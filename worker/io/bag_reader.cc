@@ -82,6 +82,21 @@ std::string where(const BagReader::Impl& impl, const std::string& topic, size_t 
   return impl.name() + ": topic '" + topic + "' message " + std::to_string(index);
 }
 
+// Reads one message with `read` (returns whether there was one), turning rosbag errors
+// into an IoError that names the message.
+template <typename Read>
+bool read_guarded(const BagReader::Impl& impl, const std::string& topic, size_t index,
+                  Read&& read) {
+  try {
+    return read();
+  } catch (const rosbag::BagException& e) {
+    throw IoError(where(impl, topic, index) +
+                  ": cannot read (truncated or corrupt bag?): " + e.what());
+  } catch (const ros::Exception& e) {
+    throw IoError(where(impl, topic, index) + ": cannot decode: " + e.what());
+  }
+}
+
 void check_increasing(const BagReader::Impl& impl, const std::string& topic, size_t index,
                       TimeNs t_ns, TimeNs previous_ns) {
   if (index > 0 && t_ns <= previous_ns)
@@ -149,7 +164,7 @@ class BagScanSource : public ScanSource {
   }
 
   bool next(PointCloud& cloud) override {
-    try {
+    return read_guarded(*impl_, topic_, index_, [&] {
       if (it_ == view_->end()) return false;
       const std::string what = where(*impl_, topic_, index_);
       auto msg = it_->instantiate<sensor_msgs::PointCloud2>();
@@ -161,12 +176,7 @@ class BagScanSource : public ScanSource {
       ++index_;
       ++it_;
       return true;
-    } catch (const rosbag::BagException& e) {
-      throw IoError(where(*impl_, topic_, index_) +
-                    ": cannot read (truncated or corrupt bag?): " + e.what());
-    } catch (const ros::Exception& e) {
-      throw IoError(where(*impl_, topic_, index_) + ": cannot decode: " + e.what());
-    }
+    });
   }
 
  private:
@@ -271,7 +281,7 @@ class BagImageSource : public ImageSource {
   }
 
   bool next(ImageFrame& frame, bool decode) override {
-    try {
+    return read_guarded(*impl_, topic_, index_, [&] {
       if (it_ == view_->end()) return false;
       const std::string what = where(*impl_, topic_, index_);
       TimeNs t_ns = 0;
@@ -290,12 +300,7 @@ class BagImageSource : public ImageSource {
       ++index_;
       ++it_;
       return true;
-    } catch (const rosbag::BagException& e) {
-      throw IoError(where(*impl_, topic_, index_) +
-                    ": cannot read (truncated or corrupt bag?): " + e.what());
-    } catch (const ros::Exception& e) {
-      throw IoError(where(*impl_, topic_, index_) + ": cannot decode: " + e.what());
-    }
+    });
   }
 
  private:

@@ -52,30 +52,32 @@ DvlRangesSeries read_dvl_ranges_csv(const std::filesystem::path& path) {
   return out;
 }
 
-DepthSeries read_depth_csv(const std::filesystem::path& path) {
-  CsvReader csv(path, {"t", "depth"});
-  DepthSeries out;
+namespace {
+
+// A `t,<column>` file into samples whose one value is `field`.
+template <typename Sample>
+std::vector<Sample> read_scalar_csv(const std::filesystem::path& path, const char* column,
+                                    double Sample::*field) {
+  CsvReader csv(path, {"t", column});
+  std::vector<Sample> out;
   while (csv.next()) {
-    DepthSample s;
+    Sample s;
     s.t_ns = csv.time(0);
     csv.check_increasing(s.t_ns);
-    s.depth_m = csv.number(1);
+    s.*field = csv.number(1);
     out.push_back(s);
   }
   return out;
 }
 
+}  // namespace
+
+DepthSeries read_depth_csv(const std::filesystem::path& path) {
+  return read_scalar_csv(path, "depth", &DepthSample::depth_m);
+}
+
 ServoSeries read_servo_csv(const std::filesystem::path& path) {
-  CsvReader csv(path, {"t", "angle"});
-  ServoSeries out;
-  while (csv.next()) {
-    ServoSample s;
-    s.t_ns = csv.time(0);
-    csv.check_increasing(s.t_ns);
-    s.angle_rad = csv.number(1);
-    out.push_back(s);
-  }
-  return out;
+  return read_scalar_csv(path, "angle", &ServoSample::angle_rad);
 }
 
 void write_imu_csv(const std::filesystem::path& path, const ImuSeries& samples) {
