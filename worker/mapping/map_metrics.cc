@@ -3,56 +3,48 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
-#include "worker/mapping/parallel_for.h"
-#include "worker/mapping/radius_search.h"
-#include "worker/mapping/selection.h"
+#include "worker/mapping/cell_grid.h"
+#include "worker/mapping/medoid.h"
 
 namespace keel::mapping {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr float kUndefined = std::numeric_limits<float>::quiet_NaN();
+constexpr uint32_t kNotQueried = 0xffffffffu;
 
 struct NeighbourhoodMetrics {
   float roughness = kUndefined;
   float planarity = kUndefined;
 };
 
-// Scratch for one neighbourhood, reused across the queries of a thread.
+// Scratch of one thread, reused across its cells and queries.
 struct Scratch {
-  std::vector<Eigen::Vector3f> neighbours;
-  std::vector<float> axis[3];
+  std::vector<uint32_t> block;    // cells of the 3 x 3 x 3 block
+  std::vector<float> cx, cy, cz;  // the block's points (candidates), absolute
+  std::vector<float> nx, ny, nz;  // one query's neighbours, relative to the query point
+  MedoidScratch medoid;
 };
 
-// Coordinates are taken relative to the query point q, so q contributes zero to the sums.
-NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& scratch) {
-  const size_t n = scratch.neighbours.size();  // includes q itself
-  double s[3] = {0, 0, 0};
-  double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-  for (int a = 0; a < 3; ++a) scratch.axis[a].resize(n);
-  for (size_t m = 0; m < n; ++m) {
-    const Eigen::Vector3f d = scratch.neighbours[m] - q;
-    const double x = d.x(), y = d.y(), z = d.z();
-    s[0] += x;
-    s[1] += y;
-    s[2] += z;
-    xx += x * x;
-    xy += x * y;
-    xz += x * z;
-    yy += y * y;
-    yz += y * z;
-    zz += z * z;
-    scratch.axis[0][m] = d.x();
-    scratch.axis[1][m] = d.y();
-    scratch.axis[2][m] = d.z();
-  }
-  const Eigen::Vector3d sum(s[0], s[1], s[2]);
+// Roughness and planarity of one neighbourhood given as offsets from the query point q (q's own
+// offset, zero, included): q then adds nothing to the sums.
+NeighbourhoodMetrics neighbourhood_metrics(Scratch& scratch, size_t n) {
+  const Eigen::Index count = static_cast<Eigen::Index>(n);
+  const Eigen::Map<const Eigen::ArrayXf> x(scratch.nx.data(), count), y(scratch.ny.data(), count),
+      z(scratch.nz.data(), count);
+  const Eigen::Vector3d sum(x.sum(), y.sum(), z.sum());
   Eigen::Matrix3d sum_outer;
+  const double xx = (x * x).sum(), xy = (x * y).sum(), xz = (x * z).sum(), yy = (y * y).sum(),
+               yz = (y * z).sum(), zz = (z * z).sum();
   sum_outer << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   NeighbourhoodMetrics out;
 
@@ -67,15 +59,16 @@ NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& sc
     out.roughness = static_cast<float>(std::abs(normal.dot(centroid)));  // |n . (q - c)|
   }
 
-  // Eq. (26) about the coordinate-wise median, Eq. (25) from its eigenvalues.
+  // Eq. (26) about the exact medoid, Eq. (25) from its eigenvalues.
   if (n >= 3) {
-    Eigen::Vector3d median;
-    for (int a = 0; a < 3; ++a) median[a] = select_kth(scratch.axis[a].data(), n, n / 2);
-    const double count = static_cast<double>(n);
-    const Eigen::Vector3d mean = sum / count;
+    const size_t m =
+        exact_medoid(scratch.nx.data(), scratch.ny.data(), scratch.nz.data(), n, &scratch.medoid)
+            .index;
+    const Eigen::Vector3d medoid(scratch.nx[m], scratch.ny[m], scratch.nz[m]);
+    const Eigen::Vector3d mean = sum / static_cast<double>(n);
     // 1/N sum (v - m)(v - m)^T = S2/N - mean m^T - m mean^T + m m^T.
-    const Eigen::Matrix3d sigma = sum_outer / count - mean * median.transpose() -
-                                  median * mean.transpose() + median * median.transpose();
+    const Eigen::Matrix3d sigma = sum_outer / static_cast<double>(n) - mean * medoid.transpose() -
+                                  medoid * mean.transpose() + medoid * medoid.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(sigma, Eigen::EigenvaluesOnly);
     const Eigen::Vector3d lambda = solver.eigenvalues();  // ascending: l3, l2, l1
@@ -84,6 +77,71 @@ NeighbourhoodMetrics neighbourhood_metrics(const Eigen::Vector3f& q, Scratch& sc
     }
   }
   return out;
+}
+
+// Copies the points of the cells in scratch.block into the candidate columns.
+void gather_block(const CellGrid& grid, Scratch& scratch) {
+  size_t total = 0;
+  for (const uint32_t c : scratch.block) total += grid.end(c) - grid.begin(c);
+  for (auto* column :
+       {&scratch.cx, &scratch.cy, &scratch.cz, &scratch.nx, &scratch.ny, &scratch.nz})
+    column->resize(total);
+  size_t at = 0;
+  for (const uint32_t c : scratch.block) {
+    const uint32_t b = grid.begin(c), e = grid.end(c);
+    std::copy(grid.x().begin() + b, grid.x().begin() + e, scratch.cx.begin() + at);
+    std::copy(grid.y().begin() + b, grid.y().begin() + e, scratch.cy.begin() + at);
+    std::copy(grid.z().begin() + b, grid.z().begin() + e, scratch.cz.begin() + at);
+    at += e - b;
+  }
+}
+
+// Offsets from q of the candidates within r of q, written branch-free to the neighbour
+// columns; returns their number.
+size_t select_neighbours(float qx, float qy, float qz, float squared_radius, Scratch& s) {
+  const size_t candidates = s.cx.size();
+  const float* cx = s.cx.data();
+  const float* cy = s.cy.data();
+  const float* cz = s.cz.data();
+  float* nx = s.nx.data();
+  float* ny = s.ny.data();
+  float* nz = s.nz.data();
+  size_t n = 0;
+  for (size_t i = 0; i < candidates; ++i) {
+    const float dx = cx[i] - qx, dy = cy[i] - qy, dz = cz[i] - qz;
+    nx[n] = dx;
+    ny[n] = dy;
+    nz[n] = dz;
+    n += static_cast<size_t>(dx * dx + dy * dy + dz * dz < squared_radius);
+  }
+  return n;
+}
+
+// Runs body(worker, cell) for every cell on `threads` threads pulling batches of cells from a
+// shared counter (map density varies, so equal static shares would leave a core idle).
+template <typename Body>  // Body: void(size_t worker, size_t cell)
+void for_each_cell(size_t cells, int threads, const Body& body) {
+  constexpr size_t kBatch = 16;
+  std::atomic<size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto run = [&](size_t worker) {
+    try {
+      for (size_t b = next.fetch_add(kBatch); b < cells; b = next.fetch_add(kBatch)) {
+        for (size_t c = b; c < std::min(cells, b + kBatch); ++c) body(worker, c);
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = cells;
+    }
+  };
+  const size_t workers = std::min<size_t>(std::max(threads, 1), (cells + kBatch - 1) / kBatch);
+  std::vector<std::thread> pool;
+  for (size_t w = 1; w < workers; ++w) pool.emplace_back(run, w);
+  run(0);
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
 }
 
 double quantile(const std::vector<double>& sorted, double p) {
@@ -118,31 +176,35 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
   out.planarity.assign(queries, kUndefined);
   if (queries == 0) return out;
 
-  const RadiusSearch search(points);
-  // Visit the queries in the search's Morton order: consecutive queries touch the same leaves.
-  const std::vector<uint32_t>& order = search.spatial_order();
-  std::vector<uint32_t> visit;  // query numbers q in Morton order of their points
-  if (queries == points.size()) {
-    visit = order;  // query q is point q
-  } else {
-    std::vector<uint32_t> rank(points.size());
-    for (size_t i = 0; i < order.size(); ++i) rank[order[i]] = static_cast<uint32_t>(i);
-    visit.resize(queries);
-    for (size_t q = 0; q < queries; ++q) visit[q] = static_cast<uint32_t>(q);
-    std::sort(visit.begin(), visit.end(), [&](uint32_t a, uint32_t b) {
-      return rank[out.query_index[a]] < rank[out.query_index[b]];
-    });
+  // Cells of side r: every neighbour of a point of cell c lies in the 3 x 3 x 3 block around
+  // c, gathered once for all of c's queries.
+  const CellGrid grid(points, options.radius_m);
+  std::vector<uint32_t> query_of_point;  // input index -> query number; empty: the identity
+  if (queries != points.size()) {
+    query_of_point.assign(points.size(), kNotQueried);
+    for (size_t q = 0; q < queries; ++q)
+      query_of_point[out.query_index[q]] = static_cast<uint32_t>(q);
   }
-
   const double area = kPi * options.radius_m * options.radius_m;
-  parallel_for(queries, options.threads, [&](size_t begin, size_t end) {
-    Scratch scratch;
-    for (size_t v = begin; v < end; ++v) {
-      const size_t q = visit[v];
-      const Eigen::Vector3f& p = points[out.query_index[q]];
-      search.points_within(p, options.radius_m, &scratch.neighbours);
-      out.surface_density[q] = static_cast<float>(scratch.neighbours.size() / area);  // Eq. (23)
-      const NeighbourhoodMetrics metrics = neighbourhood_metrics(p, scratch);
+  const float squared_radius = static_cast<float>(options.radius_m * options.radius_m);
+  const int threads = queries < 1024 ? 1 : options.threads;
+  std::vector<Scratch> scratches(static_cast<size_t>(std::max(threads, 1)));
+  for_each_cell(grid.cell_count(), threads, [&](size_t worker, size_t c) {
+    Scratch* s = &scratches[worker];
+    bool any_query = query_of_point.empty();
+    for (uint32_t i = grid.begin(c); !any_query && i < grid.end(c); ++i) {
+      any_query = query_of_point[grid.input_index()[i]] != kNotQueried;
+    }
+    if (!any_query) return;
+    grid.block_around(c, &s->block);
+    gather_block(grid, *s);
+    for (uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
+      const uint32_t input = grid.input_index()[i];
+      const uint32_t q = query_of_point.empty() ? input : query_of_point[input];
+      if (q == kNotQueried) continue;
+      const size_t n = select_neighbours(grid.x()[i], grid.y()[i], grid.z()[i], squared_radius, *s);
+      out.surface_density[q] = static_cast<float>(n / area);  // Eq. (23)
+      const NeighbourhoodMetrics metrics = neighbourhood_metrics(*s, n);
       out.roughness[q] = metrics.roughness;
       out.planarity[q] = metrics.planarity;
     }

@@ -1,6 +1,10 @@
 // Eqs. (23)-(26) on analytic surfaces, density against brute-force counts.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "tests/worker/mapping/test_clouds.h"
@@ -78,10 +82,11 @@ TEST(MapMetrics, SphereMatchesSphericalCapClosedForms) {
   // Least-squares plane through the cap's centroid, at height R (1 + c) / 2: the point is
   // R (1 - c) / 2 = r^2 / (4 R) = 0.03125 m above it.
   EXPECT_NEAR(roughness.mean, R * (1 - c) / 2, 0.03 * R * (1 - c) / 2);
-  // Tangential variance R^2 (1 - E[u^2]) / 2, normal variance R^2 (1 - c)^2 / 12 (u uniform;
-  // its median equals its mean, so Eq. (26)'s median centre changes nothing).
+  // Eq. (26) is taken about the medoid, the member nearest the cap's axis: its apex (the query
+  // point), not the centroid. Tangential second moment R^2 (1 - E[u^2]) / 2, normal second
+  // moment about the apex R^2 E[(1 - u)^2] = R^2 (1 - c)^2 / 3 (u uniform on [c, 1]).
   const double Eu2 = (1 - c * c * c) / (3 * (1 - c));
-  const double tangential = R * R * (1 - Eu2) / 2, normal = R * R * (1 - c) * (1 - c) / 12;
+  const double tangential = R * R * (1 - Eu2) / 2, normal = R * R * (1 - c) * (1 - c) / 3;
   EXPECT_NEAR(planarity.mean, (tangential - normal) / tangential, 0.01);
   // Density: cap area 2 pi R^2 (1 - c) holds that share of the 60000 points of the sphere.
   const double expected_n = 60000.0 * (1 - c) / 2;
@@ -124,6 +129,81 @@ TEST(MapMetrics, DensityIsBruteForceCountOverDiscArea) {
     ASSERT_NEAR(metrics.surface_density[q], count / (M_PI * 0.01), 1e-3) << q;
   }
   EXPECT_GT(checked, 2900u);
+}
+
+// Eqs. (23)-(26) per point in double precision straight from their definitions: neighbours by
+// brute force, roughness from the plane of the others, Sigma about the O(N^2) medoid.
+struct Oracle {
+  double density = 0, roughness = std::nan(""), planarity = std::nan("");
+  bool ambiguous = false;  // a neighbour within 1e-5 m of the sphere: float may count it either way
+};
+
+Oracle brute_force(const std::vector<Eigen::Vector3f>& points, size_t q, double r) {
+  Oracle o;
+  const Eigen::Vector3d p = points[q].cast<double>();
+  std::vector<Eigen::Vector3d> hood;
+  for (const auto& v : points) {
+    const double d = (v.cast<double>() - p).norm();
+    if (d < r) hood.push_back(v.cast<double>());
+    o.ambiguous |= std::abs(d - r) < 1e-5;
+  }
+  const size_t n = hood.size();
+  o.density = n / (M_PI * r * r);
+  if (n >= 4) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& v : hood) centroid += v;
+    centroid = (centroid - p) / double(n - 1);  // q itself left out
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    bool skipped = false;
+    for (const auto& v : hood) {
+      if (!skipped && v == p) {
+        skipped = true;
+        continue;
+      }
+      cov += (v - centroid) * (v - centroid).transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov / double(n - 1));
+    o.roughness = std::abs(solver.eigenvectors().col(0).dot(p - centroid));
+  }
+  if (n >= 3) {
+    size_t medoid = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t m = 0; m < n; ++m) {
+      double sum = 0;
+      for (const auto& v : hood) sum += (v - hood[m]).norm();
+      if (sum < best) best = sum, medoid = m;
+    }
+    Eigen::Matrix3d sigma = Eigen::Matrix3d::Zero();
+    for (const auto& v : hood) sigma += (v - hood[medoid]) * (v - hood[medoid]).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(sigma / double(n));
+    const Eigen::Vector3d l = solver.eigenvalues();
+    o.planarity = (l[1] - l[0]) / l[2];
+  }
+  return o;
+}
+
+TEST(MapMetrics, EveryPointMatchesBruteForceOracle) {
+  // A noisy plane crossing a uniform volume: planar, volumetric and mixed neighbourhoods.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  std::vector<Eigen::Vector3f> points;
+  for (int k = 0; k < 1500; ++k) points.emplace_back(u(rng), u(rng), 0.5f + noise(rng));
+  for (int k = 0; k < 1500; ++k) points.emplace_back(u(rng), u(rng), u(rng));
+  MapMetricsOptions options;  // r = 0.25 m, 2 threads
+  const PointMetrics metrics = compute_point_metrics(points, options);
+  ASSERT_EQ(metrics.query_index.size(), points.size());
+  size_t checked = 0;
+  for (size_t q = 0; q < points.size(); q += 3) {
+    ASSERT_EQ(metrics.query_index[q], q);
+    const Oracle o = brute_force(points, q, options.radius_m);
+    if (o.ambiguous) continue;
+    ++checked;
+    ASSERT_NEAR(metrics.surface_density[q], o.density, 1e-3) << q;
+    ASSERT_NEAR(metrics.roughness[q], o.roughness, 1e-5 + 1e-3 * o.roughness) << q;
+    ASSERT_NEAR(metrics.planarity[q], o.planarity, 1e-3) << q;
+  }
+  EXPECT_GT(checked, 900u);
 }
 
 TEST(MapMetrics, SummaryStatistics) {
