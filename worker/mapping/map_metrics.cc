@@ -2,9 +2,18 @@
 
 #include <Eigen/Eigenvalues>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define KEEL_METRICS_AVX2 1  // AVX2 neighbour selection chosen at run time when the CPU has it
+#endif
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -35,24 +44,99 @@ struct Scratch {
   MedoidScratch medoid;
 };
 
+// The neighbours' offsets v: their mean and scatter sum (v - mean)(v - mean)^T. Centred before
+// squaring: raw second moments lose a near-collinear neighbourhood's small eigenvalues to
+// float cancellation.
+struct Moments {
+  Eigen::Vector3d mean;
+  Eigen::Matrix3d scatter;
+};
+
+#if defined(__SSE2__)
+double horizontal_sum(__m128 v) {
+  alignas(16) float lanes[4];
+  _mm_store_ps(lanes, v);
+  return (double(lanes[0]) + lanes[1]) + (double(lanes[2]) + lanes[3]);
+}
+#endif
+
+Eigen::Vector3d offset_sum(const float* x, const float* y, const float* z, size_t n) {
+  double s[3] = {0, 0, 0};
+  size_t k = 0;
+#if defined(__SSE2__)
+  __m128 sx = _mm_setzero_ps(), sy = _mm_setzero_ps(), sz = _mm_setzero_ps();
+  for (; k + 4 <= n; k += 4) {
+    sx = _mm_add_ps(sx, _mm_loadu_ps(x + k));
+    sy = _mm_add_ps(sy, _mm_loadu_ps(y + k));
+    sz = _mm_add_ps(sz, _mm_loadu_ps(z + k));
+  }
+  s[0] = horizontal_sum(sx), s[1] = horizontal_sum(sy), s[2] = horizontal_sum(sz);
+#endif
+  for (; k < n; ++k) s[0] += x[k], s[1] += y[k], s[2] += z[k];
+  return Eigen::Vector3d(s[0], s[1], s[2]);
+}
+
+// sum (v - c)(v - c)^T: xx, yy, zz, xy, xz, yz, in double: a neighbourhood of three or four
+// nearly collinear points (l2 ~ 1e-7 l1) defines its plane only through products that float
+// sums round away.
+void centred_products(const float* x, const float* y, const float* z, size_t n,
+                      const Eigen::Vector3d& c, double* s) {
+  size_t k = 0;
+#if defined(__SSE2__)
+  const __m128d cx = _mm_set1_pd(c.x()), cy = _mm_set1_pd(c.y()), cz = _mm_set1_pd(c.z());
+  __m128d a[6];
+  for (__m128d& lane : a) lane = _mm_setzero_pd();
+  for (; k + 2 <= n; k += 2) {
+    const __m128d dx = _mm_sub_pd(
+        _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(x + k)))), cx);
+    const __m128d dy = _mm_sub_pd(
+        _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(y + k)))), cy);
+    const __m128d dz = _mm_sub_pd(
+        _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(z + k)))), cz);
+    a[0] = _mm_add_pd(a[0], _mm_mul_pd(dx, dx)), a[1] = _mm_add_pd(a[1], _mm_mul_pd(dy, dy));
+    a[2] = _mm_add_pd(a[2], _mm_mul_pd(dz, dz)), a[3] = _mm_add_pd(a[3], _mm_mul_pd(dx, dy));
+    a[4] = _mm_add_pd(a[4], _mm_mul_pd(dx, dz)), a[5] = _mm_add_pd(a[5], _mm_mul_pd(dy, dz));
+  }
+  for (int i = 0; i < 6; ++i) {
+    alignas(16) double lanes[2];
+    _mm_store_pd(lanes, a[i]);
+    s[i] = lanes[0] + lanes[1];
+  }
+#endif
+  for (; k < n; ++k) {
+    const double dx = x[k] - c.x(), dy = y[k] - c.y(), dz = z[k] - c.z();
+    s[0] += dx * dx, s[1] += dy * dy, s[2] += dz * dz;
+    s[3] += dx * dy, s[4] += dx * dz, s[5] += dy * dz;
+  }
+}
+
+Moments neighbourhood_moments(const float* x, const float* y, const float* z, size_t n) {
+  Moments m;
+  m.mean = offset_sum(x, y, z, n) / static_cast<double>(n);
+  double s[6] = {0, 0, 0, 0, 0, 0};
+  centred_products(x, y, z, n, m.mean, s);
+  m.scatter << s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2];
+  return m;
+}
+
 // Roughness and planarity of one neighbourhood given as offsets from the query point q (q's own
-// offset, zero, included): q then adds nothing to the sums.
+// offset, zero, included).
 NeighbourhoodMetrics neighbourhood_metrics(Scratch& scratch, size_t n) {
-  const Eigen::Index count = static_cast<Eigen::Index>(n);
-  const Eigen::Map<const Eigen::ArrayXf> x(scratch.nx.data(), count), y(scratch.ny.data(), count),
-      z(scratch.nz.data(), count);
-  const Eigen::Vector3d sum(x.sum(), y.sum(), z.sum());
-  Eigen::Matrix3d sum_outer;
-  const double xx = (x * x).sum(), xy = (x * y).sum(), xz = (x * z).sum(), yy = (y * y).sum(),
-               yz = (y * z).sum(), zz = (z * z).sum();
-  sum_outer << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+  const Moments moments =
+      neighbourhood_moments(scratch.nx.data(), scratch.ny.data(), scratch.nz.data(), n);
+  const double count = static_cast<double>(n);
   NeighbourhoodMetrics out;
 
-  // Eq. (24): plane through the centroid of the n - 1 others (q adds nothing to the sums).
+  // Eq. (24): plane through the centroid c of the n - 1 others. q = 0 adds nothing to the sum,
+  // so c = n mean / (n - 1), and their scatter about c is the n members' scatter about c
+  // (scatter + n (mean - c)(mean - c)^T) less q's term c c^T.
   if (n >= 4) {
-    const double others = static_cast<double>(n - 1);
-    const Eigen::Vector3d centroid = sum / others;
-    const Eigen::Matrix3d covariance = sum_outer / others - centroid * centroid.transpose();
+    const double others = count - 1.0;
+    const Eigen::Vector3d centroid = moments.mean * (count / others);
+    const Eigen::Vector3d shift = moments.mean - centroid;
+    const Eigen::Matrix3d covariance =
+        (moments.scatter + count * shift * shift.transpose() - centroid * centroid.transpose()) /
+        others;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(covariance);
     const Eigen::Vector3d normal = solver.eigenvectors().col(0);         // smallest eigenvalue
@@ -65,10 +149,9 @@ NeighbourhoodMetrics neighbourhood_metrics(Scratch& scratch, size_t n) {
         exact_medoid(scratch.nx.data(), scratch.ny.data(), scratch.nz.data(), n, &scratch.medoid)
             .index;
     const Eigen::Vector3d medoid(scratch.nx[m], scratch.ny[m], scratch.nz[m]);
-    const Eigen::Vector3d mean = sum / static_cast<double>(n);
-    // 1/N sum (v - m)(v - m)^T = S2/N - mean m^T - m mean^T + m m^T.
-    const Eigen::Matrix3d sigma = sum_outer / static_cast<double>(n) - mean * medoid.transpose() -
-                                  medoid * mean.transpose() + medoid * medoid.transpose();
+    // 1/N sum (v - m)(v - m)^T = scatter / N + (mean - m)(mean - m)^T.
+    const Eigen::Vector3d shift = moments.mean - medoid;
+    const Eigen::Matrix3d sigma = moments.scatter / count + shift * shift.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(sigma, Eigen::EigenvaluesOnly);
     const Eigen::Vector3d lambda = solver.eigenvalues();  // ascending: l3, l2, l1
@@ -83,9 +166,9 @@ NeighbourhoodMetrics neighbourhood_metrics(Scratch& scratch, size_t n) {
 void gather_block(const CellGrid& grid, Scratch& scratch) {
   size_t total = 0;
   for (const uint32_t c : scratch.block) total += grid.end(c) - grid.begin(c);
-  for (auto* column :
-       {&scratch.cx, &scratch.cy, &scratch.cz, &scratch.nx, &scratch.ny, &scratch.nz})
-    column->resize(total);
+  for (auto* column : {&scratch.cx, &scratch.cy, &scratch.cz}) column->resize(total);
+  // Selection stores whole vectors at the running count: room for one past the last.
+  for (auto* column : {&scratch.nx, &scratch.ny, &scratch.nz}) column->resize(total + 8);
   size_t at = 0;
   for (const uint32_t c : scratch.block) {
     const uint32_t b = grid.begin(c), e = grid.end(c);
@@ -96,18 +179,14 @@ void gather_block(const CellGrid& grid, Scratch& scratch) {
   }
 }
 
-// Offsets from q of the candidates within r of q, written branch-free to the neighbour
-// columns; returns their number.
-size_t select_neighbours(float qx, float qy, float qz, float squared_radius, Scratch& s) {
-  const size_t candidates = s.cx.size();
+// Offsets from q of candidates [begin, candidates) within r of q, written branch-free to the
+// neighbour columns from position n on; returns the new count.
+size_t select_scalar(float qx, float qy, float qz, float squared_radius, const Scratch& s,
+                     size_t begin, size_t n, float* nx, float* ny, float* nz) {
   const float* cx = s.cx.data();
   const float* cy = s.cy.data();
   const float* cz = s.cz.data();
-  float* nx = s.nx.data();
-  float* ny = s.ny.data();
-  float* nz = s.nz.data();
-  size_t n = 0;
-  for (size_t i = 0; i < candidates; ++i) {
+  for (size_t i = begin; i < s.cx.size(); ++i) {
     const float dx = cx[i] - qx, dy = cy[i] - qy, dz = cz[i] - qz;
     nx[n] = dx;
     ny[n] = dy;
@@ -115,6 +194,77 @@ size_t select_neighbours(float qx, float qy, float qz, float squared_radius, Scr
     n += static_cast<size_t>(dx * dx + dy * dy + dz * dz < squared_radius);
   }
   return n;
+}
+
+#if defined(KEEL_METRICS_AVX2)
+// For each 8-bit mask, the lanes whose bit is set, in order, then the rest: a permutation that
+// packs the selected lanes to the front.
+struct CompressTable {
+  uint8_t lanes[256][8];
+  CompressTable() {
+    for (int mask = 0; mask < 256; ++mask) {
+      int at = 0;
+      for (int lane = 0; lane < 8; ++lane) {
+        if (mask >> lane & 1) lanes[mask][at++] = static_cast<uint8_t>(lane);
+      }
+      for (int lane = 0; lane < 8; ++lane) {
+        if (!(mask >> lane & 1)) lanes[mask][at++] = static_cast<uint8_t>(lane);
+      }
+    }
+  }
+};
+const CompressTable kCompress;
+
+// Eight candidates a step: the selected offsets packed to the front of a vector stored whole
+// at the running count (the columns have 8 floats of slack). Same order and test as scalar.
+__attribute__((target("avx2,popcnt"))) size_t select_avx2(float qx, float qy, float qz,
+                                                          float squared_radius, Scratch& s) {
+  const size_t candidates = s.cx.size();
+  const float *cx = s.cx.data(), *cy = s.cy.data(), *cz = s.cz.data();
+  float *nx = s.nx.data(), *ny = s.ny.data(), *nz = s.nz.data();
+  const __m256 vx = _mm256_set1_ps(qx), vy = _mm256_set1_ps(qy), vz = _mm256_set1_ps(qz);
+  const __m256 r2 = _mm256_set1_ps(squared_radius);
+  size_t n = 0, i = 0;
+  for (; i + 8 <= candidates; i += 8) {
+    const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(cx + i), vx);
+    const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(cy + i), vy);
+    const __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(cz + i), vz);
+    const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                    _mm256_mul_ps(dz, dz));
+    const int mask = _mm256_movemask_ps(_mm256_cmp_ps(d2, r2, _CMP_LT_OQ));
+    if (mask == 0) continue;
+    const __m256i order = _mm256_cvtepu8_epi32(
+        _mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompress.lanes[mask])));
+    _mm256_storeu_ps(nx + n, _mm256_permutevar8x32_ps(dx, order));
+    _mm256_storeu_ps(ny + n, _mm256_permutevar8x32_ps(dy, order));
+    _mm256_storeu_ps(nz + n, _mm256_permutevar8x32_ps(dz, order));
+    n += static_cast<size_t>(__builtin_popcount(static_cast<unsigned>(mask)));
+  }
+  return select_scalar(qx, qy, qz, squared_radius, s, i, n, nx, ny, nz);
+}
+
+bool cpu_has_avx2() {
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+  return has;
+}
+#endif
+
+// Offsets from q of the candidates within r of q, in the neighbour columns; returns their
+// number.
+size_t select_neighbours(float qx, float qy, float qz, float squared_radius, Scratch& s) {
+#if defined(KEEL_METRICS_AVX2)
+  if (cpu_has_avx2()) return select_avx2(qx, qy, qz, squared_radius, s);
+#endif
+  return select_scalar(qx, qy, qz, squared_radius, s, 0, 0, s.nx.data(), s.ny.data(), s.nz.data());
+}
+
+// The query reading input point `input` (kNotQueried if none) when query q reads point
+// floor(q points / queries): q = ceil(input queries / points) is the first query reading a point
+// at or after `input`. Arithmetic, not a table: a table indexed by input point is read in grid
+// order, i.e. at random. Products stay below 2^64 (points < 2^32).
+uint32_t query_of(uint64_t input, uint64_t points, uint64_t queries) {
+  const uint64_t q = (input * queries + points - 1) / points;
+  return q < queries && q * points / queries == input ? static_cast<uint32_t>(q) : kNotQueried;
 }
 
 // Runs body(worker, cell) for every cell on `threads` threads pulling batches of cells from a
@@ -144,12 +294,23 @@ void for_each_cell(size_t cells, int threads, const Body& body) {
   if (error) std::rethrow_exception(error);
 }
 
-double quantile(const std::vector<double>& sorted, double p) {
-  const double position = p * static_cast<double>(sorted.size() - 1);
+// Quantile p of `values` (linear interpolation between the order statistics below and above
+// p (n - 1), like numpy) for ascending p: `selected` ranks [0, selected) are already in place
+// and no larger than the rest, so each selection only partitions what is left.
+double quantile(std::vector<float>* values, double p, size_t* selected) {
+  const size_t n = values->size();
+  const double position = p * static_cast<double>(n - 1);
   const size_t below = static_cast<size_t>(std::floor(position));
-  const size_t above = std::min(below + 1, sorted.size() - 1);
+  const size_t above = std::min(below + 1, n - 1);
+  for (const size_t rank : {below, above}) {
+    if (rank < *selected) continue;
+    std::nth_element(values->begin() + static_cast<std::ptrdiff_t>(*selected),
+                     values->begin() + static_cast<std::ptrdiff_t>(rank), values->end());
+    *selected = rank + 1;
+  }
   const double fraction = position - static_cast<double>(below);
-  return sorted[below] + fraction * (sorted[above] - sorted[below]);
+  const double low = (*values)[below], high = (*values)[above];
+  return low + fraction * (high - low);
 }
 
 }  // namespace
@@ -170,7 +331,7 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
                              ? std::min(options.max_query_points, points.size())
                              : points.size();
   out.query_index.resize(queries);
-  for (size_t q = 0; q < queries; ++q) out.query_index[q] = q * points.size() / queries;
+  for (size_t q = 0; q < queries; ++q) out.query_index[q] = q * points.size() / queries;  // strided
   out.surface_density.assign(queries, kUndefined);
   out.roughness.assign(queries, kUndefined);
   out.planarity.assign(queries, kUndefined);
@@ -179,28 +340,23 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
   // Cells of side r: every neighbour of a point of cell c lies in the 3 x 3 x 3 block around
   // c, gathered once for all of c's queries.
   const CellGrid grid(points, options.radius_m);
-  std::vector<uint32_t> query_of_point;  // input index -> query number; empty: the identity
-  if (queries != points.size()) {
-    query_of_point.assign(points.size(), kNotQueried);
-    for (size_t q = 0; q < queries; ++q)
-      query_of_point[out.query_index[q]] = static_cast<uint32_t>(q);
-  }
   const double area = kPi * options.radius_m * options.radius_m;
   const float squared_radius = static_cast<float>(options.radius_m * options.radius_m);
   const int threads = queries < 1024 ? 1 : options.threads;
   std::vector<Scratch> scratches(static_cast<size_t>(std::max(threads, 1)));
+  std::vector<CellGrid::BlockFinder> finders(scratches.size(), CellGrid::BlockFinder(grid));
   for_each_cell(grid.cell_count(), threads, [&](size_t worker, size_t c) {
     Scratch* s = &scratches[worker];
-    bool any_query = query_of_point.empty();
+    bool any_query = false;
     for (uint32_t i = grid.begin(c); !any_query && i < grid.end(c); ++i) {
-      any_query = query_of_point[grid.input_index()[i]] != kNotQueried;
+      any_query = query_of(grid.input_index()[i], points.size(), queries) != kNotQueried;
     }
     if (!any_query) return;
-    grid.block_around(c, &s->block);
+    finders[worker].block_around(c, &s->block);
     gather_block(grid, *s);
     for (uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
       const uint32_t input = grid.input_index()[i];
-      const uint32_t q = query_of_point.empty() ? input : query_of_point[input];
+      const uint32_t q = query_of(input, points.size(), queries);
       if (q == kNotQueried) continue;
       const size_t n = select_neighbours(grid.x()[i], grid.y()[i], grid.z()[i], squared_radius, *s);
       out.surface_density[q] = static_cast<float>(n / area);  // Eq. (23)
@@ -214,39 +370,45 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
 
 Distribution summarize(const std::vector<float>& values, int histogram_bins) {
   Distribution d;
-  std::vector<double> sorted;
-  sorted.reserve(values.size());
+  std::vector<float> defined;
+  defined.reserve(values.size());
   for (const float v : values) {
     if (std::isnan(v)) {
       ++d.undefined;
     } else {
-      sorted.push_back(v);
+      defined.push_back(v);
     }
   }
-  d.count = sorted.size();
-  if (sorted.empty()) return d;
-  std::sort(sorted.begin(), sorted.end());
+  d.count = defined.size();
+  if (defined.empty()) return d;
   double sum = 0.0;
-  for (const double v : sorted) sum += v;
+  float low = defined.front(), high = defined.front();
+  for (const float v : defined) {
+    sum += v;
+    low = std::min(low, v);
+    high = std::max(high, v);
+  }
   d.mean = sum / static_cast<double>(d.count);
   double squares = 0.0;
-  for (const double v : sorted) squares += (v - d.mean) * (v - d.mean);
+  for (const float v : defined) squares += (v - d.mean) * (v - d.mean);
   d.std = std::sqrt(squares / static_cast<double>(d.count));  // population, like numpy
-  d.min = sorted.front();
-  d.max = sorted.back();
-  d.p05 = quantile(sorted, 0.05);
-  d.p25 = quantile(sorted, 0.25);
-  d.median = quantile(sorted, 0.5);
-  d.p75 = quantile(sorted, 0.75);
-  d.p95 = quantile(sorted, 0.95);
+  d.min = low;
+  d.max = high;
   const int bins = std::max(1, histogram_bins);
   const double width = (d.max - d.min) / bins;
   for (int b = 0; b <= bins; ++b) d.histogram_edges.push_back(d.min + b * width);
   d.histogram_counts.assign(static_cast<size_t>(bins), 0);
-  for (const double v : sorted) {
+  for (const float v : defined) {
     const int bin = width > 0.0 ? static_cast<int>((v - d.min) / width) : 0;
     ++d.histogram_counts[static_cast<size_t>(std::clamp(bin, 0, bins - 1))];
   }
+  // Selection, not a full sort (percentiles of millions of values).
+  size_t selected = 0;
+  d.p05 = quantile(&defined, 0.05, &selected);
+  d.p25 = quantile(&defined, 0.25, &selected);
+  d.median = quantile(&defined, 0.5, &selected);
+  d.p75 = quantile(&defined, 0.75, &selected);
+  d.p95 = quantile(&defined, 0.95, &selected);
   return d;
 }
 

@@ -7,9 +7,11 @@
 //                     Sigma_k = 1/N sum (v_n - v_bar)(v_n - v_bar)^T about v_bar = med(v_n)  Eq.
 //                     (26)
 // v_bar is the exact medoid the paper names (the member minimising the summed distance to the
-// others), found by the cutting-plane search of medoid.h in ~5-9 O(N) passes instead of O(N^2).
+// others), found by the bounded search of medoid.h in ~3 O(N) passes instead of O(N^2).
 // Neighbour search: cells of side r (cell_grid.h); the 3 x 3 x 3 block of a cell is gathered once
-// for all its queries; cells are shared out dynamically over `threads`.
+// for all its queries and its candidates within r selected with AVX2 where the CPU has it;
+// cells are shared out dynamically over `threads`. Moments are centred and summed in double
+// (a near-collinear neighbourhood's plane depends on products that float sums lose).
 #pragma once
 
 #include <nlohmann/json.hpp>
