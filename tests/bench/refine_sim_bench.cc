@@ -28,6 +28,8 @@ using nlohmann::json;
 const fs::path kRoot =
     fs::temp_directory_path() / ("keel_bench_refine_" + std::to_string(::getpid()));
 
+std::vector<std::string> g_sim_settings;  // fourth argument: keel-sim --set items
+
 fs::path simulate(const std::string& scenario, uint64_t seed, double dvl_scale,
                   const std::vector<std::string>& settings = {}, double duration_s = 0.0) {
   const fs::path dir = kRoot / (scenario + "_" + std::to_string(seed) + "_" +
@@ -40,16 +42,30 @@ fs::path simulate(const std::string& scenario, uint64_t seed, double dvl_scale,
   o.sensors = {"imu", "dvl"};
   o.dvl_scale = dvl_scale;
   o.settings = settings;
+  o.settings.insert(o.settings.end(), g_sim_settings.begin(), g_sim_settings.end());
   o.duration_s = duration_s;
   keel::sim::run_simulation(o);
   return dir;
 }
+
+std::vector<std::string> g_targets;  // the summary: one line per figure and its target
+
+void target(const std::string& scenario, const char* figure, double value, const char* unit,
+            const char* target_text, bool met) {
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-13s %-44s %8.3f%-2s  target %-22s %s", scenario.c_str(),
+                figure, value, unit, target_text, met ? "met" : "MISSED");
+  g_targets.push_back(line);
+}
+
+json g_extra_options = json::object();  // third argument: refine options for every run
 
 json run_refine(const fs::path& mission, const json& options) {
   keel::pipeline::StageContext context;
   context.mission_dir = mission;
   context.work_dir = mission / "work";
   context.options = options;
+  context.options.update(g_extra_options);
   fs::create_directories(context.work_dir);
   return keel::pipeline::make_refine_stage()->run(context).report;
 }
@@ -96,6 +112,9 @@ void table_ii(const std::string& scenario, int seeds) {
       "%.1f%%, target >= 40%%)\n",
       "mean", map.value(), without.value(), with.value(), reduction.value(),
       reduction_vs_map.value(), 100.0 * (1.0 - with.value() / without.value()));
+  const double fusion = 100.0 * (1.0 - with.value() / without.value());
+  target(scenario, "DVL fusion: mean ATE lower than without DVL by", fusion, " %", ">= 40 %",
+         fusion >= 40.0);
 }
 
 void scale_error(const std::string& scenario, int seeds) {
@@ -119,6 +138,9 @@ void scale_error(const std::string& scenario, int seeds) {
   }
   std::printf("%6s %12.4f %12.4f %10.3f   (mean; target: estimated within 10%% of fixed)\n", "mean",
               est.value(), fixed.value(), est.value() / fixed.value());
+  const double ratio = est.value() / fixed.value();
+  target(scenario, "2% scale error: mean ATE s_d estimated / known", ratio, "", "<= 1.10",
+         ratio <= 1.10);
 }
 
 void ten_minutes() {
@@ -141,6 +163,9 @@ void ten_minutes() {
       solver["total_time_s"].get<double>(), solver["solve_time_s"].get<double>(),
       solver["covariance_time_s"].get<double>(), solver["iterations"].get<int>(), stage_s,
       ate(r, "map"), ate(r, "refined_with_dvl"));
+  const double solve_s = solver["total_time_s"].get<double>();
+  target("usv-bridge", "10-minute mission: solver total", solve_s, " s", "<= 5 s (2 cores)",
+         solve_s <= 5.0);
   fs::remove_all(mission);
 }
 
@@ -148,15 +173,30 @@ void ten_minutes() {
 
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 5;
+  // Optional second argument: run only the parts whose name contains it, e.g. "scale" or
+  // "fusion/usv-corridor" (parts: fusion/<scenario>, scale/<scenario>, ten_minutes).
+  const std::string only = argc > 2 ? argv[2] : "";
+  // Optional third argument: refine options (JSON) added to every run, e.g. '{"map_anchors":
+  // false}', to compare variants on the same missions.
+  if (argc > 3) g_extra_options = json::parse(argv[3]);
+  // Further arguments: keel-sim settings (key=value) for every simulated mission.
+  for (int k = 4; k < argc; ++k) g_sim_settings.push_back(argv[k]);
+  auto wanted = [&](const std::string& part) {
+    return only.empty() || part.find(only) != std::string::npos;
+  };
   try {
-    for (const char* scenario : {"usv-bridge", "usv-corridor"}) table_ii(scenario, seeds);
-    for (const char* scenario : {"usv-bridge", "usv-corridor"}) scale_error(scenario, seeds);
-    ten_minutes();
+    for (const char* scenario : {"usv-bridge", "usv-corridor"})
+      if (wanted(std::string("fusion/") + scenario)) table_ii(scenario, seeds);
+    for (const char* scenario : {"usv-bridge", "usv-corridor"})
+      if (wanted(std::string("scale/") + scenario)) scale_error(scenario, seeds);
+    if (wanted("ten_minutes")) ten_minutes();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_refine_sim: %s\n", e.what());
     fs::remove_all(kRoot);
     return 1;
   }
   fs::remove_all(kRoot);
+  std::printf("\nTargets (issue 4), %d seeds per scenario:\n", seeds);
+  for (const std::string& line : g_targets) std::printf("%s\n", line.c_str());
   return 0;
 }

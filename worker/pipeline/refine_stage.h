@@ -46,6 +46,14 @@ struct RefineStageOptions {
   // odometry that degenerated (a corridor) stops outvoting the DVL. false: the fixed model above.
   bool odometry_noise_from_map = true;
   std::string degeneracy = "drop";  // drop (seed 000) | keep_well_conditioned | ignore
+  // An odometry direction is degenerate when its sigma (after the widening above) exceeds this:
+  // 0.2 m is a fifth of a ~1 m keyframe step, far beyond a working lidar odometry (~1 % of
+  // distance) and far below what a corridor's lost axis shows (slam::DegeneracyOptions).
+  double degeneracy_sigma_translation_m = 0.2;
+  double degeneracy_sigma_rotation_rad = 0.1;
+  // Over degenerate intervals keep the IMU factor's position residual next to the DVL factor
+  // (slam::RefineOptions::imu_position_when_degenerate); false: seed 000's rule everywhere.
+  bool imu_position_when_degenerate = true;
   // Beyond the paper: offline, the global constraints of the online SLAM (scan-to-map matching,
   // its loop closures) survive only in its MAP poses, so each keyframe is anchored to its MAP
   // pose (expressed relative to the first keyframe, which the prior r_0 holds at its MAP pose)

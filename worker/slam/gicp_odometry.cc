@@ -82,6 +82,15 @@ Matrix6d information_of(const Cloud::Ptr& target, const Cloud::Ptr& source, cons
   return H / (o.point_sigma_m * o.point_sigma_m);
 }
 
+bool near_guess(const Pose3& T, const Pose3& guess, const GicpOdometryOptions& o) {
+  const Pose3 d = guess.inverse() * T;
+  const bool t_ok = o.max_translation_from_guess_m <= 0.0 ||
+                    d.translation().norm() <= o.max_translation_from_guess_m;
+  const bool r_ok = o.max_rotation_from_guess_rad <= 0.0 ||
+                    so3_log(d.linear()).norm() <= o.max_rotation_from_guess_rad;
+  return t_ok && r_ok;
+}
+
 }  // namespace
 
 Matrix6d point_to_plane_information(const PointCloud& target, const PointCloud& source,
@@ -125,10 +134,14 @@ std::vector<RelativePoseMeasurement> relative_poses_from_scans(
     RelativePoseMeasurement m;
     m.t_i_ns = scans[k - 1].t_ns;
     m.t_j_ns = scans[k].t_ns;
+    Pose3 T = guess;
     if (gicp.hasConverged()) {
-      m.T_i_j.matrix() = gicp.getFinalTransformation().cast<double>();
+      T.matrix() = gicp.getFinalTransformation().cast<double>();
       // Re-orthonormalise the float result.
-      m.T_i_j.linear() = Eigen::Quaterniond(m.T_i_j.linear()).normalized().toRotationMatrix();
+      T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+    }
+    if (gicp.hasConverged() && near_guess(T, guess, options)) {
+      m.T_i_j = T;
       m.information = information_of(clouds[k - 1], clouds[k], m.T_i_j, options);
     } else {
       m.T_i_j = guess;  // no information: the solver sees a fully degenerate edge

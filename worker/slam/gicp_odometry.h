@@ -22,11 +22,19 @@ struct GicpOdometryOptions {
   // Point-to-plane residual sigma for the information H = sum J^T J / sigma^2. Neighbouring
   // residuals are not independent, so this is deliberately larger than the range noise.
   double point_sigma_m = 0.05;
+  // Outlier gate: a converged alignment farther than this from the initial guess (the online
+  // map's relative pose, good to centimetres) is a wrong local minimum, e.g. a spinning lidar's
+  // rings matched to their neighbours over a flat surface, which shifts z by a ring spacing
+  // while the point-to-plane information still looks confident. Such an edge gets zero
+  // information, i.e. the solver treats it as fully degenerate. <= 0: no gate.
+  double max_translation_from_guess_m = 0.25;
+  double max_rotation_from_guess_rad = 0.1;
 };
 
 // scans[k]: the keyframe scan in the sensor frame, stamped with the keyframe time (t_ns);
 // initial_T_world_body[k]: a guess of the keyframe pose (e.g. the online map pose). Returns the
-// edges k-1 -> k (T_body_{k-1}_body_k, information in [t, phi] order). Throws
+// edges k-1 -> k (T_body_{k-1}_body_k, information in [t, phi] order); an edge that did not
+// converge or failed the outlier gate keeps the guess with zero information. Throws
 // std::invalid_argument on size mismatch, unsorted stamps or a scan with too few points.
 std::vector<RelativePoseMeasurement> relative_poses_from_scans(
     const std::vector<PointCloud>& scans, const Pose3& T_body_sensor,

@@ -297,10 +297,14 @@ class GraphBuilder {
   }
 
   // I_ij, D_ij and the random walks of Eq. (6)-(7) for every interval.
-  void add_interval(size_t k, const Interval& iv, const Eigen::Vector3d& g, double dt_s) {
+  // Returns whether I_ij kept its position residual next to a D_ij.
+  bool add_interval(size_t k, const Interval& iv, const Eigen::Vector3d& g, double dt_s,
+                    bool degenerate) {
     const size_t j = k + 1;
+    const bool drop_position = opt_.drop_imu_position_residual_with_dvl &&
+                               !(degenerate && opt_.imu_position_when_degenerate);
     if (iv.imu) {
-      const bool with_position = !(iv.dvl && opt_.drop_imu_position_residual_with_dvl);
+      const bool with_position = !(iv.dvl && drop_position);
       problem_->AddResidualBlock(
           new ImuFactor(iv.imu, g, imu_sqrt_information(*iv.imu, with_position)), nullptr,
           s_->pose[k].data(), s_->vel[k].data(), s_->bg[k].data(), s_->ba[k].data(),
@@ -323,6 +327,7 @@ class GraphBuilder {
     problem_->AddResidualBlock(
         new BiasRandomWalkFactor(opt_.dvl_noise.bias_random_walk(speed), dt_s), nullptr,
         s_->bv[k].data(), s_->bv[j].data());
+    return iv.imu && iv.dvl && !drop_position;
   }
 
   // Calibration priors (beyond the paper) and the blocks held constant.
@@ -479,8 +484,14 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   // 2. Odometry edges with per-keyframe degeneracy, and loop closures.
   const std::vector<Edge> odometry = odometry_edges(in, opt, t_ns, &kf);
   const std::vector<Edge> loops = loop_edges(in, opt, t_ns);
+  // Biases are unobservable in degeneracy unless I_ij's position residual ties the velocity
+  // states to the DVL there (imu_position_when_degenerate).
+  const bool biases_observable_when_degenerate =
+      opt.use_imu && opt.use_dvl && !in.dvl.empty() &&
+      (opt.imu_position_when_degenerate || !opt.drop_imu_position_residual_with_dvl);
   for (KeyframeEstimate& k : kf) {
-    k.biases_zeroed = k.degenerate && opt.zero_biases_when_degenerate;
+    k.biases_zeroed =
+        k.degenerate && opt.zero_biases_when_degenerate && !biases_observable_when_degenerate;
     summary.num_degenerate_keyframes += k.degenerate ? 1 : 0;
   }
 
@@ -512,7 +523,8 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
     graph->add_edges(loops, /*robust=*/true);
     summary.num_imu_factors = summary.num_dvl_factors = 0;
     for (size_t k = 0; k + 1 < n; ++k) {
-      graph->add_interval(k, intervals[k], g, ns_to_seconds(t_ns[k + 1] - t_ns[k]));
+      kf[k + 1].imu_position_with_dvl = graph->add_interval(
+          k, intervals[k], g, ns_to_seconds(t_ns[k + 1] - t_ns[k]), kf[k + 1].degenerate);
       kf[k + 1].has_imu_factor = intervals[k].imu != nullptr;
       kf[k + 1].has_dvl_factor = intervals[k].dvl != nullptr;
       summary.num_imu_factors += intervals[k].imu ? 1 : 0;

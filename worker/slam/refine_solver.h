@@ -14,7 +14,9 @@
 // Degeneracy (Sec. IV-B): an odometry edge whose information has a small eigenvalue marks its
 // keyframe degenerate; its odometry factor is dropped so the keyframe relies on the IMU and DVL
 // factors, and that keyframe's biases are set to zero and held (they are unobservable then).
-// Where D_ij exists, I_ij's position residual is given zero weight (Sec. IV-B).
+// Where D_ij exists, I_ij's position residual is given zero weight (Sec. IV-B), except, beyond
+// the paper, over degenerate intervals (RefineOptions::imu_position_when_degenerate), where it
+// is kept and the biases, observable through it, are estimated rather than zeroed.
 //
 // Frames: inputs and outputs use the body frame of the mission (T_world_body, world z up,
 // gravity -z). Internally states live in the IMU frame B, as in the paper.
@@ -66,6 +68,13 @@ struct RefineOptions {
   bool use_odometry = true;
   bool use_loop_closures = true;
   bool drop_imu_position_residual_with_dvl = true;  // Sec. IV-B
+  // Beyond the paper: where the odometry is degenerate, I_ij keeps its position residual next to
+  // D_ij, so positions rest on the IMU and the DVL together ("rely on IMU and DVL factors").
+  // The accelerometer is absolute while the DVL displacement scales with 1/s_d, so along a
+  // degenerate axis (where nothing else measures distance) this is what observes s_d; it also
+  // ties the velocity states, hence b^a, to the DVL, so the biases stay observable there and
+  // are not zeroed. false: the paper's rule everywhere.
+  bool imu_position_when_degenerate = true;
 
   // Degeneracy (Sec. IV-B).
   DegeneracyOptions degeneracy;
@@ -127,6 +136,7 @@ struct KeyframeEstimate {
   Eigen::Matrix3d bias_dvl_covariance = Eigen::Matrix3d::Zero();
   bool degenerate = false;  // its incoming odometry edge was degenerate
   bool biases_zeroed = false;
+  bool imu_position_with_dvl = false;  // I_ij kept its position residual next to D_ij
   // Factors over the interval from the previous keyframe to this one.
   bool has_odometry_factor = false;
   bool has_imu_factor = false;
