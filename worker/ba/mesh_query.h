@@ -75,9 +75,83 @@ class MeshQuery {
 
   size_t num_faces() const;  // faces in the tree (non-degenerate)
 
+  // Faces (indices into TriangleMesh::faces, degenerate ones left out) at a distance of at
+  // most `radius_m` from `center`, exactly: an AABB-tree box query filtered by the
+  // point-triangle distance. Each face's distance goes to `distances_m` when it is not null.
+  std::vector<int> faces_within(const Eigen::Vector3d& center, double radius_m,
+                                std::vector<double>* distances_m = nullptr) const;
+  // closest_point() restricted to `faces` (as returned by faces_within), by brute force over
+  // them. Same feature, pseudonormal and sign rules. `faces` must not be empty.
+  ClosestPoint closest_point_among(const Eigen::Vector3d& query,
+                                   const std::vector<int>& faces) const;
+
  private:
+  friend class LocalClosestPoint;
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+// Exact closest-point queries for ONE point that moves little between calls: a landmark
+// across Ceres iterations, where the closest triangle rarely changes.
+//
+// Why (issue 6, measured in tests/bench/mesh_query_bench.cc): an AABB-tree closest-point query
+// costs microseconds, brute force over the few faces around the last answer a fraction of it.
+//
+// Soundness: at an anchor q0 with distance d0 to the mesh, keep every face within d0 + 2 rho
+// of q0 (the candidates). For any q with |q - q0| <= rho the closest face g of q has
+//   d(q0, g) <= d(q, g) + rho <= d(q, f0) + rho <= d0 + 2 rho
+// (f0 the closest face of q0), so g is a candidate, and brute force over the candidates gives
+// the exact closest point, equal to MeshQuery::closest_point up to ties. The candidates are
+// sorted by d(q0, g), and d(q, g) >= d(q0, g) - |q - q0|, so the brute force stops at the first
+// candidate that cannot beat the best so far: usually after the faces around the closest
+// feature. We chose this ball over a 1-ring around the cached face: a 1-ring misses faces where
+// the mesh folds back (a thin keel, the far side of a box) and needs a validity test per call,
+// the ball needs none. rho shrinks so that at most max_candidates faces are kept; below
+// min_move_bound_m (far from a fine mesh) the tree answers.
+//
+// Re-anchoring: a call between rho and 2 rho from the anchor (the point drifts) re-anchors
+// there with one ball query on the tree (the old candidates bound d0). A call farther away (a
+// jump) is answered by the tree and moves the anchor only when the next far call lands within
+// rho of it: in a BA a jump is mostly a Levenberg-Marquardt trial step (a large x_gM step moves
+// every landmark in the model frame) that is rejected, after which the point is back near the
+// anchor. Re-anchoring at every jump re-anchored a third of all calls in bench_ba.
+//
+// Not thread-safe: one per point, used by one thread at a time. `mesh` must outlive it.
+struct LocalClosestPointOptions {
+  // rho. Landmarks move by millimetres per BA iteration after the SLAM initialisation; 5 cm
+  // keeps a few dozen faces of a 10 cm-grid hull and re-anchors a few times per solve.
+  double move_bound_m = 0.05;
+  int max_candidates = 48;
+  double min_move_bound_m = 1e-3;
+};
+
+class LocalClosestPoint {
+ public:
+  explicit LocalClosestPoint(const MeshQuery& mesh, const LocalClosestPointOptions& options = {});
+
+  // Equals mesh.closest_point(query) (distance, point and signed distance; the face may be
+  // another one at the same distance). Throws std::invalid_argument for a non-finite query.
+  ClosestPoint closest_point(const Eigen::Vector3d& query);
+
+  int tree_queries() const { return tree_queries_; }      // re-anchoring and uncached calls
+  int cached_queries() const { return cached_queries_; }  // answered from the candidates
+  double move_bound_m() const { return move_bound_m_; }   // rho at the current anchor
+  size_t num_candidates() const { return candidates_.size(); }
+
+ private:
+  ClosestPoint re_anchor(const Eigen::Vector3d& query, double moved_m);
+
+  const MeshQuery* mesh_;
+  LocalClosestPointOptions options_;
+  bool anchored_ = false;
+  Eigen::Vector3d anchor_ = Eigen::Vector3d::Zero();
+  double move_bound_m_ = 0.0;  // 0: the candidates are not valid, use the tree
+  bool has_pending_ = false;   // the last far call, answered by the tree
+  Eigen::Vector3d pending_ = Eigen::Vector3d::Zero();
+  std::vector<int> candidates_;                // sorted by their distance to the anchor
+  std::vector<double> candidate_distances_m_;  // parallel: that distance
+  int tree_queries_ = 0;
+  int cached_queries_ = 0;
 };
 
 }  // namespace keel::ba

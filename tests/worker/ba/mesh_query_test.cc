@@ -5,9 +5,11 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "tests/worker/ba/mesh_fixtures.h"
 
@@ -263,6 +265,133 @@ TEST(MeshQuery, BatchesEqualSingleQueries) {
       }
     }
   }
+}
+
+TEST(MeshQuery, FacesWithinMatchesBruteForce) {
+  std::mt19937 rng(5);
+  for (const Solid& solid : solids()) {
+    SCOPED_TRACE(solid.name);
+    const MeshQuery query(solid.mesh);
+    std::uniform_real_distribution<double> radius(0.0, 0.8);
+    for (const Eigen::Vector3d& p : queries_near(solid.mesh, rng, 300)) {
+      const double r = radius(rng);
+      std::vector<double> distances;
+      std::vector<int> faces = query.faces_within(p, r, &distances);
+      ASSERT_EQ(faces.size(), distances.size());
+      std::sort(faces.begin(), faces.end());
+      std::vector<int> expected;
+      for (size_t f = 0; f < solid.mesh.faces.size(); ++f) {
+        const auto& v = solid.mesh.faces[f];
+        const double d =
+            (p - brute_closest_on_triangle(p, solid.mesh.vertices[v[0]], solid.mesh.vertices[v[1]],
+                                           solid.mesh.vertices[v[2]]))
+                .norm();
+        // Faces within rounding of the sphere may go either way.
+        if (std::abs(d - r) < 1e-12) {
+          expected.clear();
+          break;
+        }
+        if (d < r) expected.push_back(static_cast<int>(f));
+      }
+      if (expected.empty() && !faces.empty()) continue;  // a face on the sphere (rare)
+      ASSERT_EQ(faces, expected) << p.transpose() << " r " << r;
+    }
+  }
+}
+
+// LocalClosestPoint against brute force over all triangles, on points that move: random walks
+// with small steps (cache hits), occasional jumps (re-anchoring), walks across edges, vertices
+// and the inside, and a tight candidate budget that makes the move bound shrink.
+TEST(LocalClosestPoint, EqualsBruteForceOnMovingPoints) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> step(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Solid& solid : solids()) {
+    for (const int max_candidates : {48, 4}) {
+      SCOPED_TRACE(solid.name + " max_candidates " + std::to_string(max_candidates));
+      const MeshQuery query(solid.mesh);
+      LocalClosestPointOptions options;
+      options.move_bound_m = 0.1;
+      options.max_candidates = max_candidates;
+      int cached = 0, total = 0, shrunk = 0;
+      for (const Eigen::Vector3d& start : queries_near(solid.mesh, rng, 40)) {
+        LocalClosestPoint local(query, options);
+        Eigen::Vector3d p = start;
+        for (int k = 0; k < 60; ++k) {
+          // Mostly millimetre to centimetre steps, sometimes a 0.3 m jump.
+          const double scale = unit(rng) < 0.05 ? 0.3 : (unit(rng) < 0.5 ? 0.002 : 0.02);
+          p += scale * Eigen::Vector3d(step(rng), step(rng), step(rng));
+          const ClosestPoint result = local.closest_point(p);
+          const ClosestPoint tree = query.closest_point(p);
+          const double expected = brute_distance(solid.mesh, p);
+          ASSERT_NEAR(result.distance_m, expected, 1e-9) << p.transpose();
+          ASSERT_NEAR((result.point - p).norm(), expected, 1e-9);
+          ASSERT_LT((result.point - tree.point).norm(), 1e-9) << p.transpose();
+          ASSERT_NEAR(result.signed_distance_m, tree.signed_distance_m, 1e-9) << p.transpose();
+          ASSERT_LT((result.normal - tree.normal).norm(), 1e-9) << p.transpose();
+          // The face it names holds the point.
+          const auto& f = solid.mesh.faces[result.face];
+          const Eigen::Vector3d on_face =
+              brute_closest_on_triangle(result.point, solid.mesh.vertices[f[0]],
+                                        solid.mesh.vertices[f[1]], solid.mesh.vertices[f[2]]);
+          ASSERT_LT((on_face - result.point).norm(), 1e-9);
+          ++total;
+          shrunk += local.move_bound_m() < options.move_bound_m;
+        }
+        cached += local.cached_queries();
+        EXPECT_EQ(local.cached_queries() + local.tree_queries(), 60);
+      }
+      // The cache did answer many calls, so the comparison above exercised it.
+      EXPECT_GT(cached, max_candidates == 4 ? total / 4 : total / 2);
+      if (max_candidates == 4) EXPECT_GT(shrunk, 0);
+    }
+  }
+}
+
+// A rejected Levenberg-Marquardt step: the point jumps and comes back. The jump is answered
+// exactly by the tree and the anchor stays; a point that stays after its jump is re-anchored.
+TEST(LocalClosestPoint, JumpAndReturnKeepsTheAnchor) {
+  const TriangleMesh mesh = testing::make_box({0, 0, 0}, {1, 1, 1});
+  const MeshQuery query(mesh);
+  LocalClosestPoint local(query);  // rho = 5 cm
+  const Eigen::Vector3d start(0.5, 0.4, 1.02);
+  local.closest_point(start);
+  EXPECT_EQ(local.tree_queries(), 1);
+  const Eigen::Vector3d jump(1.3, 0.4, 0.5);
+  EXPECT_NEAR(local.closest_point(jump).signed_distance_m, 0.3, 1e-12);
+  EXPECT_EQ(local.tree_queries(), 2);
+  EXPECT_NEAR(local.closest_point(start + Eigen::Vector3d(0.01, 0, 0)).signed_distance_m, 0.02,
+              1e-12);
+  EXPECT_EQ(local.cached_queries(), 1);  // back at the anchor: no tree query
+  local.closest_point(jump);
+  EXPECT_NEAR(local.closest_point(jump + Eigen::Vector3d(0, 0.01, 0)).signed_distance_m, 0.3,
+              1e-12);
+  EXPECT_EQ(local.tree_queries(), 4);  // it stayed: re-anchored there
+  EXPECT_NEAR(local.closest_point(jump + Eigen::Vector3d(0, 0.02, 0)).distance_m, 0.3, 1e-12);
+  EXPECT_EQ(local.cached_queries(), 2);
+}
+
+TEST(LocalClosestPoint, FarPointsAndBadInput) {
+  const TriangleMesh mesh = testing::make_icosphere(3);
+  const MeshQuery query(mesh);
+  LocalClosestPointOptions options;
+  options.max_candidates = 8;
+  options.min_move_bound_m = 0.04;
+  LocalClosestPoint local(query, options);
+  // From 5 m away, more than 8 faces lie within d0 + 2 rho and the 9th is closer than
+  // d0 + 2 min_move_bound_m: nothing worth caching, every call asks the tree.
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector3d p(6.0 + 0.001 * k, 0.2, 0.1);
+    EXPECT_NEAR(local.closest_point(p).distance_m, brute_distance(mesh, p), 1e-9);
+  }
+  EXPECT_EQ(local.tree_queries(), 5);
+  EXPECT_EQ(local.num_candidates(), 0u);
+  EXPECT_THROW(local.closest_point({std::nan(""), 0, 0}), std::invalid_argument);
+  options.move_bound_m = 0;
+  EXPECT_THROW(LocalClosestPoint(query, options), std::invalid_argument);
+  EXPECT_THROW(query.closest_point_among({0, 0, 0}, {}), std::invalid_argument);
+  EXPECT_THROW(query.closest_point_among({0, 0, 0}, {-1}), std::invalid_argument);
+  EXPECT_THROW(query.faces_within({0, 0, 0}, -1.0), std::invalid_argument);
 }
 
 TEST(MeshQuery, DegenerateFacesAndBadInput) {

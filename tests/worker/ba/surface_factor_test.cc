@@ -7,8 +7,11 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
+#include <random>
 
 #include "tests/worker/ba/mesh_fixtures.h"
 #include "worker/ba/pose_block.h"
@@ -141,6 +144,93 @@ TEST_F(SurfaceFactorOnBox, FactorCostContinuousAtTheSwitch) {
   EXPECT_EQ(below[1], 0.0);  // lambda = 1 side
   EXPECT_GT(above[1], 0.0);  // lambda = 0 side
   EXPECT_NEAR(0.5 * below.squaredNorm(), 0.5 * above.squaredNorm(), 1e-3);
+}
+
+// The closed-form Jacobian against central differences in the ambient parameters (all 7 of
+// x_gM, the quaternion not normalised: the factor normalises it) in the face, edge and vertex
+// regions of the box, inside and outside, for both components and both modes.
+TEST_F(SurfaceFactorOnBox, ClosedFormJacobianMatchesCentralDifferences) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.6, 1.6);
+  std::uniform_real_distribution<double> scale(0.5, 2.0);
+  int checked = 0;
+  for (int i = 0; i < 400; ++i) {
+    const Eigen::Vector3d l_model(u(rng), u(rng), u(rng));
+    const ClosestPoint closest = mesh_.closest_point(l_model);
+    // The distance is not differentiable on the medial axis (inside the box, equidistant to
+    // two faces) nor on the surface: skip points within 1 mm of either.
+    if (closest.distance_m < 1e-3) continue;
+    const Eigen::Vector3d c = l_model.cwiseMin(Eigen::Vector3d::Ones() - l_model);
+    if (closest.signed_distance_m < 0) {
+      std::array<double, 3> d{c.x(), c.y(), c.z()};
+      std::sort(d.begin(), d.end());
+      if (d[1] - d[0] < 1e-3) continue;
+    }
+    for (SurfaceMode mode : {SurfaceMode::kMaxMixture, SurfaceMode::kOnModel}) {
+      std::unique_ptr<ceres::CostFunction> f(make_surface_factor(mesh_, mixture_, mode, 0.01));
+      PoseBlock model = to_pose_block(T_world_model_);
+      const double s = scale(rng);
+      for (int k = 0; k < 4; ++k) model[k] *= s;
+      Eigen::Vector3d l_world = T_world_model_ * l_model;
+      double* blocks[2] = {model.data(), l_world.data()};
+      Eigen::Matrix<double, 2, 7, Eigen::RowMajor> J_model;
+      Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J_landmark;
+      double* jacobians[2] = {J_model.data(), J_landmark.data()};
+      Eigen::Vector2d r;
+      ASSERT_TRUE(f->Evaluate(blocks, r.data(), jacobians));
+      EXPECT_NEAR(r[0],
+                  (0.01 - closest.signed_distance_m) /
+                      mixture_.sigma(mode == SurfaceMode::kOnModel
+                                         ? 1
+                                         : mixture_.label(0.01 - closest.signed_distance_m)),
+                  1e-9);
+      const double h = 1e-7;
+      for (int b = 0; b < 2; ++b) {
+        const int n = b == 0 ? 7 : 3;
+        for (int k = 0; k < n; ++k) {
+          const double x0 = blocks[b][k];
+          Eigen::Vector2d plus, minus;
+          blocks[b][k] = x0 + h;
+          ASSERT_TRUE(f->Evaluate(blocks, plus.data(), nullptr));
+          blocks[b][k] = x0 - h;
+          ASSERT_TRUE(f->Evaluate(blocks, minus.data(), nullptr));
+          blocks[b][k] = x0;
+          const Eigen::Vector2d numeric = (plus - minus) / (2 * h);
+          const double analytic = b == 0 ? J_model(0, k) : J_landmark(0, k);
+          // Relative to the residual's scale (1 / sigma per metre).
+          ASSERT_NEAR(analytic, numeric[0], 1e-5 * (1.0 + std::abs(numeric[0])))
+              << "block " << b << " k " << k << " at " << l_model.transpose();
+          ASSERT_EQ(b == 0 ? J_model(1, k) : J_landmark(1, k), 0.0);
+          ASSERT_NEAR(numeric[1], 0.0, 1e-9);  // unless a step crossed the switch
+        }
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 300);
+}
+
+// A factor keeps its landmark's nearby faces between evaluations: walking a landmark through
+// the face, edge and vertex regions and inside, its residuals stay those of a fresh tree query.
+TEST_F(SurfaceFactorOnBox, CachedFactorFollowsAMovingLandmark) {
+  std::unique_ptr<ceres::CostFunction> f(
+      make_surface_factor(mesh_, mixture_, SurfaceMode::kOnModel, 0.0));
+  PoseBlock model = to_pose_block(T_world_model_);
+  std::mt19937 rng(9);
+  std::normal_distribution<double> step(0.0, 0.01);
+  Eigen::Vector3d l_model(0.5, 0.5, 1.2);
+  const Eigen::Vector3d goal(1.3, -0.2, -0.1);  // through the top face, an edge, a corner
+  for (int k = 0; k < 400; ++k) {
+    l_model += 0.005 * (goal - Eigen::Vector3d(0.5, 0.5, 1.2)) +
+               Eigen::Vector3d(step(rng), step(rng), step(rng));
+    if (k == 200) l_model = Eigen::Vector3d(0.4, 0.45, 0.5);  // a jump inside
+    Eigen::Vector3d l_world = T_world_model_ * l_model;
+    double* blocks[2] = {model.data(), l_world.data()};
+    Eigen::Vector2d r;
+    ASSERT_TRUE(f->Evaluate(blocks, r.data(), nullptr));
+    const double h = signed_distance_to_model(mesh_, T_world_model_, l_world);
+    ASSERT_NEAR(r[0], -h / 0.02, 1e-7) << k << " " << l_model.transpose();
+  }
 }
 
 }  // namespace
