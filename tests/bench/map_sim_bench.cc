@@ -6,7 +6,8 @@
 // Each stage run is a fresh process (`bench_map_sim --stage MISSION WORK`), so its peak RSS is
 // its own. On a shared machine wall time includes waiting for a core: CPU seconds are printed
 // too, and "per 2 cores" = 2 x points / CPU seconds.
-// Run build-*/tests/bench/bench_map_sim [--keep] [--skip-rss | --rss-only] [--dir DIR].
+// Run build-*/tests/bench/bench_map_sim [--keep] [--skip-rss | --rss-only] [--skip-metrics-file]
+// [--dir DIR] (--skip-metrics-file: no whole-map metrics run on map_lidar_h.ply).
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -147,9 +148,18 @@ void print_table_v(const json& report) {
               beats["planarity"].get<bool>() ? "yes" : "NO");
 }
 
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
+}
+
 void print_stage_figures(const json& run) {
   const json& report = run["report"];
   const json& timing = report["timing"];
+  std::printf("load average now %s (2 cores; wall times include waiting for a core)\n",
+              load_average().c_str());
   const double points = timing["input_points"].get<double>();
   const double wall = run["wall_s"].get<double>(), cpu = run["cpu_s"].get<double>();
   std::printf(
@@ -184,6 +194,9 @@ void print_stage_figures(const json& run) {
       combined["draco"]["max_position_error_m"].get<double>() * 1e3,
       combined["draco"]["position_error_bound_m"].get<double>() * 1e3,
       combined["draco"]["position_range_m"].get<double>());
+  if (timing.contains("outputs_and_metrics_seconds"))
+    std::printf("  outputs and metrics (after the scans): %.1f s wall\n",
+                timing["outputs_and_metrics_seconds"].get<double>());
   std::printf("  metrics in the stage: %.1f s, %.2f M query points/s\n",
               timing["metrics_seconds"].get<double>(),
               timing["metrics_query_points_per_second"].get<double>() / 1e6);
@@ -207,9 +220,7 @@ void metrics_throughput(const fs::path& ply) {
 // Table IV's lidar scan filters with DROR's alpha set to the reduced lidar's horizontal
 // resolution (360 deg / 450 points): with VLP-16's 0.2 deg, DROR would remove every point.
 json reduced_lidar_options(double final_leaf_m) {
-  return {{"metrics_max_points", 200000},
-          {"final_voxel_leaf_m", final_leaf_m},
-          {"lidar_filters", {{"scan_filters", json::parse(R"([
+  return {{"final_voxel_leaf_m", final_leaf_m}, {"lidar_filters", {{"scan_filters", json::parse(R"([
               {"type": "crop_box", "min": [-60, -60, -60], "max": [60, 60, 60], "remove": "outside"},
               {"type": "crop_box", "min": [-2, -2, -2], "max": [2, 2, 2], "remove": "inside"},
               {"type": "dror", "beta": 3.0, "alpha_deg": 0.8, "k_min": 4, "sr_min": 0.01}])")}}}};
@@ -257,13 +268,14 @@ void memory_scaling(const fs::path& root, bool keep) {
 int main(int argc, char** argv) {
   if (argc >= 4 && std::string(argv[1]) == "--stage")
     return run_stage_child(argv[2], argv[3], argc >= 5 ? argv[4] : "");
-  bool keep = false, skip_rss = false, rss_only = false;
+  bool keep = false, skip_rss = false, rss_only = false, skip_metrics_file = false;
   fs::path root = fs::temp_directory_path() / ("keel_bench_map_sim_" + std::to_string(getpid()));
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--keep") keep = true;
     if (a == "--skip-rss") skip_rss = true;
     if (a == "--rss-only") rss_only = true;
+    if (a == "--skip-metrics-file") skip_metrics_file = true;
     if (a == "--dir" && i + 1 < argc) root = argv[++i];
   }
   fs::create_directories(root);
@@ -281,7 +293,8 @@ int main(int argc, char** argv) {
                 run["report"]["poses"]["source"].get<std::string>().c_str());
     print_stage_figures(run);
     print_table_v(run["report"]);
-    metrics_throughput(root / "work_full" / keel::pipeline::map_ply_file("lidar_h"));
+    if (!skip_metrics_file)
+      metrics_throughput(root / "work_full" / keel::pipeline::map_ply_file("lidar_h"));
     if (!skip_rss) memory_scaling(root, keep);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_map_sim: %s\n", e.what());

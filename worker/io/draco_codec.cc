@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -139,9 +141,8 @@ double max_nearest_distance(const std::vector<Vector>& originals, const std::vec
 }
 
 template <typename Vector>
-void measure_error(const std::vector<Vector>& originals, const std::vector<bool>* used,
-                   const std::vector<Eigen::Vector3f>& decoded, const DracoOptions& options,
-                   DracoEncoded* result) {
+double error_tolerance(const std::vector<Vector>& originals, const DracoOptions& options,
+                       DracoEncoded* result) {
   result->position_range_m = quantization_range(originals);
   const double step = result->position_range_m / ((1u << options.position_bits) - 1);
   result->position_error_bound_m = 0.5 * std::sqrt(3.0) * step;
@@ -149,8 +150,126 @@ void measure_error(const std::vector<Vector>& originals, const std::vector<bool>
   double largest = 0.0;
   for (const auto& p : originals)
     largest = std::max(largest, p.template cast<double>().cwiseAbs().maxCoeff());
-  const double tolerance = result->position_error_bound_m + 8.0 * largest * 1.2e-7;
+  return result->position_error_bound_m + 8.0 * largest * 1.2e-7;
+}
+
+template <typename Vector>
+void measure_error(const std::vector<Vector>& originals, const std::vector<bool>* used,
+                   const std::vector<Eigen::Vector3f>& decoded, const DracoOptions& options,
+                   DracoEncoded* result) {
+  const double tolerance = error_tolerance(originals, options, result);
+  const double step = result->position_range_m / ((1u << options.position_bits) - 1);
   result->max_position_error_m = max_nearest_distance(originals, used, decoded, step, tolerance);
+  result->error_method = "nearest_decoded";
+}
+
+// The position Draco's decoder returns for each input position, computed with Draco's own
+// float arithmetic: AttributeQuantizationTransform::ComputeParameters (per-axis minimum, range
+// = largest extent, 1 when all points coincide), Quantizer (q = floor((p - min) *
+// (2^bits - 1) / range + 0.5)) and Dequantizer (q * range / (2^bits - 1) + min), as in
+// draco/attributes/attribute_quantization_transform.cc and draco/core/quantization_utils.cc.
+class DracoPositionReplica {
+ public:
+  DracoPositionReplica(const std::vector<Eigen::Vector3f>& positions, int bits) {
+    Eigen::Vector3f hi = positions[0];
+    min_ = positions[0];
+    for (const auto& p : positions) {
+      min_ = min_.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    float range = 0.f;
+    for (int c = 0; c < 3; ++c) range = std::max(range, hi[c] - min_[c]);
+    if (range == 0.f) range = 1.f;
+    const auto max_quantized = static_cast<int32_t>((1u << bits) - 1);
+    inverse_delta_ = static_cast<float>(max_quantized) / range;
+    delta_ = range / static_cast<float>(max_quantized);
+  }
+  Eigen::Vector3f decoded(const Eigen::Vector3f& p) const {
+    Eigen::Vector3f out;
+    for (int c = 0; c < 3; ++c) {
+      float value = p[c] - min_[c];
+      value *= inverse_delta_;
+      const auto q = static_cast<int32_t>(std::floor(value + 0.5f));
+      float back = static_cast<float>(q) * delta_;
+      back = back + min_[c];
+      out[c] = back;
+    }
+    return out;
+  }
+
+ private:
+  Eigen::Vector3f min_;
+  float inverse_delta_ = 1.f, delta_ = 1.f;
+};
+
+// Order-independent digest of a multiset of float triples: two sums (mod 2^64) of independent
+// 64-bit mixes of the bit patterns. Equal multisets give equal digests; unequal ones collide
+// with probability ~2^-128.
+class MultisetDigest {
+ public:
+  void add(const Eigen::Vector3f& p) {
+    uint32_t bits[3];
+    for (int c = 0; c < 3; ++c) {
+      const float value = p[c] + 0.0f;  // -0 and +0 are the same position
+      std::memcpy(&bits[c], &value, sizeof(float));
+    }
+    const uint64_t xy = (static_cast<uint64_t>(bits[0]) << 32) | bits[1];
+    sum_a_ += mix(xy ^ mix(bits[2] + 0x9e3779b97f4a7c15ULL));
+    sum_b_ += mix(mix(xy + 0xd1b54a32d192ed03ULL) ^ (bits[2] * 0xc2b2ae3d27d4eb4fULL));
+    ++count_;
+  }
+  bool operator==(const MultisetDigest& other) const {
+    return sum_a_ == other.sum_a_ && sum_b_ == other.sum_b_ && count_ == other.count_;
+  }
+
+ private:
+  static uint64_t mix(uint64_t x) {  // splitmix64 finalizer
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    x ^= x >> 31;
+    return x;
+  }
+  uint64_t sum_a_ = 0, sum_b_ = 0, count_ = 0;
+};
+
+// The point cloud's error without a spatial search: each input position's decoded value is
+// predicted by DracoPositionReplica, and the prediction is accepted only when the multiset of
+// predicted positions equals the multiset Draco actually decoded (MultisetDigest). Then every
+// decoded point is exactly the quantization of an input point, and the largest |predicted -
+// original| is the largest error. O(n) time, O(1) memory. Returns false (nothing measured)
+// when the decoded points differ from the prediction.
+bool measure_error_by_replica(const std::vector<Eigen::Vector3f>& originals,
+                              const draco::PointCloud& decoded, const DracoOptions& options,
+                              double tolerance, DracoEncoded* result) {
+  const draco::PointAttribute* position =
+      decoded.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  if (position == nullptr || position->num_components() != 3) return false;
+  MultisetDigest actual;
+  for (draco::PointIndex i(0); i < decoded.num_points(); ++i) {
+    Eigen::Vector3f p;
+    position->ConvertValue<float>(position->mapped_index(i), 3, p.data());
+    actual.add(p);
+  }
+  const DracoPositionReplica replica(originals, options.position_bits);
+  MultisetDigest predicted;
+  double max_squared = 0.0;
+  for (const Eigen::Vector3f& p : originals) {
+    const Eigen::Vector3f d = replica.decoded(p);
+    predicted.add(d);
+    max_squared = std::max(max_squared, (d.cast<double>() - p.cast<double>()).squaredNorm());
+  }
+  if (!(predicted == actual)) return false;
+  const double max_error = std::sqrt(max_squared);
+  if (max_error > tolerance) {
+    throw std::runtime_error("draco round trip: a point moved " + std::to_string(max_error) +
+                             " m, more than the quantization bound " + std::to_string(tolerance) +
+                             " m");
+  }
+  result->max_position_error_m = max_error;
+  result->error_method = "replica";
+  return true;
 }
 
 std::string to_string(const draco::EncoderBuffer& buffer) {
@@ -244,15 +363,26 @@ DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positi
   draco::EncoderBuffer buffer;
   check_status(encoder.EncodePointCloudToBuffer(*cloud, &buffer), "draco point cloud encoding");
 
+  cloud.reset();  // the encoder's copy of the input is no longer needed
+
   DracoEncoded result;
   result.bytes = to_string(buffer);
-  const DracoPointCloud decoded = decode_draco_point_cloud(result.bytes, "encoded point cloud");
-  if (decoded.positions.size() != positions.size()) {
+  buffer.Clear();
+  auto decoded = decode_cloud(result.bytes);
+  check_status(decoded.status(), "encoded point cloud: not a valid Draco geometry");
+  const draco::PointCloud& decoded_cloud = *decoded.value();
+  if (decoded_cloud.num_points() != positions.size()) {
     throw std::runtime_error("draco round trip: " + std::to_string(positions.size()) +
-                             " points encoded, " + std::to_string(decoded.positions.size()) +
+                             " points encoded, " + std::to_string(decoded_cloud.num_points()) +
                              " decoded");
   }
-  measure_error(positions, nullptr, decoded.positions, options, &result);
+  const double tolerance = error_tolerance(positions, options, &result);
+  if (!measure_error_by_replica(positions, decoded_cloud, options, tolerance, &result)) {
+    // Draco quantized differently from the replica (another Draco version, say): match each
+    // input point to its nearest decoded point instead.
+    measure_error(positions, nullptr, read_positions(decoded_cloud, "encoded point cloud"), options,
+                  &result);
+  }
   return result;
 }
 

@@ -29,6 +29,12 @@ struct DracoEncoded {
   // 2^bits - 1 steps, so each coordinate is off by at most half a step.
   double position_range_m = 0.0;
   double position_error_bound_m = 0.0;  // sqrt(3)/2 * range / (2^bits - 1)
+  // How max_position_error_m was measured: "replica" (point clouds: each point's decoded
+  // position predicted with Draco's quantizer arithmetic, accepted only when the predicted
+  // positions equal the decoded ones as a multiset; O(n) time and no extra memory) or
+  // "nearest_decoded" (meshes, or a replica mismatch: the nearest decoded point to each input
+  // point, found on a hash grid).
+  std::string error_method;
 };
 
 // Positions plus per-point scalar fields (stored as generic attributes named by metadata

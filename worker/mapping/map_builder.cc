@@ -1,7 +1,13 @@
 #include "worker/mapping/map_builder.h"
 
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 #include "worker/mapping/cloud_ops.h"
 #include "worker/mapping/voxel_accumulator.h"
@@ -115,14 +121,22 @@ const MapBuilder::SensorState& MapBuilder::existing_state(const std::string& sen
   return *found->second;
 }
 
-void MapBuilder::add_scan(const std::string& sensor, PointCloud scan) {
-  if (finished_) throw std::logic_error("map builder: add_scan after finish()");
+struct MapBuilder::PreparedScan {
+  SensorState* state = nullptr;
+  PointCloud points;  // in W, after the scan filters
+  size_t points_in = 0;
+  size_t non_finite_points = 0;
+  bool outside_trajectory = false;
+  std::vector<FilterStep> scan_steps;
+};
+
+MapBuilder::PreparedScan MapBuilder::prepare(const std::string& sensor, SensorState& state,
+                                             PointCloud scan, int filter_threads) const {
   check_field_sizes(scan, ("scan of sensor '" + sensor + "'").c_str());
-  tree_.T_body_sensor(sensor);  // an unknown sensor is an error, not a skipped scan
-  SensorState& state = state_for(sensor);
-  ++state.stats.scans;
-  state.stats.points_in += scan.size();
-  state.stats.non_finite_points += remove_non_finite(scan);
+  PreparedScan out;
+  out.state = &state;
+  out.points_in = scan.size();
+  out.non_finite_points = remove_non_finite(scan);
 
   // Motion compensation into the sensor frame at the scan stamp (Sec. VI-A2).
   Pose3 T_world_sensor;
@@ -134,20 +148,108 @@ void MapBuilder::add_scan(const std::string& sensor, PointCloud scan) {
     }
   } catch (const std::out_of_range&) {
     if (!options_.skip_scans_outside_trajectory) throw;
-    ++state.stats.scans_outside_trajectory;
-    return;
+    out.outside_trajectory = true;
+    return out;
   }
   // Per-point offsets refer to this scan's stamp; a world map mixes stamps, so they go.
   scan.time_s.clear();
 
   // Stage 1: filters on the scan in its sensor frame (crop box about the sensor, DROR).
-  add_steps(state.stats.scan_stage,
-            apply_filter_chain(state.options.scan_filters, scan, options_.threads));
+  out.scan_steps = apply_filter_chain(state.options.scan_filters, scan, filter_threads);
   // Eq. (20) -> W V_{WS_i,K_j}.
   transform_points(scan, T_world_sensor);
   scan.frame = "world";
-  append_points(state.batch, scan);
+  out.points = std::move(scan);
+  return out;
+}
+
+void MapBuilder::commit(PreparedScan prepared) {
+  SensorState& state = *prepared.state;
+  ++state.stats.scans;
+  state.stats.points_in += prepared.points_in;
+  state.stats.non_finite_points += prepared.non_finite_points;
+  if (prepared.outside_trajectory) {
+    ++state.stats.scans_outside_trajectory;
+    return;
+  }
+  add_steps(state.stats.scan_stage, prepared.scan_steps);
+  append_points(state.batch, prepared.points);
   if (++state.batch_scans >= options_.scans_per_intermediary) flush_intermediary(state);
+}
+
+void MapBuilder::add_scan(const std::string& sensor, PointCloud scan) {
+  if (finished_) throw std::logic_error("map builder: add_scan after finish()");
+  tree_.T_body_sensor(sensor);  // an unknown sensor is an error, not a skipped scan
+  SensorState& state = state_for(sensor);
+  commit(prepare(sensor, state, std::move(scan), options_.threads));
+}
+
+void MapBuilder::add_scans(const ScanFeed& next) {
+  if (finished_) throw std::logic_error("map builder: add_scans after finish()");
+  const int workers = std::max(1, options_.threads);
+  std::mutex feed_mutex;         // serializes `next` (and state_for)
+  std::mutex commit_mutex;       // guards next_commit and error
+  std::condition_variable turn;  // signalled when next_commit advances or on error
+  uint64_t fed = 0, next_commit = 0;
+  bool feed_done = false;
+  std::exception_ptr error;
+  std::atomic<bool> stop{false};  // set with `error`, read without the lock
+
+  auto fail = [&](std::exception_ptr e) {
+    std::lock_guard<std::mutex> lock(commit_mutex);
+    if (!error) error = e;
+    stop = true;
+    turn.notify_all();
+  };
+  auto worker = [&] {
+    std::string sensor;
+    PointCloud scan;
+    while (true) {
+      uint64_t sequence = 0;
+      SensorState* state = nullptr;
+      try {
+        std::lock_guard<std::mutex> lock(feed_mutex);
+        if (feed_done || stop) return;
+        scan = PointCloud{};
+        if (!next(sensor, scan)) {
+          feed_done = true;
+          return;
+        }
+        tree_.T_body_sensor(sensor);  // an unknown sensor is an error
+        state = &state_for(sensor);
+        sequence = fed++;
+      } catch (...) {
+        fail(std::current_exception());
+        return;
+      }
+      // Scan-level parallelism: each scan's filters run on one thread.
+      std::optional<PreparedScan> prepared;
+      try {
+        prepared.emplace(
+            prepare(sensor, *state, std::move(scan), workers > 1 ? 1 : options_.threads));
+      } catch (...) {
+        fail(std::current_exception());
+      }
+      std::unique_lock<std::mutex> lock(commit_mutex);
+      turn.wait(lock, [&] { return next_commit == sequence || error != nullptr; });
+      if (error) return;
+      try {
+        commit(std::move(*prepared));  // in feed order; the other thread waits or prepares
+      } catch (...) {
+        if (!error) error = std::current_exception();
+        stop = true;
+        turn.notify_all();
+        return;
+      }
+      ++next_commit;
+      turn.notify_all();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
+  worker();
+  for (std::thread& thread : threads) thread.join();
+  if (error) std::rethrow_exception(error);
 }
 
 void MapBuilder::flush_intermediary(SensorState& state) {
@@ -198,6 +300,7 @@ std::vector<std::string> MapBuilder::sensors() const {
 
 const PointCloud& MapBuilder::sensor_map(const std::string& sensor) const {
   if (!finished_) throw std::logic_error("map builder: sensor_map before finish()");
+  if (maps_taken_) throw std::logic_error("map builder: sensor_map after take_combined_map()");
   return existing_state(sensor).map;
 }
 
@@ -205,8 +308,31 @@ const SensorMapStats& MapBuilder::stats(const std::string& sensor) const {
   return existing_state(sensor).stats;
 }
 
+PointCloud MapBuilder::take_combined_map() {
+  if (!finished_) throw std::logic_error("map builder: take_combined_map before finish()");
+  if (maps_taken_) throw std::logic_error("map builder: take_combined_map called twice");
+  PointCloud combined;
+  combined.frame = "world";
+  size_t total = 0;
+  for (const auto& [sensor, state] : states_) total += state->map.size();
+  // Reserved pages are only resident once written, so freeing each sensor's map right after
+  // copying it keeps the resident peak near one copy of the union.
+  combined.xyz.reserve(total);
+  bool all_intensity = true;
+  for (const auto& [sensor, state] : states_)
+    all_intensity = all_intensity && (state->map.empty() || state->map.has_intensity());
+  if (all_intensity) combined.intensity.reserve(total);
+  for (auto& [sensor, state] : states_) {
+    append_points(combined, state->map);
+    state->map = PointCloud{};
+  }
+  maps_taken_ = true;
+  return combined;
+}
+
 PointCloud MapBuilder::combined_map() const {
   if (!finished_) throw std::logic_error("map builder: combined_map before finish()");
+  if (maps_taken_) throw std::logic_error("map builder: combined_map after take_combined_map()");
   PointCloud combined;
   combined.frame = "world";
   size_t total = 0;

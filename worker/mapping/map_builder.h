@@ -12,6 +12,7 @@
 // the output map, not with mission length.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -78,6 +79,14 @@ class MapBuilder {
 
   // `scan` in the sensor frame, t_ns its stamp, time_s (optional) per-point offsets in s.
   void add_scan(const std::string& sensor, PointCloud scan);
+  // Fills `sensor` and `scan` with the next scan, or returns false after the last one.
+  using ScanFeed = std::function<bool(std::string& sensor, PointCloud& scan)>;
+  // add_scan for every scan `next` yields, on options.threads threads: each thread takes the
+  // next scan from the feed (calls to `next` never overlap and follow feed order), deskews,
+  // filters and transforms it on its own, and then commits it to its sensor's map in feed
+  // order, so the result equals add_scan called scan by scan. An exception from `next` or
+  // from any scan stops every thread and is rethrown here.
+  void add_scans(const ScanFeed& next);
   // Flushes partial intermediary maps and applies the final filters; add_scan after it throws.
   void finish();
 
@@ -87,17 +96,27 @@ class MapBuilder {
   const SensorMapStats& stats(const std::string& sensor) const;
   // Eq. (21): the union of every sensor's map (intensity kept when all carry it).
   PointCloud combined_map() const;
+  // The same union, releasing each sensor's map as it is copied (the peak holds the union
+  // once, not twice); sensor_map() throws afterwards.
+  PointCloud take_combined_map();
 
  private:
   struct SensorState;
+  struct PreparedScan;
   SensorState& state_for(const std::string& sensor);
   const SensorState& existing_state(const std::string& sensor) const;
+  // add_scan in two halves: per-scan work that touches no shared state (any thread) ...
+  PreparedScan prepare(const std::string& sensor, SensorState& state, PointCloud scan,
+                       int filter_threads) const;
+  // ... and the part that extends the sensor's map (in scan order).
+  void commit(PreparedScan prepared);
   void flush_intermediary(SensorState& state);
 
   const TransformTree& tree_;
   MapBuilderOptions options_;
   std::map<std::string, std::unique_ptr<SensorState>> states_;
   bool finished_ = false;
+  bool maps_taken_ = false;
 };
 
 }  // namespace keel::mapping

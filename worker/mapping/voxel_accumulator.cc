@@ -1,6 +1,7 @@
 #include "worker/mapping/voxel_accumulator.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,16 @@ int64_t axis_index(double coordinate, double inverse_leaf) {
                                 " / leaf does not fit a 62-bit voxel index");
   }
   return static_cast<int64_t>(scaled);
+}
+
+// The accumulator stores 32-bit indices per axis.
+int32_t axis_index_32(int64_t index, float coordinate) {
+  if (index < INT32_MIN || index > INT32_MAX) {
+    throw std::invalid_argument("voxel grid: coordinate " + std::to_string(coordinate) +
+                                " / leaf does not fit a 32-bit voxel index (leaf too small "
+                                "for the extent)");
+  }
+  return static_cast<int32_t>(index);
 }
 
 }  // namespace
@@ -40,76 +51,120 @@ VoxelAccumulator& VoxelAccumulator::operator=(VoxelAccumulator&&) noexcept = def
 
 void VoxelAccumulator::grow() {
   const size_t capacity = std::max<size_t>(1024, slots_.size() * 2);
-  std::vector<Slot> slots(capacity);
+  slots_ = std::vector<uint32_t>();  // released first: the entries hold everything to rebuild
+  slots_.assign(capacity, kEmpty);
   const size_t mask = capacity - 1;
   for (size_t index = 0; index < size_; ++index) {
-    size_t s = voxel_hash(entry(index).key) & mask;
-    while (slots[s].entry != kEmpty) s = (s + 1) & mask;
-    slots[s] = Slot{static_cast<uint32_t>(index),
-                    static_cast<uint32_t>(voxel_hash(entry(index).key) >> 32)};
+    const Entry& e = entry(index);
+    size_t s = voxel_hash(VoxelKey{e.i, e.j, e.k}) & mask;
+    while (slots_[s] != kEmpty) s = (s + 1) & mask;
+    slots_[s] = static_cast<uint32_t>(index);
   }
-  slots_ = std::move(slots);
 }
 
-VoxelAccumulator::Entry& VoxelAccumulator::find_or_insert(const VoxelKey& key) {
-  if (2 * (size_ + 1) > slots_.size()) grow();
-  const uint64_t hash = voxel_hash(key);
-  const uint32_t fingerprint = static_cast<uint32_t>(hash >> 32);
-  const size_t mask = slots_.size() - 1;
+VoxelAccumulator::Entry& VoxelAccumulator::find_or_insert(int32_t i, int32_t j, int32_t k,
+                                                          uint64_t hash) {
+  const size_t mask = slots_.size() - 1;  // the caller made room (reserve_for)
   for (size_t s = hash & mask;; s = (s + 1) & mask) {
-    Slot& slot = slots_[s];
-    if (slot.entry == kEmpty) {
+    uint32_t& slot = slots_[s];
+    if (slot == kEmpty) {
       if (size_ >= kEmpty) throw std::length_error("voxel grid: more than 2^32 - 1 voxels");
       if ((size_ >> kChunkBits) == chunks_.size()) {
         chunks_.push_back(std::make_unique<Entry[]>(size_t{1} << kChunkBits));
       }
-      slot = Slot{static_cast<uint32_t>(size_), fingerprint};
+      slot = static_cast<uint32_t>(size_);
       Entry& created = entry(size_++);
-      created.key = key;
+      created.i = i;
+      created.j = j;
+      created.k = k;
       return created;
     }
-    if (slot.fingerprint == fingerprint && entry(slot.entry).key == key) return entry(slot.entry);
+    Entry& e = entry(slot);
+    if (e.i == i && e.j == j && e.k == k) return e;
   }
+}
+
+void VoxelAccumulator::reserve_for(size_t more_voxels) {
+  while (2 * (size_ + more_voxels) > slots_.size()) grow();
 }
 
 void VoxelAccumulator::add(const PointCloud& cloud) {
   if (cloud.empty()) return;
-  const bool with_intensity = cloud.intensity.size() == cloud.xyz.size();
-  intensity_everywhere_ = intensity_everywhere_ && with_intensity;
   for (size_t n = 0; n < cloud.xyz.size(); ++n) {
-    const Eigen::Vector3f& p = cloud.xyz[n];
-    if (!p.allFinite()) {
+    if (!cloud.xyz[n].allFinite()) {
       throw std::invalid_argument("voxel grid: point " + std::to_string(n) + " is not finite");
     }
-    Entry& sum = find_or_insert(voxel_of(p, inverse_leaf_));
-    sum.x += p.x();
-    sum.y += p.y();
-    sum.z += p.z();
-    if (with_intensity) sum.intensity += cloud.intensity[n];
-    ++sum.count;
+  }
+  const bool with_intensity = cloud.intensity.size() == cloud.xyz.size();
+  intensity_everywhere_ = intensity_everywhere_ && with_intensity;
+  // The table is far larger than the caches on a real map, so each lookup is two cache misses
+  // (slot, entry). Points go in blocks: hash the block and prefetch its slots, then prefetch
+  // the entries those slots name, then accumulate, so the misses of a block overlap.
+  constexpr size_t kBlock = 32;
+  VoxelKey keys[kBlock];
+  uint64_t hashes[kBlock];
+  for (size_t begin = 0; begin < cloud.xyz.size(); begin += kBlock) {
+    const size_t count = std::min(kBlock, cloud.xyz.size() - begin);
+    reserve_for(count);
+    const size_t mask = slots_.size() - 1;
+    for (size_t b = 0; b < count; ++b) {
+      keys[b] = voxel_of(cloud.xyz[begin + b], inverse_leaf_);
+      hashes[b] = voxel_hash(keys[b]);
+      __builtin_prefetch(&slots_[hashes[b] & mask]);
+    }
+    for (size_t b = 0; b < count; ++b) {
+      const uint32_t slot = slots_[hashes[b] & mask];
+      if (slot != kEmpty) __builtin_prefetch(&entry(slot));
+    }
+    for (size_t b = 0; b < count; ++b) {
+      const Eigen::Vector3f& p = cloud.xyz[begin + b];
+      const VoxelKey& key = keys[b];
+      Entry& sum = find_or_insert(axis_index_32(key.i, p.x()), axis_index_32(key.j, p.y()),
+                                  axis_index_32(key.k, p.z()), hashes[b]);
+      sum.dx += static_cast<float>(p.x() - key.i * leaf_m_);
+      sum.dy += static_cast<float>(p.y() - key.j * leaf_m_);
+      sum.dz += static_cast<float>(p.z() - key.k * leaf_m_);
+      if (with_intensity) sum.intensity += cloud.intensity[begin + b];
+      ++sum.count;
+    }
   }
   points_added_ += cloud.size();
 }
 
-PointCloud VoxelAccumulator::centroids() const {
+PointCloud VoxelAccumulator::centroids(uint32_t min_hits) const {
   PointCloud out;
-  out.xyz.reserve(size_);
+  const size_t kept = voxel_count(min_hits);
+  out.xyz.reserve(kept);
   const bool with_intensity = intensity_everywhere_ && points_added_ > 0;
-  if (with_intensity) out.intensity.reserve(size_);
+  if (with_intensity) out.intensity.reserve(kept);
   for (size_t index = 0; index < size_; ++index) {
     const Entry& sum = entry(index);
+    if (sum.count < min_hits) continue;
     const double inverse_count = 1.0 / static_cast<double>(sum.count);
-    out.xyz.emplace_back(static_cast<float>(sum.x * inverse_count),
-                         static_cast<float>(sum.y * inverse_count),
-                         static_cast<float>(sum.z * inverse_count));
+    out.xyz.emplace_back(static_cast<float>(sum.i * leaf_m_ + sum.dx * inverse_count),
+                         static_cast<float>(sum.j * leaf_m_ + sum.dy * inverse_count),
+                         static_cast<float>(sum.k * leaf_m_ + sum.dz * inverse_count));
     if (with_intensity) out.intensity.push_back(static_cast<float>(sum.intensity * inverse_count));
   }
   return out;
 }
 
+size_t VoxelAccumulator::voxel_count(uint32_t min_hits) const {
+  if (min_hits <= 1) return size_;
+  size_t kept = 0;
+  for (size_t index = 0; index < size_; ++index) kept += entry(index).count >= min_hits;
+  return kept;
+}
+
+size_t VoxelAccumulator::memory_bytes() const {
+  return slots_.capacity() * sizeof(uint32_t) +
+         chunks_.size() * (size_t{1} << kChunkBits) * sizeof(Entry);
+}
+
 void VoxelAccumulator::clear() {
-  slots_ = std::vector<Slot>();
+  slots_ = std::vector<uint32_t>();
   chunks_.clear();
+  chunks_.shrink_to_fit();
   size_ = 0;
   intensity_everywhere_ = true;
   points_added_ = 0;

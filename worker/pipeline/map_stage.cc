@@ -6,19 +6,25 @@
 //      the recorded `map` poses, correcting the recorded `odometry` by Algorithm 2 so every
 //      scan between keyframes has a pose; the TF tree W -> B -> S_i with the extrinsics of
 //      MissionReader::extrinsic (mission.yaml, else the bag's /tf_static);
-//   3. every scan of every sensor, one at a time, through MapBuilder (Fig. 5); the SLAM
-//      lidar's scans also through SlamMapBuilder for the SLAM-map baseline;
-//   4. per sensor and combined (Eq. (21)): Draco (.drc) and PLY maps;
-//   5. metrics of the SLAM map and the inspection maps (Eqs. (23)-(26)), side by side as
-//      Table V, with the ratios.
+//   3. every scan of every sensor through MapBuilder (Fig. 5), `threads` scans at a time and
+//      committed in order (MapBuilder::add_scans); the SLAM lidar's scans also through
+//      SlamMapBuilder for the SLAM-map baseline;
+//   4. per sensor: Draco (.drc) and PLY maps, written side by side;
+//   5. metrics of the SLAM map and the SLAM lidar's inspection map (Eqs. (23)-(26)), then the
+//      combined map (Eq. (21)): its Draco file beside its PLY file and metrics; Table V with
+//      the ratios. docs/map-filters.md explains the throughput and memory choices.
 #include "worker/pipeline/map_stage.h"
 #include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include "proto/contract_error.h"
 #include "worker/io/draco_codec.h"
@@ -221,34 +227,79 @@ std::string emptied_by(const mapping::SensorMapStats& s) {
   return "";
 }
 
-// Writes map_<name>.drc (and .ply) and returns their figures.
-json write_map(const PointCloud& map, const std::string& name, const MapStageOptions& options,
-               const fs::path& work_dir, std::vector<std::string>& artifacts) {
+// Runs the tasks on up to `threads` threads, each task once, in order of submission; the first
+// exception is rethrown after every started task has finished (the others are not started).
+void run_tasks(const std::vector<std::function<void()>>& tasks, int threads) {
+  std::atomic<size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    for (size_t i = next++; i < tasks.size() && !failed; i = next++) {
+      try {
+        tasks[i]();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> workers;
+  const size_t count = std::min<size_t>(std::max(threads, 1), tasks.size());
+  for (size_t w = 1; w < count; ++w) workers.emplace_back(work);
+  work();
+  for (auto& worker : workers) worker.join();
+  if (error) std::rethrow_exception(error);
+}
+
+// One map's artifacts and their figures for the report.
+struct MapOutput {
+  json report = json::object();
+  std::vector<std::string> artifacts;
+};
+
+// Writes map_<name>.drc; report {"points", "draco": {...}}.
+MapOutput write_map_draco(const PointCloud& map, const std::string& name,
+                          const MapStageOptions& options, const fs::path& work_dir) {
   io::DracoOptions draco;
   draco.position_bits = options.draco_position_bits;
   draco.compression_level = options.draco_compression_level;
   const auto start = std::chrono::steady_clock::now();
-  const io::DracoEncoded encoded = io::encode_draco_point_cloud(map, {}, draco);
+  io::DracoEncoded encoded = io::encode_draco_point_cloud(map, {}, draco);
   io::write_draco_file(work_dir / map_draco_file(name), encoded.bytes);
-  artifacts.push_back(map_draco_file(name));
-  json out = {{"points", map.size()},
-              {"draco",
-               {{"file", map_draco_file(name)},
-                {"bytes", encoded.bytes.size()},
-                {"bytes_per_point", static_cast<double>(encoded.bytes.size()) / map.size()},
-                {"position_bits", draco.position_bits},
-                {"compression_level", draco.compression_level},
-                {"position_range_m", encoded.position_range_m},
-                {"max_position_error_m", encoded.max_position_error_m},
-                {"position_error_bound_m", encoded.position_error_bound_m},
-                {"encode_seconds", seconds_since(start)}}}};
-  if (options.write_ply) {
-    io::write_ply_cloud(work_dir / map_ply_file(name), map);
-    artifacts.push_back(map_ply_file(name));
-    out["ply"] = {{"file", map_ply_file(name)},
-                  {"bytes", fs::file_size(work_dir / map_ply_file(name))}};
-  }
+  MapOutput out;
+  out.artifacts.push_back(map_draco_file(name));
+  out.report = {{"points", map.size()},
+                {"draco",
+                 {{"file", map_draco_file(name)},
+                  {"bytes", encoded.bytes.size()},
+                  {"bytes_per_point", static_cast<double>(encoded.bytes.size()) / map.size()},
+                  {"position_bits", draco.position_bits},
+                  {"compression_level", draco.compression_level},
+                  {"position_range_m", encoded.position_range_m},
+                  {"max_position_error_m", encoded.max_position_error_m},
+                  {"position_error_bound_m", encoded.position_error_bound_m},
+                  {"error_method", encoded.error_method},
+                  {"encode_seconds", seconds_since(start)}}}};
   return out;
+}
+
+// Writes map_<name>.ply when options.write_ply; report {"ply": {...}} or nothing.
+MapOutput write_map_ply(const PointCloud& map, const std::string& name,
+                        const MapStageOptions& options, const fs::path& work_dir) {
+  MapOutput out;
+  if (!options.write_ply) return out;
+  io::write_ply_cloud(work_dir / map_ply_file(name), map);
+  out.artifacts.push_back(map_ply_file(name));
+  out.report["ply"] = {{"file", map_ply_file(name)},
+                       {"bytes", fs::file_size(work_dir / map_ply_file(name))}};
+  return out;
+}
+
+void merge_output(MapOutput& into, const MapOutput& part) {
+  into.report.update(part.report);
+  into.artifacts.insert(into.artifacts.end(), part.artifacts.begin(), part.artifacts.end());
 }
 
 // ---- step 5: metrics ----------------------------------------------------------------------
@@ -323,6 +374,7 @@ class MapStage : public Stage {
   std::string name() const override { return "map"; }
 
   StageResult run(StageContext& context) override {
+    const auto stage_start = std::chrono::steady_clock::now();
     // Step 1: options, mission, sensors.
     const MapStageOptions options = MapStageOptions::from_json(context.options);
     io::MissionReader reader(io::load_mission(context.mission_dir));
@@ -381,23 +433,25 @@ class MapStage : public Stage {
                 std::to_string(selection.mapped.size()) + " sensors, " +
                 std::to_string(poses.T_world_body.size()) + " poses");
     const auto scans_start = std::chrono::steady_clock::now();
-    size_t scans_done = 0;
-    PointCloud scan;
-    for (size_t k = 0; k < selection.mapped.size(); ++k) {
-      const MappedSensor& sensor = selection.mapped[k];
-      const bool feeds_slam = slam && &sensor == slam_sensor;
-      while (true) {
+    size_t scans_done = 0, source = 0;
+    // MapBuilder pulls scans from this feed on options.threads threads (calls never overlap,
+    // so the sources, the SLAM baseline and progress see scans one at a time, in order).
+    builder.add_scans([&](std::string& sensor_name, PointCloud& scan) {
+      while (source < sources.size()) {
         context.check_canceled();
-        if (!sources[k]->next(scan)) break;
-        if (feeds_slam) slam->add_scan(scan);
-        builder.add_scan(sensor.name, std::move(scan));
-        scan = PointCloud{};
-        ++scans_done;
-        if (total_scans > 0)
-          context.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
+        if (sources[source]->next(scan)) {
+          const MappedSensor& sensor = selection.mapped[source];
+          sensor_name = sensor.name;
+          if (slam && &sensor == slam_sensor) slam->add_scan(scan);
+          ++scans_done;
+          if (total_scans > 0)
+            context.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
+          return true;
+        }
+        sources[source++].reset();
       }
-      sources[k].reset();
-    }
+      return false;
+    });
     context.check_canceled();
     builder.finish();
     const double scans_seconds = seconds_since(scans_start);
@@ -415,6 +469,8 @@ class MapStage : public Stage {
     r["skipped_sensors"] = selection.skipped;
     json warnings = json::array();
     json sensors = json::object();
+    const auto outputs_start = std::chrono::steady_clock::now();
+    std::vector<std::string> written;  // sensors with a non-empty map, largest first
     for (const auto& s : selection.mapped) {
       json entry = {{"type", s.type},
                     {"filters", mapping::to_json(builder_options.sensors.at(s.name))}};
@@ -425,12 +481,11 @@ class MapStage : public Stage {
         continue;
       }
       entry["stats"] = stats_json(builder.stats(s.name));
-      const PointCloud& map = builder.sensor_map(s.name);
-      if (map.empty()) {
+      if (builder.sensor_map(s.name).empty()) {
         warnings.push_back("sensor '" + s.name + "': the map is empty (every point filtered, or " +
                            "every scan outside the trajectory); no artifacts written");
       } else {
-        entry["map"] = write_map(map, s.name, options, context.work_dir, out.artifacts);
+        written.push_back(s.name);
       }
       if (builder.stats(s.name).scans_outside_trajectory > 0)
         warnings.push_back("sensor '" + s.name +
@@ -439,16 +494,37 @@ class MapStage : public Stage {
       if (const std::string w = emptied_by(builder.stats(s.name)); !w.empty())
         warnings.push_back("sensor '" + s.name + "': " + w);
       sensors[s.name] = entry;
-      context.check_canceled();
+    }
+    // Draco encoding is single-threaded: the maps are written side by side, largest first.
+    std::sort(written.begin(), written.end(), [&](const std::string& a, const std::string& b) {
+      return builder.sensor_map(a).size() > builder.sensor_map(b).size();
+    });
+    std::vector<MapOutput> drc(written.size()), ply(written.size());
+    std::vector<std::function<void()>> write_tasks;
+    for (size_t i = 0; i < written.size(); ++i)
+      write_tasks.push_back([&, i] {
+        context.check_canceled();
+        drc[i] =
+            write_map_draco(builder.sensor_map(written[i]), written[i], options, context.work_dir);
+      });
+    for (size_t i = 0; i < written.size(); ++i)
+      write_tasks.push_back([&, i] {
+        ply[i] =
+            write_map_ply(builder.sensor_map(written[i]), written[i], options, context.work_dir);
+      });
+    run_tasks(write_tasks, options.threads);
+    for (size_t i = 0; i < written.size(); ++i) {
+      merge_output(drc[i], ply[i]);
+      sensors[written[i]]["map"] = drc[i].report;
+      out.artifacts.insert(out.artifacts.end(), drc[i].artifacts.begin(), drc[i].artifacts.end());
     }
     r["sensors"] = sensors;
-    const PointCloud combined = builder.combined_map();
-    if (combined.empty()) throw std::runtime_error("map: every map is empty; nothing to write");
-    r["combined"] = write_map(combined, kCombinedMapName, options, context.work_dir, out.artifacts);
     context.progress(kOutputsDone);
     context.check_canceled();
 
-    // Step 5: Table V.
+    // Step 5: Table V (the SLAM map and the SLAM lidar's inspection map), then the combined
+    // map (Eq. (21)): built once the sensor maps are written, which it replaces in memory,
+    // written (Draco and PLY side by side) and measured.
     std::vector<MetricsColumn> columns;
     std::string primary = "inspection_combined";
     if (slam) {
@@ -460,13 +536,11 @@ class MapStage : public Stage {
                        {"points", slam_map.size()}};
       if (!slam_map.empty()) {
         columns.push_back(measure("slam_map", slam_map, options));
-        context.progress(kOutputsDone + 0.05);
       } else {
         warnings.push_back("SLAM map: no scan of '" + slam_sensor->name +
                            "' matches a keyframe; no baseline");
       }
-      if (std::find(built.begin(), built.end(), slam_sensor->name) != built.end() &&
-          !builder.sensor_map(slam_sensor->name).empty()) {
+      if (std::find(written.begin(), written.end(), slam_sensor->name) != written.end()) {
         primary = "inspection_" + slam_sensor->name;
         columns.push_back(measure(primary, builder.sensor_map(slam_sensor->name), options));
       }
@@ -475,7 +549,26 @@ class MapStage : public Stage {
       r["slam_map"] = nullptr;
       warnings.push_back("no lidar mapped: no SLAM-map baseline");
     }
-    columns.push_back(measure("inspection_combined", combined, options));
+    context.progress(kOutputsDone + 0.05);
+
+    const PointCloud combined = builder.take_combined_map();
+    if (combined.empty()) throw std::runtime_error("map: every map is empty; nothing to write");
+    MapOutput combined_output, combined_ply;
+    MetricsColumn combined_metrics;
+    run_tasks(
+        {[&] {
+           combined_output = write_map_draco(combined, kCombinedMapName, options, context.work_dir);
+         },
+         [&] {
+           combined_ply = write_map_ply(combined, kCombinedMapName, options, context.work_dir);
+           combined_metrics = measure("inspection_combined", combined, options);
+         }},
+        options.threads);
+    merge_output(combined_output, combined_ply);
+    r["combined"] = combined_output.report;
+    out.artifacts.insert(out.artifacts.end(), combined_output.artifacts.begin(),
+                         combined_output.artifacts.end());
+    columns.push_back(std::move(combined_metrics));
     json metrics = {{"radius_m", options.metrics_radius_m},
                     {"max_query_points", options.metrics_max_points},
                     {"maps", json::object()}};
@@ -489,12 +582,18 @@ class MapStage : public Stage {
     }
     metrics["table_v"] = table_v(columns, primary);
     r["metrics"] = metrics;
-    r["timing"] = {{"scans_seconds", scans_seconds},
-                   {"input_points", points_in},
-                   {"input_points_per_second", scans_seconds > 0 ? points_in / scans_seconds : 0.0},
-                   {"metrics_seconds", metrics_seconds},
-                   {"metrics_query_points_per_second",
-                    metrics_seconds > 0 ? metrics_queries / metrics_seconds : 0.0}};
+    const double stage_seconds = seconds_since(stage_start);
+    r["timing"] = {
+        {"stage_seconds", stage_seconds},
+        {"stage_input_points_per_second", stage_seconds > 0 ? points_in / stage_seconds : 0.0},
+        {"outputs_and_metrics_seconds", seconds_since(outputs_start)},
+        {"threads", options.threads},
+        {"scans_seconds", scans_seconds},
+        {"input_points", points_in},
+        {"input_points_per_second", scans_seconds > 0 ? points_in / scans_seconds : 0.0},
+        {"metrics_seconds", metrics_seconds},
+        {"metrics_query_points_per_second",
+         metrics_seconds > 0 ? metrics_queries / metrics_seconds : 0.0}};
     r["warnings"] = warnings;
     context.progress(1.0);
     return out;

@@ -50,14 +50,19 @@ struct MapStageOptions {
   // Draco: 18 bits keep the quantization error <= sqrt(3)/2 * 200 m / (2^18 - 1) = 0.66 mm
   // on a 200 m map (<= 1 mm up to a 302 m extent).
   int draco_position_bits = 18;
-  int draco_compression_level = 7;
+  // 5 rather than 7: on the keel-sim bridge map (8.4 M points) encoding takes 25 % less CPU
+  // (1.45 s vs 1.93 s) for files 1 % larger (2.37 vs 2.35 bytes per point).
+  int draco_compression_level = 5;
   bool write_ply = true;
 
   // Table V metrics (Eqs. (23)-(26)).
   double metrics_radius_m = 0.25;
   // Query points per map, strided evenly over it (neighbours always come from the whole map);
-  // 0 = every point. Bounds report time on maps of tens of millions of points.
-  size_t metrics_max_points = 200000;
+  // 0 = every point. The report gives distributions (mean, percentiles, histogram), which a
+  // sample of 20000 points estimates to within ~0.7 % of a standard deviation (standard error
+  // std / sqrt(20000)), at a small fraction of the cost of every point of a 2 cm map
+  // (~1600 neighbours each within 0.25 m).
+  size_t metrics_max_points = 20000;
   // SLAM-map baseline: the keyframe scans of `slam_sensor` (empty = the first lidar mapped).
   std::string slam_sensor;
   double slam_keyframe_leaf_m = 0.2;

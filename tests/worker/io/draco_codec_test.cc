@@ -72,7 +72,32 @@ TEST(DracoCodec, PointCloudErrorWithinQuantizationBoundAndEqualToReported) {
     EXPECT_LE(max_error, encoded.position_error_bound_m * (1 + 1e-6));
     EXPECT_NEAR(encoded.max_position_error_m, max_error, 1e-6);
     EXPECT_GT(max_error, 0.2 * encoded.position_error_bound_m);  // quantization did happen
+    EXPECT_EQ(encoded.error_method, "replica");  // the O(n) check, not the spatial search
   }
+}
+
+TEST(DracoCodec, ReplicaErrorMatchesPerPointErrorsOnALargeOffsetCloudWithDuplicates) {
+  // Coordinates far from the origin (float rounding at the half-step boundaries) and repeated
+  // points: the replica must still reproduce Draco's decoded multiset exactly.
+  std::vector<Eigen::Vector3f> points = random_points(4000, 23);
+  for (auto& p : points) p += Eigen::Vector3f(4.0e5f, -3.1e4f, 12.0f);
+  for (size_t i = 0; i < 500; ++i) points.push_back(points[i]);
+  DracoOptions options;
+  options.position_bits = 18;
+  options.field_bits = 0;
+  const DracoEncoded encoded = encode_draco_point_cloud(points, {id_field(points.size())}, options);
+  EXPECT_EQ(encoded.error_method, "replica");
+  const DracoPointCloud decoded = decode_draco_point_cloud(encoded.bytes);
+  const ScalarField* ids = find_field(decoded.fields, "id");
+  ASSERT_NE(ids, nullptr);
+  double max_error = 0;
+  for (size_t k = 0; k < decoded.positions.size(); ++k) {
+    const auto i = static_cast<size_t>(ids->values[k]);
+    ASSERT_LT(i, points.size());
+    max_error =
+        std::max<double>(max_error, (decoded.positions[k] - points[i]).cast<double>().norm());
+  }
+  EXPECT_NEAR(encoded.max_position_error_m, max_error, 1e-9);
 }
 
 TEST(DracoCodec, QuantizedFieldsStayWithinTheirStep) {

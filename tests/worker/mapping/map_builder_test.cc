@@ -105,6 +105,86 @@ TEST(MapBuilder, StreamingFinalVoxelGridEqualsOneVoxelGridOverTheWholeMap) {
   EXPECT_EQ(stats.final_stage.steps[1].points_out, map.size());
 }
 
+// add_scans on two threads against add_scan scan by scan: two sensors interleaved, a DROR
+// scan filter, a ROR intermediary filter, a streaming final voxel grid and scans outside the
+// trajectory; the maps must be identical point for point (commits follow feed order).
+TEST(MapBuilder, ParallelFeedEqualsScanByScan) {
+  const TransformTree tree = make_tree();
+  MapBuilderOptions options = no_filters(3);
+  options.default_sensor.scan_filters.filters.push_back(DrorFilter{3.0, 2.0, 3, 0.3});
+  options.default_sensor.intermediary_filters.filters.push_back(RadiusOutlierFilter{1.0, 2});
+  options.default_sensor.final_filters.filters.push_back(VoxelGridFilter{0.4});
+  std::vector<std::pair<std::string, PointCloud>> scans;
+  for (int s = 0; s < 40; ++s) {
+    PointCloud scan = random_cloud(300, -4.0f, 4.0f, 700 + s);
+    scan.t_ns = seconds_to_ns(s == 17 ? 99.0 : 3.0 + 0.1 * s);  // 99 s: outside the poses
+    scans.emplace_back(s % 3 == 0 ? "sonar" : "lidar", scan);
+  }
+  options.threads = 1;
+  MapBuilder serial(tree, options);
+  for (const auto& [sensor, scan] : scans) serial.add_scan(sensor, scan);
+  serial.finish();
+  options.threads = 2;
+  MapBuilder parallel(tree, options);
+  size_t next = 0;
+  parallel.add_scans([&](std::string& sensor, PointCloud& scan) {
+    if (next == scans.size()) return false;
+    sensor = scans[next].first;
+    scan = scans[next].second;
+    ++next;
+    return true;
+  });
+  parallel.finish();
+  for (const std::string sensor : {"lidar", "sonar"}) {
+    SCOPED_TRACE(sensor);
+    const PointCloud& a = serial.sensor_map(sensor);
+    const PointCloud& b = parallel.sensor_map(sensor);
+    ASSERT_GT(a.size(), 0u);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t k = 0; k < a.size(); ++k) ASSERT_EQ(a.xyz[k], b.xyz[k]) << k;
+    EXPECT_EQ(serial.stats(sensor).scans, parallel.stats(sensor).scans);
+    EXPECT_EQ(serial.stats(sensor).scans_outside_trajectory,
+              parallel.stats(sensor).scans_outside_trajectory);
+    EXPECT_EQ(serial.stats(sensor).intermediary_maps, parallel.stats(sensor).intermediary_maps);
+  }
+  EXPECT_EQ(serial.stats("lidar").scans_outside_trajectory +
+                serial.stats("sonar").scans_outside_trajectory,
+            1u);
+}
+
+TEST(MapBuilder, ParallelFeedRethrowsTheFirstError) {
+  const TransformTree tree = make_tree();
+  MapBuilderOptions options = no_filters(2);
+  options.threads = 2;
+  {
+    MapBuilder builder(tree, options);
+    int fed = 0;
+    EXPECT_THROW(builder.add_scans([&](std::string& sensor, PointCloud& scan) {
+      if (fed == 5) throw std::runtime_error("feed failed");
+      sensor = "lidar";
+      scan = random_cloud(50, -2.0f, 2.0f, fed);
+      scan.t_ns = seconds_to_ns(4.0 + 0.1 * fed++);
+      return true;
+    }),
+                 std::runtime_error);
+  }
+  {
+    // A scan-level error (point times that do not match the points) stops the feed too.
+    MapBuilder builder(tree, options);
+    int fed = 0;
+    EXPECT_THROW(builder.add_scans([&](std::string& sensor, PointCloud& scan) {
+      if (fed == 1000) return false;
+      sensor = "lidar";
+      scan = random_cloud(50, -2.0f, 2.0f, fed);
+      scan.t_ns = seconds_to_ns(4.0 + 0.001 * fed);
+      if (fed++ == 3) scan.time_s.assign(7, 0.0f);
+      return true;
+    }),
+                 std::invalid_argument);
+    EXPECT_LT(fed, 1000);
+  }
+}
+
 TEST(MapBuilder, ScanFiltersRunInTheSensorFrame) {
   const TransformTree tree = make_tree();
   MapBuilderOptions options = no_filters(5);
