@@ -79,6 +79,8 @@ struct BaResult {
   BaInitialisation initialisation;  // BaOptions::slam_initialisation
   int tracks_in = 0;                // tracks handed to triangulation
   int landmarks_triangulated = 0;   // tracks kept as landmarks
+  // Dropped after the SLAM initialisation: out of the triangulation's depth or reprojection gate.
+  int landmarks_dropped_after_initialisation = 0;
   int dvl_ranges_in = 0;
   int dvl_ranges_used = 0;  // after the gate of BaOptions::dvl_gate_m
   bool gicp_ran = false;

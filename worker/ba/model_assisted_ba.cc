@@ -39,6 +39,36 @@ void triangulate(const std::vector<FeatureTrack>& tracks, const BaProblem& probl
   }
 }
 
+// Step 4, after the model-free solve: the triangulation gates again, on the refined state. A
+// wrong match (SIFT on repetitive hull texture) can drift out of the depth range there: one
+// left 1e8 m away made the surface factors' cost 1e19 and `geva` run 1,400 s on keel-sim
+// hauv-hull with frontend tracks.
+int drop_inconsistent_landmarks(const BaProblem& problem, const BaOptions& options,
+                                BaInitialState& state) {
+  const ServoMount mount = servo_mount(problem.rig);
+  std::vector<Pose3> T_world_camera;
+  for (size_t i = 0; i < state.T_world_vehicle.size(); ++i) {
+    T_world_camera.push_back(world_camera_pose(state.T_world_vehicle[i], state.servo_angle_rad[i],
+                                               mount, state.T_servo_camera));
+  }
+  size_t kept = 0;
+  for (size_t k = 0; k < state.tracks.size(); ++k) {
+    if (!landmark_within_gates(state.landmarks_world[k], state.tracks[k], T_world_camera,
+                               problem.rig, options.triangulation.max_reprojection_px,
+                               options.triangulation))
+      continue;
+    if (kept != k) {  // a self-move would empty the track's observations
+      state.tracks[kept] = std::move(state.tracks[k]);
+      state.landmarks_world[kept] = state.landmarks_world[k];
+    }
+    ++kept;
+  }
+  const int dropped = static_cast<int>(state.tracks.size() - kept);
+  state.tracks.resize(kept);
+  state.landmarks_world.resize(kept);
+  return dropped;
+}
+
 // Step 5: DVL returns in the world frame from the SLAM-corrected poses.
 std::vector<Eigen::Vector3d> dvl_returns_world(const BaProblem& problem,
                                                const BaInitialState& state) {
@@ -95,6 +125,10 @@ BaResult run_model_assisted_ba(const BaProblem& problem, const BaOptions& option
 
   if (options.slam_initialisation) {  // step 4
     result.initialisation = refine_initial_state(problem, mesh, state, options);
+    result.landmarks_dropped_after_initialisation =
+        drop_inconsistent_landmarks(problem, options, state);
+    if (state.tracks.empty())
+      throw std::invalid_argument("ba: no landmark survived the SLAM initialisation");
   }
 
   const GicpAlignment gicp = align_dvl_returns_to_model(  // step 5

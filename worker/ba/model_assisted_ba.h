@@ -6,6 +6,8 @@
 //      calibrated extrinsic (triangulation.h);
 //   4. SLAM initialisation (BaOptions::slam_initialisation): the model-free graph, as the
 //      vehicle's online SLAM would solve it, so the modes start from a SLAM-quality state;
+//      then landmarks that no longer pass the triangulation gates (depth range, reprojection;
+//      wrong matches) are dropped;
 //   5. x_gM: GICP of the DVL returns (world, from the SLAM-corrected poses) onto the CAD
 //      vertices (Sec. 2.5); it is the start and the Eq. (8) prior of x_gM;
 //   6. DVL beams whose predicted range misses the mesh or is off by more than

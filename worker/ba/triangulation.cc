@@ -61,7 +61,26 @@ double max_parallax_rad(const std::vector<View>& views, const Eigen::Vector3d& p
   return best;
 }
 
+bool within_gates(const std::vector<View>& views, const Eigen::Vector3d& point,
+                  double max_reprojection_px, const TriangulationOptions& options) {
+  if (!point.allFinite()) return false;
+  for (const View& v : views) {
+    const Eigen::Vector3d p_c = v.T_camera_world * point;
+    if (p_c.z() < options.min_depth_m || p_c.norm() > options.max_depth_m) return false;
+    const Eigen::Vector2d uv(v.camera->fx * p_c.x() / p_c.z() + v.camera->cx,
+                             v.camera->fy * p_c.y() / p_c.z() + v.camera->cy);
+    if ((uv - v.pixel).norm() > max_reprojection_px) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+bool landmark_within_gates(const Eigen::Vector3d& point, const FeatureTrack& track,
+                           const std::vector<Pose3>& T_world_camera, const BaRig& rig,
+                           double max_reprojection_px, const TriangulationOptions& options) {
+  return within_gates(views_of(track, T_world_camera, rig), point, max_reprojection_px, options);
+}
 
 std::optional<Eigen::Vector3d> triangulate_track(const FeatureTrack& track,
                                                  const std::vector<Pose3>& T_world_camera,
@@ -70,14 +89,8 @@ std::optional<Eigen::Vector3d> triangulate_track(const FeatureTrack& track,
   const std::vector<View> views = views_of(track, T_world_camera, rig);
   if (views.size() < 2) return std::nullopt;
   const std::optional<Eigen::Vector3d> point = linear_triangulation(views);
-  if (!point || !point->allFinite()) return std::nullopt;
-  for (const View& v : views) {
-    const Eigen::Vector3d p_c = v.T_camera_world * *point;
-    if (p_c.z() < options.min_depth_m || p_c.norm() > options.max_depth_m) return std::nullopt;
-    const Eigen::Vector2d uv(v.camera->fx * p_c.x() / p_c.z() + v.camera->cx,
-                             v.camera->fy * p_c.y() / p_c.z() + v.camera->cy);
-    if ((uv - v.pixel).norm() > options.max_reprojection_px) return std::nullopt;
-  }
+  if (!point || !within_gates(views, *point, options.max_reprojection_px, options))
+    return std::nullopt;
   const bool has_stereo = std::any_of(track.observations.begin(), track.observations.end(),
                                       [](const FeatureObservation& o) { return o.pixel_bottom; });
   if (!has_stereo && max_parallax_rad(views, *point) < options.min_parallax_deg * kDegToRad) {

@@ -22,4 +22,11 @@ std::optional<Eigen::Vector3d> triangulate_track(const FeatureTrack& track,
                                                  const BaRig& rig,
                                                  const TriangulationOptions& options);
 
+// The depth and reprojection gates of triangulate_track() for a landmark already placed (e.g.
+// after the SLAM initialisation): in front of every observing camera within
+// [min_depth_m, max_depth_m] and reprojecting within max_reprojection_px.
+bool landmark_within_gates(const Eigen::Vector3d& point, const FeatureTrack& track,
+                           const std::vector<Pose3>& T_world_camera, const BaRig& rig,
+                           double max_reprojection_px, const TriangulationOptions& options);
+
 }  // namespace keel::ba

@@ -37,6 +37,8 @@ std::vector<std::vector<int>> visible_per_view(const InspectInput& input) {
 
 void validate(const InspectOptions& o) {
   require(std::isfinite(o.tau_m) && o.tau_m >= 0.0, "tau_m", o.tau_m, "a finite value >= 0 m");
+  require(std::isfinite(o.tau_noise_sigmas) && o.tau_noise_sigmas >= 0.0, "tau_noise_sigmas",
+          o.tau_noise_sigmas, "a finite value >= 0");
   require(std::isfinite(o.dbscan_eps_m) && o.dbscan_eps_m > 0.0, "dbscan_eps_m", o.dbscan_eps_m,
           "a finite radius > 0 m");
   require(o.dbscan_min_pts >= 1, "dbscan_min_pts", o.dbscan_min_pts, "an integer >= 1");
@@ -55,13 +57,16 @@ InspectResult run_inspect(const InspectInput& input, const InspectOptions& optio
   InspectStats& stats = result.stats;
   stats.num_views = static_cast<int>(input.T_world_camera.size());
   const std::vector<std::vector<int>> visible = visible_per_view(input);
+  result.threshold = deviation_threshold(input.landmarks, options);
+  InspectOptions detection = options;  // line 6 of Algorithm 1 with the tau in force
+  detection.tau_m = result.threshold.tau_m;
 
   MeshFusion fusion(input.cad_in_world, options);       // line 1 of Algorithm 2
   for (int view = 0; view < stats.num_views; ++view) {  // line 2
     const Pose3& T_world_camera = input.T_world_camera[view];
     auto start = Clock::now();
     std::vector<DetectedShape> shapes =  // line 4: Algorithm 1
-        detect_shapes(view, T_world_camera, input.landmarks, visible[view], options);
+        detect_shapes(view, T_world_camera, input.landmarks, visible[view], detection);
     stats.detect_s += seconds_since(start);
     start = Clock::now();
     stats.num_updates += fusion.fuse_view(T_world_camera, shapes);  // lines 5-14

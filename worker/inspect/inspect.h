@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "worker/core/triangle_mesh.h"
+#include "worker/inspect/deviation_threshold.h"
 #include "worker/inspect/inspect_input.h"
 #include "worker/inspect/inspect_options.h"
 #include "worker/inspect/shape_detection.h"
@@ -35,6 +36,7 @@ struct InspectResult {
   std::vector<int> vertex_update_count;   // n of Eq. (15)
   std::vector<DetectedShape> detections;  // every per-view shape of Algorithm 1
   std::vector<ShapeSummary> shapes;       // merged objects, for shapes.json
+  DeviationThreshold threshold;           // the tau line 6 of Algorithm 1 used
   InspectStats stats;
 };
 

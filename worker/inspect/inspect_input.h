@@ -16,6 +16,9 @@ struct Landmark {
   Eigen::Vector3d point_world = Eigen::Vector3d::Zero();  // l_i after BA
   // h(x_gM, l_i) of Eq. (5): signed distance to M_prior, positive outside (towards the water).
   double h_m = 0.0;
+  // lambda of Eq. (7) at the BA's solution: 1 when the max-mixture put the feature on the model.
+  // The noise of h is measured over these (deviation_threshold.h).
+  int lambda = 0;
   // Indices into InspectInput::T_world_camera of the keyframes that observed this feature;
   // distinct. They serve as is_visible() of Algorithm 2 (line 3): a feature matched in an image
   // lies in that camera's frustum and was not occluded.

@@ -4,6 +4,7 @@ namespace keel::inspect {
 
 nlohmann::json InspectOptions::to_json() const {
   return {{"tau_m", tau_m},
+          {"tau_noise_sigmas", tau_noise_sigmas},
           {"dbscan_eps_m", dbscan_eps_m},
           {"dbscan_min_pts", dbscan_min_pts},
           {"alpha_m", alpha_m},

@@ -514,6 +514,7 @@ class BaStage : public Stage {
                            {"final_cost", result.initialisation.final_cost}};
     r["tracks_in"] = result.tracks_in;
     r["landmarks_triangulated"] = result.landmarks_triangulated;
+    r["landmarks_dropped_after_initialisation"] = result.landmarks_dropped_after_initialisation;
     r["dvl_ranges_in"] = result.dvl_ranges_in;
     r["dvl_ranges_used"] = result.dvl_ranges_used;
     r["gicp"] = {{"ran", result.gicp_ran},

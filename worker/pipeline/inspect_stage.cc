@@ -60,7 +60,7 @@ inspect::InspectInput build_input(const BaSolution& solution, TriangleMesh cad_i
   input.cad_in_world = std::move(cad_in_world);
   input.T_world_camera = solution.T_world_camera;
   for (const auto& l : solution.landmarks)
-    input.landmarks.push_back({l.point_world, l.h_m, l.views});
+    input.landmarks.push_back({l.point_world, l.h_m, l.lambda, l.views});
   return input;
 }
 
@@ -121,11 +121,21 @@ json evaluate_objects(const std::vector<TruthObject>& objects,
     }
     list.push_back(entry);
   }
-  const int false_shapes = int(std::count(shape_matched.begin(), shape_matched.end(), false));
+  // A shape no object matched is false only on clean hull: one within an object's reach is a
+  // second shape of that object (Algorithm 1's clusters of one object can stay apart).
+  int false_shapes = 0, split_shapes = 0;
+  for (size_t s = 0; s < shapes.size(); ++s) {
+    if (shape_matched[s]) continue;
+    const bool on_object = std::any_of(objects.begin(), objects.end(), [&](const TruthObject& o) {
+      return (shapes[s].centroid_world - o.center).norm() <= o.radius_m + match_distance_m;
+    });
+    ++(on_object ? split_shapes : false_shapes);
+  }
   return {{"objects", list},
           {"found", found},
           {"missed", int(objects.size()) - found},
           {"false_shapes", false_shapes},
+          {"extra_shapes_on_objects", split_shapes},
           {"match_distance_m", match_distance_m},
           {"note", "object centres are in truth.yaml's world frame; shapes in the BA's"}};
 }
@@ -174,6 +184,8 @@ class InspectStage : public Stage {
     json& r = out.report;
     r["solution_mode"] = solution.mode;
     r["options"] = options.inspect.to_json();
+    r["tau_m"] = result.threshold.tau_m;  // line 6 of Algorithm 1, after the noise floor
+    r["deviation_noise_sigma_m"] = result.threshold.noise_sigma_m;
     r["views"] = result.stats.num_views;
     r["views_with_shapes"] = result.stats.num_views_with_shapes;
     r["detections"] = result.stats.num_detections;
@@ -207,9 +219,17 @@ class InspectStage : public Stage {
 }  // namespace
 
 std::vector<std::string> InspectStageOptions::known_options() {
-  return {"tau_m",        "dbscan_eps_m",        "dbscan_min_pts",      "alpha_m",
-          "view_range_m", "max_behind_vertex_m", "draco_position_bits", "draco_field_bits",
-          "write_ply",    "match_distance_m"};
+  return {"tau_m",
+          "tau_noise_sigmas",
+          "dbscan_eps_m",
+          "dbscan_min_pts",
+          "alpha_m",
+          "view_range_m",
+          "max_behind_vertex_m",
+          "draco_position_bits",
+          "draco_field_bits",
+          "write_ply",
+          "match_distance_m"};
 }
 
 InspectStageOptions InspectStageOptions::from_json(const json& options) {
@@ -219,6 +239,7 @@ InspectStageOptions InspectStageOptions::from_json(const json& options) {
   proto::FieldReader r(options, "options.inspect");
   auto& in = o.inspect;
   in.tau_m = r.optional<double>("tau_m", in.tau_m);
+  in.tau_noise_sigmas = r.optional<double>("tau_noise_sigmas", in.tau_noise_sigmas);
   in.dbscan_eps_m = r.optional<double>("dbscan_eps_m", in.dbscan_eps_m);
   in.dbscan_min_pts = r.optional<int>("dbscan_min_pts", in.dbscan_min_pts);
   in.alpha_m = r.optional<double>("alpha_m", in.alpha_m);

@@ -93,7 +93,7 @@ TEST(Inspect, CylinderBumpIsFusedIntoTheMesh) {
 TEST(Inspect, CleanPatchReportsNothingAndKeepsTheMesh) {
   SceneOptions scene = patch_with_cameras();
   scene.num_hull_landmarks = 1500;
-  scene.hull_noise_m = 0.015;  // clipped at 3 sigma = 0.045 m < tau = 0.06 m
+  scene.hull_noise_m = 0.015;  // clipped at 3 sigma = 0.045 m < tau ~ 8 sigma
   InspectInput input = testing::make_scene(scene);
   input.cad_in_world.vertex_normals.assign(input.cad_in_world.num_vertices(), {0, 0, 1});
   const InspectResult result = run_inspect(input);
@@ -105,6 +105,31 @@ TEST(Inspect, CleanPatchReportsNothingAndKeepsTheMesh) {
     EXPECT_EQ(result.vertex_deviation_m[i], 0.0);
     EXPECT_EQ(result.vertex_update_count[i], 0);
   }
+}
+
+TEST(Inspect, LowBumpAboveTheHullNoiseIsFoundWithTheDefaultTau) {
+  // A 4 cm biofouling-like bump: inside the max-mixture's lambda = 1 basin and below the
+  // paper's false-positive setting tau = 0.06 m, but 10 noise sigmas above clean hull (4 mm,
+  // clipped at 3 sigma). The default tau (8 noise sigmas, deviation_threshold.h) finds it;
+  // tau = 0.06 m does not.
+  SceneOptions scene = patch_with_cameras();
+  scene.num_hull_landmarks = 1500;
+  scene.hull_noise_m = 0.004;
+  scene.bump_noise_m = 0.002;
+  scene.bumps = {Bump{{0.0, 0.0}, 0.2, 0.04, 30}};
+  const InspectInput input = testing::make_scene(scene);
+  const InspectResult result = run_inspect(input);
+  EXPECT_NEAR(result.threshold.noise_sigma_m, 0.004, 0.0008);
+  ASSERT_EQ(result.shapes.size(), 1u);
+  EXPECT_LT(radius_xy(result.shapes[0].centroid_world), 0.05);
+  EXPECT_NEAR(result.shapes[0].mean_deviation_m, 0.04, 0.003);
+  // DBSCAN may leave an isolated rim feature out; no hull feature (|h| <= 1.2 cm) joins.
+  EXPECT_GE(result.shapes[0].num_landmarks, 25);
+  EXPECT_LE(result.shapes[0].num_landmarks, 30);
+
+  InspectOptions paper_false_positive_setting;
+  paper_false_positive_setting.tau_m = 0.06;
+  EXPECT_TRUE(run_inspect(input, paper_false_positive_setting).shapes.empty());
 }
 
 TEST(Inspect, MovingAverageOfEq15IsTheMeanOfTheIntersections) {

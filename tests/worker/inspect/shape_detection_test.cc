@@ -46,12 +46,18 @@ class ShapeDetection : public ::testing::Test {
   }
 
   const Pose3 T_world_camera = testing::camera_looking_down({0.1, 0.0}, 1.5);
+  // detect_shapes() applies tau as given (run_inspect() raises it above the noise of h); 0.06 m
+  // (Fig. 21(c)) clears the hull's |h| <= 0.015 m.
+  const InspectOptions options = [] {
+    InspectOptions o;
+    o.tau_m = 0.06;
+    return o;
+  }();
   std::vector<Landmark> landmarks;
   std::vector<int> object;
 };
 
 TEST_F(ShapeDetection, FindsTheObjectAndIgnoresHullAndOutliers) {
-  const InspectOptions options;
   const auto shapes =
       detect_shapes(3, T_world_camera, landmarks, all_indices(landmarks.size()), options);
   ASSERT_EQ(shapes.size(), 1u);
@@ -69,10 +75,10 @@ TEST_F(ShapeDetection, FindsTheObjectAndIgnoresHullAndOutliers) {
 }
 
 TEST_F(ShapeDetection, TauAboveTheObjectHeightLeavesNothing) {
-  InspectOptions options;
-  options.tau_m = 0.2;  // line 6: |h| must exceed tau
+  InspectOptions high = options;
+  high.tau_m = 0.2;  // line 6: |h| must exceed tau
   EXPECT_TRUE(
-      detect_shapes(0, T_world_camera, landmarks, all_indices(landmarks.size()), options).empty());
+      detect_shapes(0, T_world_camera, landmarks, all_indices(landmarks.size()), high).empty());
 }
 
 TEST_F(ShapeDetection, OnlyVisibleFeaturesCount) {
@@ -80,7 +86,7 @@ TEST_F(ShapeDetection, OnlyVisibleFeaturesCount) {
   for (int i = 0; i < static_cast<int>(landmarks.size()); ++i) {
     if (std::find(object.begin(), object.end(), i) == object.end()) visible.push_back(i);
   }
-  EXPECT_TRUE(detect_shapes(0, T_world_camera, landmarks, visible, {}).empty());
+  EXPECT_TRUE(detect_shapes(0, T_world_camera, landmarks, visible, options).empty());
 }
 
 TEST(ShapeDetectionSpace, ClustersOverImageXyAndDeviation) {

@@ -23,6 +23,9 @@ Landmark make_landmark(const Eigen::Vector2d& xy, double z, const SceneOptions& 
   Landmark landmark;
   landmark.point_world = Eigen::Vector3d(xy.x(), xy.y(), z);
   landmark.h_m = z;  // Eq. (5) for the plane z = 0 with normal +z
+  // Eq. (7) with the paper's sigma0 = 1 m, sigma1 = 0.02 m, as the BA would label it: on the
+  // model inside the switching distance 0.0561 m (worker/ba/surface_factor.h).
+  landmark.lambda = std::abs(z) < 0.0561 ? 1 : 0;
   for (size_t v = 0; v < options.camera_xy.size(); ++v) {
     const Eigen::Vector2d d = (xy - options.camera_xy[v]).cwiseAbs();
     if (d.maxCoeff() <= options.half_footprint_m) landmark.views.push_back(static_cast<int>(v));

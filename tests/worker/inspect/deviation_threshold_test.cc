@@ -1,0 +1,71 @@
+// The noise floor of tau (line 6 of Algorithm 1, seed 001): a robust sigma of h over on-model
+// features, checked against the sigma the features were drawn with and exact medians.
+#include "worker/inspect/deviation_threshold.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace keel::inspect {
+namespace {
+
+Landmark feature(double h_m, int lambda) {
+  Landmark l;
+  l.h_m = h_m;
+  l.lambda = lambda;
+  return l;
+}
+
+std::vector<Landmark> gaussian_hull(int n, double sigma_m, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, sigma_m);
+  std::vector<Landmark> out;
+  for (int i = 0; i < n; ++i) out.push_back(feature(normal(rng), 1));
+  return out;
+}
+
+TEST(DeviationThreshold, RobustSigmaMatchesTheGaussianItWasDrawnFrom) {
+  const double sigma = 0.004;
+  const std::vector<Landmark> hull = gaussian_hull(40000, sigma, 7);
+  // Standard error of the MAD estimate at n = 40000 is ~0.4 %.
+  EXPECT_NEAR(robust_deviation_sigma(hull), sigma, 0.02 * sigma);
+  const DeviationThreshold t = deviation_threshold(hull, InspectOptions{});
+  EXPECT_DOUBLE_EQ(t.tau_m, InspectOptions{}.tau_noise_sigmas * t.noise_sigma_m);
+}
+
+TEST(DeviationThreshold, OffModelFeaturesAndOnModelOutliersBarelyMoveIt) {
+  const double sigma = 0.004;
+  std::vector<Landmark> hull = gaussian_hull(20000, sigma, 11);
+  const double clean = robust_deviation_sigma(hull);
+  for (int i = 0; i < 10000; ++i) hull.push_back(feature(0.11, 0));  // an object, lambda = 0
+  EXPECT_DOUBLE_EQ(robust_deviation_sigma(hull), clean);
+  for (int i = 0; i < 1000; ++i) hull.push_back(feature(0.04, 1));  // 5 % on-model outliers
+  const double with_outliers = robust_deviation_sigma(hull);
+  EXPECT_GT(with_outliers, clean);
+  EXPECT_LT(with_outliers, 1.1 * clean);  // a standard deviation would grow ~3x
+}
+
+TEST(DeviationThreshold, ExactMedianOfOddAndEvenCounts) {
+  std::vector<Landmark> f = {feature(-0.003, 1), feature(0.001, 1), feature(0.002, 1),
+                             feature(0.5, 0)};
+  EXPECT_DOUBLE_EQ(robust_deviation_sigma(f), 1.4826 * 0.002);  // |h| = 1, 2, 3 mm
+  f.push_back(feature(0.004, 1));
+  EXPECT_DOUBLE_EQ(robust_deviation_sigma(f), 1.4826 * 0.0025);  // 1, 2, 3, 4 mm
+}
+
+TEST(DeviationThreshold, FixedTauIsAFloorAndNoOnModelFeatureLeavesIt) {
+  InspectOptions options;
+  options.tau_m = 0.06;
+  const std::vector<Landmark> hull = gaussian_hull(1000, 0.002, 3);
+  EXPECT_DOUBLE_EQ(deviation_threshold(hull, options).tau_m, 0.06);  // 5 x 2 mm < 6 cm
+  options.tau_m = 0.0;
+  const std::vector<Landmark> off = {feature(0.2, 0), feature(0.3, 0)};
+  const DeviationThreshold t = deviation_threshold(off, options);
+  EXPECT_EQ(t.noise_sigma_m, 0.0);
+  EXPECT_EQ(t.tau_m, 0.0);
+  options.tau_noise_sigmas = 0.0;  // the paper's fixed tau
+  EXPECT_EQ(deviation_threshold(hull, options).tau_m, 0.0);
+}
+
+}  // namespace
+}  // namespace keel::inspect
