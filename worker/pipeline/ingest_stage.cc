@@ -10,6 +10,7 @@
 
 #include "proto/contract_error.h"
 #include "worker/io/mission_reader.h"
+#include "worker/pipeline/stage_options.h"
 
 namespace keel::pipeline {
 
@@ -25,8 +26,8 @@ struct IngestOptions {
   static IngestOptions from_json(const json& options) {
     IngestOptions o;
     if (options.is_null()) return o;
+    check_stage_options(options, "ingest", {"gap_factor", "rate_tolerance"});
     proto::FieldReader r(options, "options.ingest");
-    r.reject_unknown({"gap_factor", "rate_tolerance"});
     o.gap_factor = r.optional<double>("gap_factor", o.gap_factor);
     o.rate_tolerance = r.optional<double>("rate_tolerance", o.rate_tolerance);
     if (!(o.gap_factor > 1.0))

@@ -108,6 +108,7 @@ TEST_F(WorkerCliTest, BadStageOptionFailsTheStage) {
             2);
   EXPECT_NE(err().find("ingest: "), std::string::npos) << err();
   EXPECT_NE(err().find("no_such_option"), std::string::npos) << err();
+  EXPECT_NE(err().find("known: gap_factor, rate_tolerance"), std::string::npos) << err();
 }
 
 TEST_F(WorkerCliTest, UsageErrorsExitOne) {
