@@ -11,6 +11,8 @@
 #include "worker/pipeline/refine_stage.h"
 #include "worker/pipeline/stage_options.h"
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -150,25 +152,41 @@ void require_keyframes(const Trajectory& keyframes, const std::string& why) {
 }
 
 // Per-axis RMS of the odometry increments' disagreement with the MAP increments, [t, phi] in
-// the frame of keyframe i; added in quadrature to every odometry edge's sigmas.
+// the frame of keyframe i, over the edges that carry information; added to every such edge's
+// covariance: Sigma' = Sigma + D, D = diag(rms^2). Written as
+// information' = D^-1/2 M (I + M)^-1 D^-1/2 with M = D^1/2 information D^1/2, which needs no
+// inverse of the (possibly singular) information and keeps its correlations (GICP's
+// point-to-plane information couples translation with roll and pitch through the lidar's lever
+// arm); 1 / its diagonal is the conditional variance, smaller than the marginal one. For the
+// diagonal information of recorded odometry this is the old per-axis sum of variances.
 void widen_by_map_disagreement(Inputs& in) {
   const auto& edges = in.solver.odometry;
   const Trajectory& keyframes = in.solver.keyframes;
   if (edges.size() != keyframes.size() - 1) return;
   Eigen::Matrix<double, 6, 1> sum = Eigen::Matrix<double, 6, 1>::Zero();
+  size_t used = 0;
   for (size_t k = 0; k < edges.size(); ++k) {
+    if (edges[k].information.isZero()) continue;  // no measurement (a failed registration)
     const Pose3 T_map = keyframes[k].T_world_body.inverse() * keyframes[k + 1].T_world_body;
     const Pose3& T_odo = edges[k].T_i_j;
     Eigen::Matrix<double, 6, 1> e;
     e.head<3>() = T_odo.translation() - T_map.translation();
     e.tail<3>() = slam::so3_log(T_map.linear().transpose() * T_odo.linear());
     sum += e.cwiseProduct(e);
+    ++used;
   }
-  const Eigen::Matrix<double, 6, 1> rms = (sum / static_cast<double>(edges.size())).cwiseSqrt();
+  if (used == 0) return;
+  const Eigen::Matrix<double, 6, 1> rms = (sum / static_cast<double>(used)).cwiseSqrt();
+  // A floor keeps D invertible when an axis agrees exactly (1 um, 1 urad).
+  const Eigen::Matrix<double, 6, 1> d_sqrt = rms.cwiseMax(1e-6);
+  const slam::Matrix6d D_half = d_sqrt.asDiagonal();
+  const slam::Matrix6d D_inv_half = d_sqrt.cwiseInverse().asDiagonal();
   for (auto& edge : in.solver.odometry) {
-    const Eigen::Matrix<double, 6, 1> variance =
-        edge.information.diagonal().cwiseInverse() + rms.cwiseProduct(rms);
-    edge.information = variance.cwiseInverse().asDiagonal();
+    const slam::Matrix6d M = D_half * edge.information * D_half;
+    // M and (I + M) commute, so M (I + M)^-1 = (I + M)^-1 M.
+    const slam::Matrix6d widened =
+        D_inv_half * (slam::Matrix6d::Identity() + M).ldlt().solve(M) * D_inv_half;
+    edge.information = 0.5 * (widened + widened.transpose());
   }
   in.report["odometry"]["disagreement_with_map_rms"] = {
       {"translation_m", {rms[0], rms[1], rms[2]}},
@@ -261,6 +279,19 @@ void gicp_odometry(const io::MissionReader& reader, const RefineStageOptions& op
   // The point-to-plane information treats neighbouring residuals as independent and is far
   // too confident (millimetres); the disagreement with the MAP increments is the honest figure.
   if (options.odometry_noise_from_map) widen_by_map_disagreement(in);
+  // A registration that did not converge or failed the outlier gate carries no information.
+  // It is left out rather than passed on as a zero-information edge: that would flag its
+  // keyframe degenerate, and the paper's zeroed biases there (Sec. IV-B), chained to the rest
+  // by the bias random walks, pin b^a to zero over the whole mission (without DVL a 5 mm/s^2
+  // turn-on bias then sagged a 30 s mission by 0.5 m).
+  const size_t matched = in.solver.odometry.size();
+  auto& edges = in.solver.odometry;
+  edges.erase(
+      std::remove_if(edges.begin(), edges.end(),
+                     [](const slam::RelativePoseMeasurement& m) { return m.information.isZero(); }),
+      edges.end());
+  in.report["odometry"]["edges"] = edges.size();
+  in.report["odometry"]["edges_rejected"] = matched - edges.size();
   in.report["keyframes"]["dropped_without_scan"] = before - in.solver.keyframes.size();
 }
 

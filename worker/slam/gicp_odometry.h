@@ -26,7 +26,7 @@ struct GicpOdometryOptions {
   // map's relative pose, good to centimetres) is a wrong local minimum, e.g. a spinning lidar's
   // rings matched to their neighbours over a flat surface, which shifts z by a ring spacing
   // while the point-to-plane information still looks confident. Such an edge gets zero
-  // information, i.e. the solver treats it as fully degenerate. <= 0: no gate.
+  // information (the refine stage then leaves it out). <= 0: no gate.
   double max_translation_from_guess_m = 0.25;
   double max_rotation_from_guess_rad = 0.1;
 };

@@ -95,7 +95,11 @@ struct RefineOptions {
   double prior_sigma_velocity_mps = 0.5;
   double prior_sigma_gyro_bias_radps = 1e-2;
   double prior_sigma_accel_bias_mps2 = 0.1;
-  double prior_sigma_dvl_bias_mps = 0.05;
+  // b^v_0: the DVL's white noise dominates and its accuracy is +-0.1 % of speed (Water Linked
+  // A50, seed 000 Sec. V), i.e. ~1 mm/s at USV speeds; 5 mm/s leaves the data room. Looser
+  // (0.05 m/s) a near-constant lateral b^v is indistinguishable from an extrinsic yaw error times
+  // the forward speed wherever the biases are free, and the yaw estimate wanders by ~3x.
+  double prior_sigma_dvl_bias_mps = 0.005;
 
   // Loop closures: Cauchy loss scale in whitened units (<= 0: plain least squares), and how
   // far a loop's stamps may be from a keyframe stamp.
