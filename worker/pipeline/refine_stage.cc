@@ -827,7 +827,10 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
 slam::RefineOptions RefineStageOptions::solver_options() const {
   slam::RefineOptions s;
   s.use_dvl = dvl;
-  s.use_loop_closures = loop_closures;
+  // The stage hands the solver only the relative constraints it wants (the mission's loop
+  // closures when `loop_closures`, the MAP anchors when `map_anchors`); the solver's switch
+  // would drop both together.
+  s.use_loop_closures = loop_closures || map_anchors;
   s.estimate_dvl_scale = estimate_dvl_scale;
   s.dvl_scale_initial = dvl_scale_initial;
   s.dvl_scale_prior_sigma = dvl_scale_prior_sigma;

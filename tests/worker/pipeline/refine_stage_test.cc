@@ -217,9 +217,13 @@ TEST_F(RefineStageTest, MissionWithoutDvlFailsUnlessDvlIsOff) {
   EXPECT_NE(error.find("refine.dvl=false"), std::string::npos) << error;
 
   const fs::path work = temp_root() / "work_imu_only";
-  const StageRun run = run_stage(mission, {{"dvl", false}}, work);
+  // Loop closures off keeps the MAP anchors: every anchor reaches the solver.
+  const StageRun run = run_stage(mission, {{"dvl", false}, {"loop_closures", false}}, work);
   const Trajectory refined = io::read_tum(work / kRefinedTrajectoryFile);
   EXPECT_EQ(refined.size(), io::read_tum(mission / "map_poses.tum").size());
+  EXPECT_GT(run.result.report["inputs"]["map_anchors"]["count"].get<int>(), 0);
+  EXPECT_EQ(run.result.report["solver"]["factors"]["loop_closures"],
+            run.result.report["inputs"]["map_anchors"]["count"]);
   EXPECT_TRUE(run.result.report["dvl"].is_null());
   EXPECT_TRUE(run.result.report["evaluation"]["table"]["refined_with_dvl"].is_null());
   EXPECT_EQ(run.result.report["solver"]["factors"]["dvl"], 0);
