@@ -7,7 +7,9 @@
 // its own. On a shared machine wall time includes waiting for a core: CPU seconds are printed
 // too, and "per 2 cores" = 2 x points / CPU seconds.
 // Run build-*/tests/bench/bench_map_sim [--keep] [--skip-rss | --rss-only] [--skip-metrics-file]
-// [--dir DIR] (--skip-metrics-file: no whole-map metrics run on map_lidar_h.ply).
+// [--dir DIR] [--merge-leaves X] (--skip-metrics-file: no whole-map metrics run on
+// map_lidar_h.ply; --merge-leaves: map.final_voxel_merge_radius_leaves of every run, 0 = plain
+// voxel grid, default: the stage's default).
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -32,6 +34,14 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+
+// map.final_voxel_merge_radius_leaves of every stage run (negative: the stage's default).
+double g_merge_leaves = -1.0;
+
+json with_merge_option(json options) {
+  if (g_merge_leaves >= 0.0) options["final_voxel_merge_radius_leaves"] = g_merge_leaves;
+  return options;
+}
 
 double cpu_seconds() {
   rusage usage{};
@@ -246,7 +256,7 @@ void memory_scaling(const fs::path& root, bool keep) {
       const int minutes = k == 0 ? 5 : 30;
       const json run = stage_in_child(
           missions[k], root / ("work_" + std::to_string(minutes) + "_" + std::to_string(leaf)),
-          reduced_lidar_options(leaf));
+          with_merge_option(reduced_lidar_options(leaf)));
       std::printf("%2d-minute survey (%.2f m/s), final voxel %.2f m: ", minutes, speeds[k], leaf);
       print_stage_figures(run);
       runs.push_back(run);
@@ -277,6 +287,7 @@ int main(int argc, char** argv) {
     if (a == "--rss-only") rss_only = true;
     if (a == "--skip-metrics-file") skip_metrics_file = true;
     if (a == "--dir" && i + 1 < argc) root = argv[++i];
+    if (a == "--merge-leaves" && i + 1 < argc) g_merge_leaves = std::stod(argv[++i]);
   }
   fs::create_directories(root);
   try {
@@ -288,7 +299,7 @@ int main(int argc, char** argv) {
     // Full usv-bridge mission, the three range sensors of seed 000 Sec. VI.
     const fs::path mission = root / "bridge_full";
     simulate(mission, 0.0, {"lidar_h", "lidar_v", "sonar"}, {});
-    const json run = stage_in_child(mission, root / "work_full", json::object());
+    const json run = stage_in_child(mission, root / "work_full", with_merge_option(json::object()));
     std::printf("usv-bridge 220 s, lidar_h + lidar_v + sonar, default map options, poses: %s\n",
                 run["report"]["poses"]["source"].get<std::string>().c_str());
     print_stage_figures(run);

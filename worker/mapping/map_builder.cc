@@ -92,6 +92,12 @@ MapBuilder::MapBuilder(const TransformTree& tree, MapBuilderOptions options)
     throw std::invalid_argument("map.scans_per_intermediary (N_I): expected >= 1, got " +
                                 std::to_string(options_.scans_per_intermediary));
   }
+  const double merge = options_.final_voxel_merge_radius_leaves;
+  if (!(merge >= 0.0 && merge <= VoxelAccumulator::kMaxMergeLeaves)) {
+    throw std::invalid_argument("map.final_voxel_merge_radius_leaves: expected a number in [0, " +
+                                std::to_string(VoxelAccumulator::kMaxMergeLeaves) + "], got " +
+                                std::to_string(merge));
+  }
   check_stage_filters(options_.default_sensor, "(default)");
   for (const auto& [sensor, sensor_options] : options_.sensors) {
     check_stage_filters(sensor_options, sensor);
@@ -107,8 +113,9 @@ MapBuilder::SensorState& MapBuilder::state_for(const std::string& sensor) {
   const auto listed = options_.sensors.find(sensor);
   state->options = listed != options_.sensors.end() ? listed->second : options_.default_sensor;
   if (starts_with_voxel_grid(state->options.final_filters)) {
-    state->voxel_map.emplace(
-        std::get<VoxelGridFilter>(state->options.final_filters.filters.front()).leaf_m);
+    const double leaf_m =
+        std::get<VoxelGridFilter>(state->options.final_filters.filters.front()).leaf_m;
+    state->voxel_map.emplace(leaf_m, leaf_m * options_.final_voxel_merge_radius_leaves);
   }
   return *states_.emplace(sensor, std::move(state)).first->second;
 }

@@ -8,8 +8,9 @@
 //
 // Memory: raw scans are never kept beyond one intermediary batch per sensor. When a sensor's
 // final filters start with a voxel grid, its map is accumulated as running voxel sums
-// (VoxelAccumulator, identical to voxelizing the whole map at the end), so memory grows with
-// the output map, not with mission length.
+// (VoxelAccumulator, identical to voxelizing the whole map at the end, or with the merge rule
+// that makes the map saturate on the structure), so memory grows with the output map, not
+// with mission length.
 #pragma once
 
 #include <functional>
@@ -49,6 +50,12 @@ struct MapBuilderOptions {
   // Scans whose stamp or point times fall outside the trajectory (a sensor started before the
   // SLAM system): true skips and counts them, false makes add_scan throw std::out_of_range.
   bool skip_scans_outside_trajectory = true;
+  // Merge radius of a streamed final voxel grid, in leaves (VoxelAccumulator's merge rule: a
+  // point landing in an empty voxel joins an occupied neighbour whose centroid is within the
+  // radius). 0 keeps the plain voxel grid of the paper, whose map keeps growing with sampling
+  // density inside the range-noise shell; > 0 makes it saturate on the structure. At most
+  // VoxelAccumulator::kMaxMergeLeaves.
+  double final_voxel_merge_radius_leaves = 0.0;
   int threads = 2;
 };
 

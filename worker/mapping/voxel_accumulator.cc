@@ -38,11 +38,21 @@ VoxelKey voxel_of(const Eigen::Vector3f& p, double inverse_leaf) {
                   axis_index(p.z(), inverse_leaf)};
 }
 
-VoxelAccumulator::VoxelAccumulator(double leaf_m) : leaf_m_(leaf_m), inverse_leaf_(1.0 / leaf_m) {
+VoxelAccumulator::VoxelAccumulator(double leaf_m, double merge_radius_m)
+    : leaf_m_(leaf_m), inverse_leaf_(1.0 / leaf_m), merge_radius_m_(merge_radius_m) {
   if (!std::isfinite(leaf_m) || leaf_m <= 0.0) {
     throw std::invalid_argument("voxel grid: leaf must be a positive number of metres, got " +
                                 std::to_string(leaf_m));
   }
+  if (!(merge_radius_m >= 0.0 && merge_radius_m <= kMaxMergeLeaves * leaf_m)) {
+    throw std::invalid_argument("voxel grid: merge radius must lie in [0, " +
+                                std::to_string(kMaxMergeLeaves) + " leaves] = [0, " +
+                                std::to_string(kMaxMergeLeaves * leaf_m) + "] m, got " +
+                                std::to_string(merge_radius_m));
+  }
+  // A centroid within r of p lies within ceil(r / leaf) voxels of p's voxel along each axis
+  // (centroids stay inside their voxel up to the small drift merged points cause).
+  merge_reach_ = static_cast<int>(std::ceil(merge_radius_m * inverse_leaf_ - 1e-9));
 }
 
 VoxelAccumulator::~VoxelAccumulator() = default;
@@ -62,26 +72,61 @@ void VoxelAccumulator::grow() {
   }
 }
 
-VoxelAccumulator::Entry& VoxelAccumulator::find_or_insert(int32_t i, int32_t j, int32_t k,
-                                                          uint64_t hash) {
-  const size_t mask = slots_.size() - 1;  // the caller made room (reserve_for)
-  for (size_t s = hash & mask;; s = (s + 1) & mask) {
-    uint32_t& slot = slots_[s];
-    if (slot == kEmpty) {
-      if (size_ >= kEmpty) throw std::length_error("voxel grid: more than 2^32 - 1 voxels");
-      if ((size_ >> kChunkBits) == chunks_.size()) {
-        chunks_.push_back(std::make_unique<Entry[]>(size_t{1} << kChunkBits));
-      }
-      slot = static_cast<uint32_t>(size_);
-      Entry& created = entry(size_++);
-      created.i = i;
-      created.j = j;
-      created.k = k;
-      return created;
-    }
-    Entry& e = entry(slot);
-    if (e.i == i && e.j == j && e.k == k) return e;
+size_t VoxelAccumulator::probe(int32_t i, int32_t j, int32_t k, uint64_t hash) const {
+  const size_t mask = slots_.size() - 1;
+  for (size_t s = hash & mask;; s = (s + 1) & mask) {  // at most half full: ends
+    const uint32_t slot = slots_[s];
+    if (slot == kEmpty) return s;
+    const Entry& e = entry(slot);
+    if (e.i == i && e.j == j && e.k == k) return s;
   }
+}
+
+uint32_t VoxelAccumulator::insert_at(size_t slot, int32_t i, int32_t j, int32_t k) {
+  if (size_ >= kEmpty) throw std::length_error("voxel grid: more than 2^32 - 1 voxels");
+  if ((size_ >> kChunkBits) == chunks_.size()) {
+    chunks_.push_back(std::make_unique<Entry[]>(size_t{1} << kChunkBits));
+  }
+  const uint32_t index = static_cast<uint32_t>(size_++);
+  slots_[slot] = index;
+  Entry& created = entry(index);
+  created.i = i;
+  created.j = j;
+  created.k = k;
+  return index;
+}
+
+uint32_t VoxelAccumulator::merge_target(const Eigen::Vector3f& p, int32_t i, int32_t j,
+                                        int32_t k) const {
+  uint32_t best = kEmpty;
+  double best_d2 = merge_radius_m_ * merge_radius_m_;
+  const int r = merge_reach_;
+  for (int di = -r; di <= r; ++di) {
+    for (int dj = -r; dj <= r; ++dj) {
+      for (int dk = -r; dk <= r; ++dk) {
+        const int64_t ni = int64_t{i} + di, nj = int64_t{j} + dj, nk = int64_t{k} + dk;
+        if (ni < INT32_MIN || ni > INT32_MAX || nj < INT32_MIN || nj > INT32_MAX ||
+            nk < INT32_MIN || nk > INT32_MAX) {
+          continue;  // no voxel can be stored there
+        }
+        const uint32_t index =
+            slots_[probe(static_cast<int32_t>(ni), static_cast<int32_t>(nj),
+                         static_cast<int32_t>(nk), voxel_hash(VoxelKey{ni, nj, nk}))];
+        if (index == kEmpty) continue;  // also the point's own voxel, empty by assumption
+        const Entry& e = entry(index);
+        const double inverse_count = 1.0 / static_cast<double>(e.count);
+        const double ex = e.i * leaf_m_ + e.dx * inverse_count - p.x();
+        const double ey = e.j * leaf_m_ + e.dy * inverse_count - p.y();
+        const double ez = e.k * leaf_m_ + e.dz * inverse_count - p.z();
+        const double d2 = ex * ex + ey * ey + ez * ez;
+        if (d2 <= best_d2) {  // ties: the last visited in (di, dj, dk) order
+          best_d2 = d2;
+          best = index;
+        }
+      }
+    }
+  }
+  return best;
 }
 
 void VoxelAccumulator::reserve_for(size_t more_voxels) {
@@ -119,11 +164,21 @@ void VoxelAccumulator::add(const PointCloud& cloud) {
     for (size_t b = 0; b < count; ++b) {
       const Eigen::Vector3f& p = cloud.xyz[begin + b];
       const VoxelKey& key = keys[b];
-      Entry& sum = find_or_insert(axis_index_32(key.i, p.x()), axis_index_32(key.j, p.y()),
-                                  axis_index_32(key.k, p.z()), hashes[b]);
-      sum.dx += static_cast<float>(p.x() - key.i * leaf_m_);
-      sum.dy += static_cast<float>(p.y() - key.j * leaf_m_);
-      sum.dz += static_cast<float>(p.z() - key.k * leaf_m_);
+      const int32_t i = axis_index_32(key.i, p.x()), j = axis_index_32(key.j, p.y()),
+                    k = axis_index_32(key.k, p.z());
+      const size_t slot = probe(i, j, k, hashes[b]);
+      uint32_t index = slots_[slot];
+      if (index == kEmpty && merge_reach_ > 0) {
+        index = merge_target(p, i, j, k);  // inserts nothing: `slot` stays valid
+        if (index != kEmpty) ++points_merged_;
+      }
+      if (index == kEmpty) index = insert_at(slot, i, j, k);
+      // Offsets from the corner of the voxel the point joins: in [0, leaf) for its own voxel,
+      // within (1 + kMaxMergeLeaves) leaves of it for a merged point; float keeps either.
+      Entry& sum = entry(index);
+      sum.dx += static_cast<float>(p.x() - sum.i * leaf_m_);
+      sum.dy += static_cast<float>(p.y() - sum.j * leaf_m_);
+      sum.dz += static_cast<float>(p.z() - sum.k * leaf_m_);
       if (with_intensity) sum.intensity += cloud.intensity[begin + b];
       ++sum.count;
     }
@@ -168,6 +223,7 @@ void VoxelAccumulator::clear() {
   size_ = 0;
   intensity_everywhere_ = true;
   points_added_ = 0;
+  points_merged_ = 0;
 }
 
 }  // namespace keel::mapping

@@ -2,6 +2,19 @@
 // VoxelGrid pass over their union (sums, not centroids of centroids, are kept). Memory grows
 // with the number of occupied voxels, not with the points added, which is what lets
 // MapBuilder stream a long mission into a voxelized map at constant memory per structure.
+//
+// Optional merge rule (merge_radius_m > 0): a point whose voxel is still empty joins the
+// occupied voxel, among those within ceil(merge_radius / leaf) indices per axis, whose current
+// centroid is nearest to it, if that centroid lies within the merge radius; only otherwise does
+// it open its voxel. Why: a plain voxel grid bounds the map by the surfaces' area only once
+// every voxel of the range-noise shell around them is occupied, and a shell several voxels
+// thick (lidar range noise sigma = 1 cm against a 2 cm leaf) keeps opening voxels as a survey
+// samples it more densely, so a slower survey of the same structure gives a larger map. With
+// the rule a voxel opens only for a point farther than the merge radius from every nearby
+// centroid, so occupied voxels are seeded at least ~one merge radius apart: the map saturates
+// at about one point per merge-radius ball of the sampled shell, whatever the sampling density.
+// The price: the result depends on the order of the points (MapBuilder commits scans in feed
+// order, so its maps stay deterministic), and it is no longer exactly pcl::VoxelGrid.
 #pragma once
 
 #include <Eigen/Core>
@@ -39,8 +52,11 @@ VoxelKey voxel_of(const Eigen::Vector3f& p, double inverse_leaf);
 
 class VoxelAccumulator {
  public:
-  // Throws std::invalid_argument unless leaf_m is finite and positive.
-  explicit VoxelAccumulator(double leaf_m);
+  // Throws std::invalid_argument unless leaf_m is finite and positive and merge_radius_m is
+  // in [0, kMaxMergeLeaves * leaf_m] (0: a plain voxel grid; see the merge rule above).
+  explicit VoxelAccumulator(double leaf_m, double merge_radius_m = 0.0);
+  // The search visits (2 ceil(r / leaf) + 1)^3 - 1 voxels per point landing in an empty one.
+  static constexpr double kMaxMergeLeaves = 2.0;
   ~VoxelAccumulator();
   VoxelAccumulator(VoxelAccumulator&&) noexcept;
   VoxelAccumulator& operator=(VoxelAccumulator&&) noexcept;
@@ -51,7 +67,7 @@ class VoxelAccumulator {
   void add(const PointCloud& cloud);
   // One point per voxel holding at least `min_hits` points, the centroid, in the order the
   // voxels were first occupied (so one pass over a cloud and any split of it into consecutive
-  // batches give the same output).
+  // batches give the same output; with merging, as long as the point order is kept).
   PointCloud centroids(uint32_t min_hits = 1) const;
   // Voxels holding at least `min_hits` points.
   size_t voxel_count(uint32_t min_hits) const;
@@ -59,6 +75,9 @@ class VoxelAccumulator {
   size_t voxel_count() const { return size_; }
   uint64_t points_added() const { return points_added_; }
   double leaf_m() const { return leaf_m_; }
+  double merge_radius_m() const { return merge_radius_m_; }
+  // Points added to an empty voxel's occupied neighbour by the merge rule.
+  uint64_t points_merged() const { return points_merged_; }
   // Bytes held by the table (entries and slots), for reports.
   size_t memory_bytes() const;
   void clear();
@@ -85,13 +104,23 @@ class VoxelAccumulator {
   const Entry& entry(size_t index) const {
     return chunks_[index >> kChunkBits][index & ((size_t{1} << kChunkBits) - 1)];
   }
-  // `hash` = voxel_hash of the index; the table must have room for one more voxel.
-  Entry& find_or_insert(int32_t i, int32_t j, int32_t k, uint64_t hash);
+  // `hash` = voxel_hash of the index. The slot holding the voxel, or the empty slot where it
+  // would go.
+  size_t probe(int32_t i, int32_t j, int32_t k, uint64_t hash) const;
+  // Opens voxel (i, j, k) in the empty slot `slot` (from probe, no insertion since); the table
+  // must have room for one more voxel. Returns its entry number.
+  uint32_t insert_at(size_t slot, int32_t i, int32_t j, int32_t k);
+  // The merge rule: the entry number of the occupied voxel near (i, j, k) whose centroid is
+  // nearest p and within the merge radius, or kEmpty.
+  uint32_t merge_target(const Eigen::Vector3f& p, int32_t i, int32_t j, int32_t k) const;
   void reserve_for(size_t more_voxels);  // grows until size + more fits at half load
   void grow();
 
   double leaf_m_;
   double inverse_leaf_;
+  double merge_radius_m_ = 0.0;
+  int merge_reach_ = 0;  // ceil(merge radius / leaf): voxels searched per axis and side
+  uint64_t points_merged_ = 0;
   bool intensity_everywhere_ = true;
   uint64_t points_added_ = 0;
   size_t size_ = 0;

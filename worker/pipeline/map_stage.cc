@@ -35,6 +35,7 @@
 #include "worker/mapping/odometry_correction.h"
 #include "worker/mapping/slam_map.h"
 #include "worker/mapping/transform_tree.h"
+#include "worker/mapping/voxel_accumulator.h"
 #include "worker/pipeline/refine_stage.h"
 
 namespace keel::pipeline {
@@ -396,6 +397,7 @@ class MapStage : public Stage {
     mapping::TransformTree tree(poses.T_world_body, "map poses");
     mapping::MapBuilderOptions builder_options;
     builder_options.scans_per_intermediary = options.scans_per_intermediary;
+    builder_options.final_voxel_merge_radius_leaves = options.final_voxel_merge_radius_leaves;
     builder_options.deskew.max_sweep_duration_s = options.max_sweep_duration_s;
     builder_options.threads = options.threads;
     for (const auto& s : selection.mapped) {
@@ -611,6 +613,7 @@ std::vector<std::string> MapStageOptions::known_options() {
           "sonar_filters",
           "sensor_filters",
           "final_voxel_leaf_m",
+          "final_voxel_merge_radius_leaves",
           "scans_per_intermediary",
           "deskew",
           "max_sweep_duration_s",
@@ -640,6 +643,8 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.sonar_filters = r.optional<json>("sonar_filters", o.sonar_filters);
   o.sensor_filters = r.optional<json>("sensor_filters", o.sensor_filters);
   o.final_voxel_leaf_m = r.optional<double>("final_voxel_leaf_m", o.final_voxel_leaf_m);
+  o.final_voxel_merge_radius_leaves =
+      r.optional<double>("final_voxel_merge_radius_leaves", o.final_voxel_merge_radius_leaves);
   o.scans_per_intermediary = r.optional<int>("scans_per_intermediary", o.scans_per_intermediary);
   o.deskew = r.optional<bool>("deskew", o.deskew);
   o.max_sweep_duration_s = r.optional<double>("max_sweep_duration_s", o.max_sweep_duration_s);
@@ -664,6 +669,9 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
           "an object {\"<sensor>\": {scan_filters, intermediary_filters, final_filters, deskew}}");
   require(std::isfinite(o.final_voxel_leaf_m) && o.final_voxel_leaf_m >= 0.0, "final_voxel_leaf_m",
           "a leaf in metres >= 0 (0: no final voxel grid)");
+  require(o.final_voxel_merge_radius_leaves >= 0.0 &&
+              o.final_voxel_merge_radius_leaves <= mapping::VoxelAccumulator::kMaxMergeLeaves,
+          "final_voxel_merge_radius_leaves", "a radius in leaves in [0, 2] (0: no merging)");
   require(o.scans_per_intermediary >= 1 && o.scans_per_intermediary <= 100000,
           "scans_per_intermediary", "an integer in [1, 100000]");
   require(o.max_sweep_duration_s > 0.0, "max_sweep_duration_s", "> 0");
@@ -714,6 +722,7 @@ json MapStageOptions::to_json() const {
           {"sonar_filters", sonar_filters},
           {"sensor_filters", sensor_filters},
           {"final_voxel_leaf_m", final_voxel_leaf_m},
+          {"final_voxel_merge_radius_leaves", final_voxel_merge_radius_leaves},
           {"scans_per_intermediary", scans_per_intermediary},
           {"deskew", deskew},
           {"max_sweep_duration_s", max_sweep_duration_s},

@@ -42,6 +42,13 @@ struct MapStageOptions {
   // final voxel grid the map (and memory) grows with the mission; with it, memory grows with
   // the surveyed structure (MapBuilder accumulates voxel sums).
   double final_voxel_leaf_m = 0.02;
+  // Merge radius of every streamed final voxel grid, in leaves (mapping::VoxelAccumulator): a
+  // point landing in an empty voxel joins an occupied neighbour whose centroid lies within the
+  // radius. It makes the map (and memory) saturate on the surveyed structure instead of growing
+  // as a slower survey fills more voxels of the range-noise shell. 0: plain voxel grid. Off by
+  // default: on the keel-sim bridge one leaf does not reach the 1.5x memory target and costs
+  // density and roughness (docs/map-filters.md, "Throughput and memory").
+  double final_voxel_merge_radius_leaves = 0.0;
   int scans_per_intermediary = 10;  // N_I of Eq. (22)
   bool deskew = true;
   double max_sweep_duration_s = 1.0;

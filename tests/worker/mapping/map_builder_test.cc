@@ -7,6 +7,7 @@
 #include "worker/mapping/map_builder.h"
 #include "worker/mapping/slam_map.h"
 #include "worker/mapping/stamped_transforms.h"
+#include "worker/mapping/voxel_accumulator.h"
 
 namespace keel::mapping {
 namespace {
@@ -103,6 +104,34 @@ TEST(MapBuilder, StreamingFinalVoxelGridEqualsOneVoxelGridOverTheWholeMap) {
   EXPECT_EQ(stats.final_stage.steps[0].filter, "voxel_grid");
   EXPECT_EQ(stats.final_stage.steps[0].points_in, 4400u);
   EXPECT_EQ(stats.final_stage.steps[1].points_out, map.size());
+}
+
+TEST(MapBuilder, MergeRadiusReachesTheStreamedVoxelGridInScanOrder) {
+  const TransformTree tree = make_tree();
+  MapBuilderOptions options = no_filters(3);
+  options.final_voxel_merge_radius_leaves = 1.0;
+  options.default_sensor.final_filters.filters.push_back(VoxelGridFilter{0.5});
+  MapBuilder builder(tree, options);
+  MapBuilder reference_builder(tree, no_filters(3));  // every point, in W, in scan order
+  for (int s = 0; s < 11; ++s) {
+    PointCloud scan = random_cloud(400, -4.0f, 4.0f, 300 + s);
+    scan.t_ns = seconds_to_ns(5.0 + 0.1 * s);
+    builder.add_scan("sonar", scan);
+    reference_builder.add_scan("sonar", scan);
+  }
+  builder.finish();
+  reference_builder.finish();
+  VoxelAccumulator expected(0.5, 0.5);  // the merge rule over the points in the same order
+  expected.add(reference_builder.sensor_map("sonar"));
+  const PointCloud expected_map = expected.centroids();
+  ASSERT_GT(expected.points_merged(), 0u);
+  const PointCloud& map = builder.sensor_map("sonar");
+  ASSERT_EQ(map.size(), expected_map.size());
+  for (size_t k = 0; k < map.size(); ++k) {
+    ASSERT_LT((map.xyz[k] - expected_map.xyz[k]).norm(), 1e-5f) << k;
+  }
+  options.final_voxel_merge_radius_leaves = 2.5;  // beyond the 5x5x5 neighbourhood
+  EXPECT_THROW(MapBuilder(tree, options), std::invalid_argument);
 }
 
 // add_scans on two threads against add_scan scan by scan: two sensors interleaved, a DROR
