@@ -1,4 +1,4 @@
-// ROR and DROR of Table III, seed 000, on a PCL kd-tree, parallel over `threads`.
+// ROR and DROR of Table III, seed 000, on a kd-tree (RadiusSearch), parallel over `threads`.
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -40,8 +40,7 @@ size_t apply_radius_outlier(const RadiusOutlierFilter& filter, PointCloud& cloud
   const std::vector<uint32_t>& order = search.spatial_order();  // cache-friendly query order
   parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
-      const uint32_t n = order[i];
-      keep[n] = search.count_within(cloud.xyz[n], filter.radius_m, needed) >= needed;
+      keep[order[i]] = search.count_around(i, filter.radius_m, needed) >= needed;
     }
   });
   return keep_points(cloud, keep);
@@ -60,9 +59,12 @@ size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads) {
     for (size_t i = begin; i < end; ++i) {
       const uint32_t n = order[i];
       const Eigen::Vector3f& p = cloud.xyz[n];
-      const double r_xy = std::hypot(static_cast<double>(p.x()), static_cast<double>(p.y()));
+      // sqrt of the (exact) double squares rather than std::hypot: hypot was 8 % of DROR's time;
+      // the two differ by at most an ulp (the tests' ambiguity margin is 1e-5 m).
+      const double x = p.x(), y = p.y();
+      const double r_xy = std::sqrt(x * x + y * y);
       const double radius = dror_search_radius(filter, r_xy);
-      keep[n] = search.count_within(p, radius, filter.k_min) >= filter.k_min;
+      keep[n] = search.count_around(i, radius, filter.k_min) >= filter.k_min;
     }
   });
   return keep_points(cloud, keep);

@@ -7,6 +7,7 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -15,6 +16,7 @@
 #include "tests/worker/mapping/test_clouds.h"
 #include "worker/mapping/filter_chain.h"
 #include "worker/mapping/filters.h"
+#include "worker/mapping/radius_search.h"
 
 namespace keel::mapping {
 namespace {
@@ -219,6 +221,110 @@ TEST(Dror, MatchesBruteForceWithRangeDependentRadius) {
   EXPECT_GT(checked, 3900u);
   EXPECT_GT(ours.size(), 100u);
   EXPECT_LT(ours.size(), cloud.size() - 100);
+}
+
+// A spinning-lidar-like scan in its sensor frame: 16 rings x `azimuths` returns `step_deg`
+// apart (0.2: a VLP-16 at 10 Hz, Table IV's alpha) off walls at 4..12 m
+// with range noise, a few dropouts and isolated spurious returns (rain, spray), so
+// DROR keeps most points and removes some, and a point's neighbours sit on its own ring,
+// often across a kd-tree leaf boundary.
+PointCloud ring_scan(int azimuths, float step_deg, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  PointCloud cloud;
+  const float kDeg = 3.14159265f / 180.0f;
+  for (int ring = 0; ring < 16; ++ring) {
+    const float elevation = (-15.0f + 2.0f * ring) * kDeg;
+    for (int a = 0; a < azimuths; ++a) {
+      if (u(rng) < 0.05f) continue;  // dropout
+      const float azimuth = a * step_deg * kDeg;
+      const float wall = 8.0f + 4.0f * std::sin(2.0f * azimuth);
+      const float range = u(rng) < 0.05f ? 1.0f + 29.0f * u(rng) : wall + noise(rng);
+      cloud.xyz.emplace_back(range * std::cos(elevation) * std::cos(azimuth),
+                             range * std::cos(elevation) * std::sin(azimuth),
+                             range * std::sin(elevation));
+      cloud.intensity.push_back(static_cast<float>(cloud.xyz.size() - 1));
+    }
+  }
+  return cloud;
+}
+
+// Brute-force counts with the search's own float arithmetic, ((dx^2 + dy^2) + dz^2) < r^2:
+// the capped counts must then agree exactly, boundary cases included.
+int float_brute_count(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& q,
+                      double radius) {
+  const float r2 = static_cast<float>(radius * radius);
+  int count = 0;
+  for (const Eigen::Vector3f& p : points) {
+    const float dx = q.x() - p.x(), dy = q.y() - p.y(), dz = q.z() - p.z();
+    count += dx * dx + dy * dy + dz * dz < r2;
+  }
+  return count;
+}
+
+void expect_counts_match_brute_force(const std::vector<Eigen::Vector3f>& points, size_t stride) {
+  const RadiusSearch search(points);
+  ASSERT_EQ(search.size(), points.size());
+  std::vector<uint32_t> order = search.spatial_order();
+  std::sort(order.begin(), order.end());
+  for (size_t i = 0; i < order.size(); ++i) ASSERT_EQ(order[i], i);  // a permutation
+  size_t early = 0;
+  for (size_t rank = 0; rank < points.size(); rank += stride) {
+    const Eigen::Vector3f& q = points[search.spatial_order()[rank]];
+    for (double radius : {0.01, 0.05, 0.2, 0.6}) {
+      const int brute = float_brute_count(points, q, radius);
+      ASSERT_EQ(search.count_within(q, radius), brute) << rank << " r " << radius;
+      for (int cap : {1, 2, 4, 9, 40}) {
+        const int around = search.count_around(rank, radius, cap);
+        ASSERT_EQ(around, std::min(brute, cap)) << rank << " r " << radius << " cap " << cap;
+        ASSERT_EQ(search.count_within(q, radius, cap), std::min(brute, cap));
+        early += brute > cap;
+      }
+    }
+  }
+  EXPECT_GT(early, points.size() / stride);  // capped counts (early exits) did occur
+}
+
+TEST(RadiusSearch, CappedCountsMatchBruteForceOnAScan) {
+  expect_counts_match_brute_force(ring_scan(450, 0.8f, 11).xyz, 1);
+}
+
+TEST(RadiusSearch, CappedCountsMatchBruteForceOnClustersAndALargeCloud) {
+  // Tight clusters (many points per leaf within a small radius) plus uniform clutter.
+  std::mt19937 rng(12);
+  std::normal_distribution<float> spread(0.0f, 0.03f);
+  std::vector<Eigen::Vector3f> clusters = random_cloud(300, 0.0f, 3.0f, 13).xyz;
+  for (size_t c = 0, n = clusters.size(); c < n; c += 3) {
+    for (int k = 0; k < 8; ++k) {
+      clusters.push_back(clusters[c] + Eigen::Vector3f(spread(rng), spread(rng), spread(rng)));
+    }
+  }
+  expect_counts_match_brute_force(clusters, 1);
+  // Above the Morton threshold (2^16 points): the stored order differs, answers must not.
+  expect_counts_match_brute_force(random_cloud(70000, 0.0f, 4.0f, 14).xyz, 997);
+}
+
+TEST(Dror, MatchesBruteForceOnARingScan) {
+  const PointCloud cloud = ring_scan(450, 0.2f, 15);
+  const DrorFilter filter;  // Table IV lidar defaults
+  for (int threads : {1, 2}) {
+    PointCloud ours = cloud;
+    apply_dror(filter, ours, threads);
+    const std::set<int> kept = kept_ids(ours);
+    size_t checked = 0;
+    for (size_t k = 0; k < cloud.size(); ++k) {
+      const Eigen::Vector3f& p = cloud.xyz[k];
+      const double radius = dror_search_radius(filter, std::hypot(p.x(), p.y()));
+      const BruteCount brute = brute_count(cloud, k, radius);
+      if (brute.ambiguous) continue;
+      ++checked;
+      ASSERT_EQ(kept.count(static_cast<int>(k)) == 1, brute.count >= filter.k_min) << k;
+    }
+    EXPECT_GT(checked, cloud.size() * 95 / 100);
+    EXPECT_GT(ours.size(), cloud.size() / 2);
+    EXPECT_LT(ours.size(), cloud.size() - 100);  // the spurious returns go
+  }
 }
 
 TEST(Bun0, PclPublishedAnswers) {
