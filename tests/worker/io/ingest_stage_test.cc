@@ -82,7 +82,7 @@ TEST(IngestStage, BadBundleFailsNamingTheFileAndCancelStops) {
   context.canceled = [] { return false; };
   context.options = {{"gap_factr", 3}};
   io::testing::expect_error([&] { make_ingest_stage()->run(context); },
-                            {"options.ingest.gap_factr: unknown field"});
+                            {"options.ingest.gap_factr: unknown option (known: gap_factor, rate_tolerance)"});
 }
 
 TEST(IngestStage, ImageSizeDifferentFromTheCameraModelIsAnError) {
