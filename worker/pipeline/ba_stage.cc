@@ -536,30 +536,10 @@ class BaStage : public Stage {
 
 // ---- options ----------------------------------------------------------------------------------
 
-std::vector<std::string> BaStageOptions::known_options() {
-  return {"mode",
-          "tracks",
-          "camera_sensor",
-          "dvl_ranges_sensor",
-          "servo_sensor",
-          "depth_sensor",
-          "use_depth",
-          "dvl_max_dt_s",
-          "servo_window_s",
-          "triangulation_max_reprojection_px",
-          "max_keyframes",
-          "max_iterations",
-          "threads",
-          "linear_solver",
-          "histogram_bin_m",
-          "histogram_range_m"};
-}
-
 BaStageOptions BaStageOptions::from_json(const json& options) {
   BaStageOptions o;
   if (options.is_null()) return o;
-  check_stage_options(options, "ba", known_options());
-  proto::FieldReader r(options, "options.ba");
+  StageOptionReader r(options, "ba");
   o.mode = r.optional<std::string>("mode", o.mode);
   o.tracks = r.optional<std::string>("tracks", o.tracks);
   o.camera_sensor = r.optional<std::string>("camera_sensor", o.camera_sensor);
@@ -577,6 +557,7 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
   o.linear_solver = r.optional<std::string>("linear_solver", o.linear_solver);
   o.histogram_bin_m = r.optional<double>("histogram_bin_m", o.histogram_bin_m);
   o.histogram_range_m = r.optional<double>("histogram_range_m", o.histogram_range_m);
+  r.finish();
   require(o.mode == "all" || o.mode == "proposed" || o.mode == "geva" || o.mode == "naive", "mode",
           "proposed, geva, naive or all, got '" + o.mode + "'");
   require(o.tracks == "frontend" || o.tracks == "ground_truth", "tracks",

@@ -58,7 +58,6 @@ struct BaStageOptions {
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static BaStageOptions from_json(const nlohmann::json& options);
-  static std::vector<std::string> known_options();
   std::vector<ba::BaMode> modes() const;
 };
 

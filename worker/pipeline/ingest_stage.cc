@@ -26,10 +26,10 @@ struct IngestOptions {
   static IngestOptions from_json(const json& options) {
     IngestOptions o;
     if (options.is_null()) return o;
-    check_stage_options(options, "ingest", {"gap_factor", "rate_tolerance"});
-    proto::FieldReader r(options, "options.ingest");
+    StageOptionReader r(options, "ingest");
     o.gap_factor = r.optional<double>("gap_factor", o.gap_factor);
     o.rate_tolerance = r.optional<double>("rate_tolerance", o.rate_tolerance);
+    r.finish();
     if (!(o.gap_factor > 1.0))
       throw proto::ContractError("options.ingest.gap_factor: expected > 1");
     if (!(o.rate_tolerance > 0.0))

@@ -218,25 +218,10 @@ class InspectStage : public Stage {
 
 }  // namespace
 
-std::vector<std::string> InspectStageOptions::known_options() {
-  return {"tau_m",
-          "tau_noise_sigmas",
-          "dbscan_eps_m",
-          "dbscan_min_pts",
-          "alpha_m",
-          "view_range_m",
-          "max_behind_vertex_m",
-          "draco_position_bits",
-          "draco_field_bits",
-          "write_ply",
-          "match_distance_m"};
-}
-
 InspectStageOptions InspectStageOptions::from_json(const json& options) {
   InspectStageOptions o;
   if (options.is_null()) return o;
-  check_stage_options(options, "inspect", known_options());
-  proto::FieldReader r(options, "options.inspect");
+  StageOptionReader r(options, "inspect");
   auto& in = o.inspect;
   in.tau_m = r.optional<double>("tau_m", in.tau_m);
   in.tau_noise_sigmas = r.optional<double>("tau_noise_sigmas", in.tau_noise_sigmas);
@@ -249,6 +234,7 @@ InspectStageOptions InspectStageOptions::from_json(const json& options) {
   o.draco_field_bits = r.optional<int>("draco_field_bits", o.draco_field_bits);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);
   o.match_distance_m = r.optional<double>("match_distance_m", o.match_distance_m);
+  r.finish();
   try {
     inspect::validate(o.inspect);
   } catch (const std::invalid_argument& e) {

@@ -38,7 +38,6 @@ struct InspectStageOptions {
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static InspectStageOptions from_json(const nlohmann::json& options);
-  static std::vector<std::string> known_options();
 };
 
 std::unique_ptr<Stage> make_inspect_stage();

@@ -607,32 +607,10 @@ class MapStage : public Stage {
 std::string map_draco_file(const std::string& sensor) { return "map_" + sensor + ".drc"; }
 std::string map_ply_file(const std::string& sensor) { return "map_" + sensor + ".ply"; }
 
-std::vector<std::string> MapStageOptions::known_options() {
-  return {"sensors",
-          "lidar_filters",
-          "sonar_filters",
-          "sensor_filters",
-          "final_voxel_leaf_m",
-          "final_voxel_merge_radius_leaves",
-          "scans_per_intermediary",
-          "deskew",
-          "max_sweep_duration_s",
-          "odometry_correction",
-          "draco_position_bits",
-          "draco_compression_level",
-          "write_ply",
-          "metrics_radius_m",
-          "metrics_max_points",
-          "slam_sensor",
-          "slam_keyframe_leaf_m",
-          "threads"};
-}
-
 MapStageOptions MapStageOptions::from_json(const json& options) {
   MapStageOptions o;
   if (options.is_null()) return o;
-  check_stage_options(options, "map", known_options());
-  proto::FieldReader r(options, "options.map");
+  StageOptionReader r(options, "map");
   if (r.has("sensors")) {
     // `--set map.sensors=lidar_h` arrives as a string; `["lidar_h","sonar"]` as an array.
     const json& value = r.at("sensors");
@@ -660,6 +638,7 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.slam_sensor = r.optional<std::string>("slam_sensor", o.slam_sensor);
   o.slam_keyframe_leaf_m = r.optional<double>("slam_keyframe_leaf_m", o.slam_keyframe_leaf_m);
   o.threads = r.optional<int>("threads", o.threads);
+  r.finish();
 
   require(o.lidar_filters.is_object(), "lidar_filters",
           "an object {scan_filters, intermediary_filters, final_filters, deskew}");

@@ -77,7 +77,6 @@ struct MapStageOptions {
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static MapStageOptions from_json(const nlohmann::json& options);
-  static std::vector<std::string> known_options();
   nlohmann::json to_json() const;
   // The defaults of a sensor of type "lidar" or "sonar" (Table IV scan filters, the final
   // voxel grid, deskew), then `lidar_filters`/`sonar_filters`, then `sensor_filters[sensor]`.

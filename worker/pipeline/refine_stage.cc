@@ -716,44 +716,10 @@ class RefineStage : public Stage {
 
 }  // namespace
 
-std::vector<std::string> RefineStageOptions::known_options() {
-  return {"imu_sensor",
-          "dvl_sensor",
-          "lidar_sensor",
-          "dvl",
-          "estimate_dvl_scale",
-          "dvl_scale_initial",
-          "dvl_scale_prior_sigma",
-          "estimate_dvl_rotation",
-          "dvl_rotation_prior_sigma_deg",
-          "max_dvl_gap_s",
-          "odometry",
-          "loop_closures",
-          "odometry_sigma_translation_m",
-          "odometry_sigma_translation_per_m",
-          "odometry_sigma_rotation_rad",
-          "odometry_sigma_rotation_per_rad",
-          "odometry_noise_from_map",
-          "degeneracy",
-          "degeneracy_sigma_translation_m",
-          "degeneracy_sigma_rotation_rad",
-          "imu_position_when_degenerate",
-          "map_anchors",
-          "map_sigma_translation_m",
-          "map_sigma_rotation_rad",
-          "max_iterations",
-          "relinearization_passes",
-          "threads",
-          "compare_without_dvl",
-          "ate_max_time_difference_s",
-          "rpe_delta_m"};
-}
-
 RefineStageOptions RefineStageOptions::from_json(const json& options) {
   RefineStageOptions o;
   if (options.is_null()) return o;
-  check_stage_options(options, "refine", known_options());
-  proto::FieldReader r(options, "options.refine");
+  StageOptionReader r(options, "refine");
   o.imu_sensor = r.optional<std::string>("imu_sensor", o.imu_sensor);
   o.dvl_sensor = r.optional<std::string>("dvl_sensor", o.dvl_sensor);
   o.lidar_sensor = r.optional<std::string>("lidar_sensor", o.lidar_sensor);
@@ -795,6 +761,7 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   o.ate_max_time_difference_s =
       r.optional<double>("ate_max_time_difference_s", o.ate_max_time_difference_s);
   o.rpe_delta_m = r.optional<double>("rpe_delta_m", o.rpe_delta_m);
+  r.finish();
 
   require(o.dvl_scale_initial > 0.5 && o.dvl_scale_initial < 1.5, "dvl_scale_initial",
           "a value in (0.5, 1.5)");

@@ -74,7 +74,6 @@ struct RefineStageOptions {
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static RefineStageOptions from_json(const nlohmann::json& options);
-  static std::vector<std::string> known_options();
   // The solver options these stand for (sensor noise is filled in from mission.yaml).
   slam::RefineOptions solver_options() const;
 };

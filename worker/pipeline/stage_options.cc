@@ -2,8 +2,6 @@
 
 #include <algorithm>
 
-#include "proto/contract_error.h"
-
 namespace keel::pipeline {
 
 std::string join_names(const std::vector<std::string>& names) {
@@ -12,16 +10,18 @@ std::string join_names(const std::vector<std::string>& names) {
   return out;
 }
 
-void check_stage_options(const nlohmann::json& options, const std::string& stage,
-                         const std::vector<std::string>& known) {
-  if (options.is_null()) return;
-  if (!options.is_object())
-    throw proto::ContractError("options." + stage + ": expected an object, got " +
-                               proto::json_type_name(options));
-  for (const auto& item : options.items())
-    if (std::find(known.begin(), known.end(), item.key()) == known.end())
-      throw proto::ContractError("options." + stage + "." + item.key() +
-                                 ": unknown option (known: " + join_names(known) + ")");
+StageOptionReader::StageOptionReader(const nlohmann::json& options, const std::string& stage)
+    : options_(options), reader_(options, "options." + stage) {}
+
+void StageOptionReader::finish() const {
+  for (const auto& item : options_.items()) {
+    if (std::find(asked_.begin(), asked_.end(), item.key()) != asked_.end()) continue;
+    std::vector<std::string> known;
+    for (const auto& name : asked_)
+      if (std::find(known.begin(), known.end(), name) == known.end()) known.push_back(name);
+    throw proto::ContractError(reader_.child(item.key().c_str()) +
+                               ": unknown option (known: " + join_names(known) + ")");
+  }
 }
 
 }  // namespace keel::pipeline

@@ -1,4 +1,4 @@
-// Shared checks of a stage's JSON options (`--set stage.option=value`).
+// Shared reading of a stage's JSON options (`--set stage.option=value`).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -6,14 +6,38 @@
 #include <string>
 #include <vector>
 
+#include "proto/contract_error.h"
+
 namespace keel::pipeline {
 
 // "a, b, c": for messages that list what is known.
 std::string join_names(const std::vector<std::string>& names);
 
-// Checks that `options` is null or an object whose keys are all in `known`; a typo fails
-// with "options.<stage>.<key>: unknown option (known: ...)" instead of being ignored.
-void check_stage_options(const nlohmann::json& options, const std::string& stage,
-                         const std::vector<std::string>& known);
+// Reads `options.<stage>` (an object) and remembers every option name asked for, so the
+// list of known options is the reading code itself. `finish()` then fails on a key that
+// was never asked for: a typo fails with "options.<stage>.<key>: unknown option (known:
+// ...)" instead of being ignored.
+class StageOptionReader {
+ public:
+  StageOptionReader(const nlohmann::json& options, const std::string& stage);
+
+  template <typename T>
+  T optional(const char* name, T fallback) {
+    asked_.emplace_back(name);
+    return reader_.optional<T>(name, fallback);
+  }
+  bool has(const char* name) {
+    asked_.emplace_back(name);
+    return reader_.has(name);
+  }
+  const nlohmann::json& at(const char* name) { return reader_.at(name); }
+
+  void finish() const;
+
+ private:
+  const nlohmann::json& options_;
+  proto::FieldReader reader_;
+  std::vector<std::string> asked_;
+};
 
 }  // namespace keel::pipeline
