@@ -15,6 +15,7 @@
 #include <string>
 
 #include "tests/sim/simulator.h"
+#include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/draco_codec.h"
 #include "worker/io/mesh_reader.h"
 #include "worker/io/tum.h"
@@ -49,12 +50,7 @@ fs::path simulated_mission() {
 
 StageResult run_stage(Stage& stage, const fs::path& mission, const json& options,
                       const fs::path& work_dir) {
-  fs::create_directories(work_dir);
-  StageContext context;
-  context.mission_dir = mission;
-  context.work_dir = work_dir;
-  context.options = options;
-  return stage.run(context);
+  return testing::run_stage(stage, mission, options, work_dir).result;
 }
 
 std::string error_of(Stage& stage, const json& options, const fs::path& work_dir) {

@@ -19,6 +19,7 @@
 
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
+#include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/draco_codec.h"
 #include "worker/io/folder_index.h"
 #include "worker/io/scan_file.h"
@@ -51,21 +52,10 @@ fs::path simulated_mission() {
   return dir;
 }
 
-struct StageRun {
-  StageResult result;
-  std::vector<double> progress;
-};
+using testing::StageRun;
 
 StageRun run_stage(const fs::path& mission, const json& options, const fs::path& work_dir) {
-  fs::create_directories(work_dir);
-  StageContext context;
-  context.mission_dir = mission;
-  context.work_dir = work_dir;
-  context.options = options;
-  StageRun run;
-  context.progress = [&](double p) { run.progress.push_back(p); };
-  run.result = make_map_stage()->run(context);
-  return run;
+  return testing::run_stage(*make_map_stage(), mission, options, work_dir);
 }
 
 std::string error_of(const fs::path& mission, const json& options) {

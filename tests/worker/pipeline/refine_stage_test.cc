@@ -11,6 +11,7 @@
 #include <string>
 
 #include "tests/sim/simulator.h"
+#include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/tum.h"
 #include "worker/slam/trajectory_metrics.h"
 
@@ -39,22 +40,11 @@ fs::path simulated_mission(const std::string& name, const std::vector<std::strin
   return dir;
 }
 
-struct StageRun {
-  StageResult result;
-  std::vector<double> progress;
-};
+using testing::StageRun;
 
 StageRun run_stage(const fs::path& mission, const nlohmann::json& options,
                    const fs::path& work_dir) {
-  fs::create_directories(work_dir);
-  StageContext context;
-  context.mission_dir = mission;
-  context.work_dir = work_dir;
-  context.options = options;
-  StageRun run;
-  context.progress = [&](double p) { run.progress.push_back(p); };
-  run.result = make_refine_stage()->run(context);
-  return run;
+  return testing::run_stage(*make_refine_stage(), mission, options, work_dir);
 }
 
 double ate_rmse(const Trajectory& truth, const Trajectory& estimate) {
