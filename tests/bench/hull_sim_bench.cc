@@ -4,7 +4,7 @@
 //   - the DVL range residual sigma after GICP alone vs after `proposed` (target >= 3x smaller);
 //   - solve time of `proposed` vs `naive` (target <= +25 %) and vs `geva` (target: less);
 // then a pass/fail line per target over the seeds.
-// Run: build/tests/bench/bench_hull_sim [seeds=3] [duration_s=0 (full survey)]
+// Run: build/tests/bench/bench_hull_sim [seeds=3 | first-last] [duration_s=0 (full survey)]
 //                                       [tracks=frontend|ground_truth]
 // Environment: KEEL_HULL_BENCH_DIR=<dir> keeps the missions and stage outputs there (a mission
 // already simulated there is reused); KEEL_HULL_BENCH_REUSE_BA=1 also reuses a kept `ba`
@@ -71,7 +71,12 @@ struct Tally {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int seeds = argc > 1 ? std::atoi(argv[1]) : 3;
+  // "3" runs seeds 1..3; "2-3" runs seeds 2..3 (one seed at a time on a loaded machine).
+  const std::string seed_arg = argc > 1 ? argv[1] : "3";
+  const size_t dash = seed_arg.find('-');
+  const int first_seed = dash == std::string::npos ? 1 : std::atoi(seed_arg.c_str());
+  const int last_seed = std::atoi(seed_arg.c_str() + (dash == std::string::npos ? 0 : dash + 1));
+  const int seeds = last_seed - first_seed + 1;
   const double duration_s = argc > 2 ? std::atof(argv[2]) : 0.0;
   const std::string tracks = argc > 3 ? argv[3] : "frontend";
   const char* keep = std::getenv("KEEL_HULL_BENCH_DIR");
@@ -82,7 +87,7 @@ int main(int argc, char** argv) {
   std::printf("hauv-hull, %d seeds, duration %s, tracks=%s\n", seeds,
               duration_s > 0 ? std::to_string(duration_s).c_str() : "full", tracks.c_str());
   Tally found_all, cylinder, clean, dvl, time_naive, time_geva;
-  for (int seed = 1; seed <= seeds; ++seed) {
+  for (int seed = first_seed; seed <= last_seed; ++seed) {
     const fs::path mission =
         root / ("seed" + std::to_string(seed) + "_" +
                 (duration_s > 0 ? std::to_string(int(duration_s)) + "s" : std::string("full")));
@@ -114,6 +119,16 @@ int main(int argc, char** argv) {
     std::printf("seed %d: %zu keyframes, %d landmarks, %d DVL returns used\n", seed,
                 ba["input"]["keyframes"].get<size_t>(), ba["landmarks_triangulated"].get<int>(),
                 ba["dvl_ranges_used"].get<int>());
+    if (ba["frontend"]["ran"].get<bool>()) {
+      std::printf(
+          "  frontend: %d verified matches, %d tracks, %d triangulated, %d dropped after "
+          "initialisation (gate %.2f px, %d observations removed)\n",
+          ba["frontend"]["verified_matches"].get<int>(), ba["frontend"]["tracks"].get<int>(),
+          ba["landmarks_triangulated"].get<int>(),
+          ba["landmarks_dropped_after_initialisation"].get<int>(),
+          ba.value("post_initialisation_gate_px", 0.0),
+          ba.value("observations_dropped_after_initialisation", 0));
+    }
     std::printf(
         "  DVL residual sigma: GICP %.4f m, proposed %.4f m (%.1fx smaller; target >= 3x)\n",
         s_gicp, s_prop, s_gicp / s_prop);

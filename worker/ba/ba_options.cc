@@ -52,6 +52,10 @@ void validate(const BaOptions& o) {
       {"function_tolerance", o.function_tolerance},
       {"gradient_tolerance", o.gradient_tolerance},
       {"parameter_tolerance", o.parameter_tolerance},
+      {"frontend.min_depth_m", o.frontend.min_depth_m},
+      {"frontend.max_depth_m", o.frontend.max_depth_m},
+      {"triangulation.post_initialisation_gate_sigmas",
+       o.triangulation.post_initialisation_gate_sigmas},
   };
   for (const auto& [name, value] : positive) {
     if (!std::isfinite(value) || value <= 0) {
@@ -61,6 +65,13 @@ void validate(const BaOptions& o) {
   }
   if (!std::isfinite(o.surface_offset_m)) {
     throw std::invalid_argument("ba options: surface_offset_m: expected a finite value");
+  }
+  if (o.frontend.min_depth_m >= o.frontend.max_depth_m) {
+    throw std::invalid_argument(
+        "ba options: frontend.max_depth_m: expected more than frontend.min_depth_m");
+  }
+  if (o.triangulation.min_monocular_views < 2) {
+    throw std::invalid_argument("ba options: triangulation.min_monocular_views: expected >= 2");
   }
   if (o.modes.empty()) throw std::invalid_argument("ba options: modes: expected at least one mode");
   if (o.max_iterations < 1 || o.num_threads < 1 || o.initialisation_max_iterations < 1) {

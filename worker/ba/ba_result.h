@@ -79,8 +79,13 @@ struct BaResult {
   BaInitialisation initialisation;  // BaOptions::slam_initialisation
   int tracks_in = 0;                // tracks handed to triangulation
   int landmarks_triangulated = 0;   // tracks kept as landmarks
-  // Dropped after the SLAM initialisation: out of the triangulation's depth or reprojection gate.
+  // Dropped after the SLAM initialisation: out of the triangulation's depth or reprojection gate,
+  // or a monocular landmark left with fewer than TriangulationOptions::min_monocular_views views.
   int landmarks_dropped_after_initialisation = 0;
+  // Observations removed by the post-initialisation reprojection gate, and that gate in pixels
+  // (TriangulationOptions::post_initialisation_gate_sigmas; 0: not run).
+  int observations_dropped_after_initialisation = 0;
+  double post_initialisation_gate_px = 0;
   int dvl_ranges_in = 0;
   int dvl_ranges_used = 0;  // after the gate of BaOptions::dvl_gate_m
   bool gicp_ran = false;

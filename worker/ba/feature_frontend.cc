@@ -6,10 +6,13 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
 
+#include "worker/ba/rig_geometry.h"
 #include "worker/ba/rigid_ransac.h"
 #include "worker/ba/track_builder.h"
 
@@ -114,25 +117,36 @@ KeyframeFeatures features_of(const BaKeyframe& keyframe, size_t index, const BaR
   return out;
 }
 
-// Monocular verification: RANSAC essential matrix, Sampson distance.
+// Depth of each match in camera a, in metres, from the relative pose (R, t) recovered from E
+// (unit baseline) scaled by the initial poses' baseline; NaN where the rays do not meet in
+// front of both cameras.
+std::vector<double> two_view_depths_m(const std::vector<cv::Point2d>& pa,
+                                      const std::vector<cv::Point2d>& pb, const cv::Mat& E,
+                                      const cv::Mat& K, double baseline_m, cv::Mat& mask) {
+  cv::Mat R, t, points_h;
+  // distanceThresh in baselines: far enough to keep every finite depth; cheirality is the test.
+  cv::recoverPose(E, pa, pb, K, R, t, 1e6, mask, points_h);
+  std::vector<double> depths(pa.size(), std::numeric_limits<double>::quiet_NaN());
+  points_h.convertTo(points_h, CV_64F);
+  for (int i = 0; i < points_h.cols; ++i) {
+    if (mask.at<uint8_t>(i) == 0) continue;
+    const double w = points_h.at<double>(3, i);
+    if (std::abs(w) < 1e-12) continue;
+    depths[i] = points_h.at<double>(2, i) / w * baseline_m;
+  }
+  return depths;
+}
+
+// The matches' pixels in keyframes a and b, for verify_monocular_matches().
 std::vector<bool> verify_essential(const KeyframeFeatures& a, const KeyframeFeatures& b,
                                    const std::vector<cv::DMatch>& matches, const BaRig& rig,
-                                   const FrontendOptions& options) {
-  std::vector<cv::Point2d> pa, pb;
+                                   double baseline_m, const FrontendOptions& options) {
+  std::vector<Eigen::Vector2d> pa, pb;
   for (const auto& m : matches) {
-    pa.emplace_back(a.pixels[m.queryIdx].x(), a.pixels[m.queryIdx].y());
-    pb.emplace_back(b.pixels[m.trainIdx].x(), b.pixels[m.trainIdx].y());
+    pa.push_back(a.pixels[m.queryIdx]);
+    pb.push_back(b.pixels[m.trainIdx]);
   }
-  const PinholeCamera& c = rig.camera_top;
-  const cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
-  cv::Mat mask;
-  const cv::Mat E = cv::findEssentialMat(pa, pb, K, cv::RANSAC, options.ransac_confidence,
-                                         options.essential_threshold_px, mask);
-  std::vector<bool> inliers(matches.size(), false);
-  if (E.empty() || mask.empty()) return inliers;
-  for (size_t i = 0; i < matches.size(); ++i)
-    inliers[i] = mask.at<uint8_t>(static_cast<int>(i)) != 0;
-  return inliers;
+  return verify_monocular_matches(pa, pb, rig.camera_top, baseline_m, options);
 }
 
 // Stereo verification: one rigid motion between the triangulated points.
@@ -151,6 +165,45 @@ std::vector<bool> verify_rigid(const KeyframeFeatures& a, const KeyframeFeatures
 
 }  // namespace
 
+// The epipolar constraint holds for every point at infinity (x_b ~ R x_a satisfies
+// x_b^T [t]x R x_a = 0 for any t), so a wrong match with little disparity (repeated hull
+// texture, features fixed in the image) passes RANSAC and later triangulates hundreds of metres
+// away; the model-free solve then slid one along its ray to 2.5e8 m on keel-sim hauv-hull
+// (surface cost 1e19). So an inlier must also triangulate, with E's own pose and the initial
+// poses' baseline, in front of both cameras within [min_depth_m, max_depth_m].
+std::vector<bool> verify_monocular_matches(const std::vector<Eigen::Vector2d>& pixels_a,
+                                           const std::vector<Eigen::Vector2d>& pixels_b,
+                                           const PinholeCamera& camera, double baseline_m,
+                                           const FrontendOptions& options) {
+  if (pixels_a.size() != pixels_b.size())
+    throw std::invalid_argument("verify_monocular_matches: pixels_a and pixels_b differ in size");
+  std::vector<bool> inliers(pixels_a.size(), false);
+  if (pixels_a.size() < 5) return inliers;  // the five-point algorithm's minimum
+  std::vector<cv::Point2d> pa, pb;
+  for (size_t i = 0; i < pixels_a.size(); ++i) {
+    pa.emplace_back(pixels_a[i].x(), pixels_a[i].y());
+    pb.emplace_back(pixels_b[i].x(), pixels_b[i].y());
+  }
+  const cv::Mat K =
+      (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  cv::Mat mask;
+  const cv::Mat E = cv::findEssentialMat(pa, pb, K, cv::RANSAC, options.ransac_confidence,
+                                         options.essential_threshold_px, mask);
+  // Degenerate configurations return several stacked 3x3 solutions; keep none of them.
+  if (E.rows != 3 || E.cols != 3 || mask.empty()) return inliers;
+  const bool gate_depth = options.gate_two_view_depth && baseline_m > 0;
+  const std::vector<double> depths =
+      gate_depth ? two_view_depths_m(pa, pb, E, K, baseline_m, mask) : std::vector<double>();
+  for (size_t i = 0; i < inliers.size(); ++i) {
+    inliers[i] = mask.at<uint8_t>(static_cast<int>(i)) != 0;
+    if (inliers[i] && gate_depth) {
+      inliers[i] = std::isfinite(depths[i]) && depths[i] >= options.min_depth_m &&
+                   depths[i] <= options.max_depth_m;
+    }
+  }
+  return inliers;
+}
+
 FrontendOutput run_frontend(const std::vector<BaKeyframe>& keyframes, const BaRig& rig,
                             const FrontendOptions& options) {
   FrontendOutput out;
@@ -163,6 +216,14 @@ FrontendOutput run_frontend(const std::vector<BaKeyframe>& keyframes, const BaRi
     counts.push_back(static_cast<int>(features.back().pixels.size()));
   }
   const bool stereo = rig.camera_bottom.has_value();
+  // Camera centres from the initial poses: the metric scale of the monocular two-view check.
+  const ServoMount mount = servo_mount(rig);
+  std::vector<Eigen::Vector3d> centres_world;
+  for (const BaKeyframe& k : keyframes) {
+    centres_world.push_back(
+        world_camera_pose(k.T_world_vehicle, k.servo_angle_rad, mount, rig.T_servo_camera)
+            .translation());
+  }
   std::vector<PairMatches> pairs;
   for (size_t i = 0; i < keyframes.size(); ++i) {
     for (size_t j = i + 1; j < keyframes.size() && j <= i + options.match_window; ++j) {
@@ -172,7 +233,8 @@ FrontendOutput run_frontend(const std::vector<BaKeyframe>& keyframes, const BaRi
       ++out.stats.keyframe_pairs_matched;
       const std::vector<bool> inliers =
           stereo ? verify_rigid(features[i], features[j], matches, options)
-                 : verify_essential(features[i], features[j], matches, rig, options);
+                 : verify_essential(features[i], features[j], matches, rig,
+                                    (centres_world[j] - centres_world[i]).norm(), options);
       PairMatches pair{static_cast<int>(i), static_cast<int>(j), {}};
       for (size_t m = 0; m < matches.size(); ++m) {
         if (inliers[m]) pair.matches.emplace_back(matches[m].queryIdx, matches[m].trainIdx);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace keel::ba {
 namespace {
@@ -74,12 +75,68 @@ bool within_gates(const std::vector<View>& views, const Eigen::Vector3d& point,
   return true;
 }
 
+double reprojection_error_px(const View& v, const Eigen::Vector3d& point) {
+  const Eigen::Vector3d p_c = v.T_camera_world * point;
+  if (!(p_c.z() > 0)) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d uv(v.camera->fx * p_c.x() / p_c.z() + v.camera->cx,
+                           v.camera->fy * p_c.y() / p_c.z() + v.camera->cy);
+  return (uv - v.pixel).norm();
+}
+
 }  // namespace
+
+std::vector<double> observation_reprojection_errors_px(const Eigen::Vector3d& point,
+                                                       const FeatureTrack& track,
+                                                       const std::vector<Pose3>& T_world_camera,
+                                                       const BaRig& rig) {
+  std::vector<double> errors;
+  for (const FeatureObservation& obs : track.observations) {
+    FeatureTrack single;
+    single.observations = {obs};
+    double worst = 0;
+    for (const View& v : views_of(single, T_world_camera, rig))
+      worst = std::max(worst, reprojection_error_px(v, point));
+    errors.push_back(worst);
+  }
+  return errors;
+}
 
 bool landmark_within_gates(const Eigen::Vector3d& point, const FeatureTrack& track,
                            const std::vector<Pose3>& T_world_camera, const BaRig& rig,
                            double max_reprojection_px, const TriangulationOptions& options) {
   return within_gates(views_of(track, T_world_camera, rig), point, max_reprojection_px, options);
+}
+
+double robust_pixel_sigma_px(const std::vector<Eigen::Vector3d>& points,
+                             const std::vector<FeatureTrack>& tracks,
+                             const std::vector<Pose3>& T_world_camera, const BaRig& rig) {
+  std::vector<double> scaled;
+  for (size_t k = 0; k < tracks.size(); ++k) {
+    const size_t m = 2 * views_of(tracks[k], T_world_camera, rig).size();
+    if (m <= 3) continue;
+    const double dof_scale = std::sqrt(double(m) / double(m - 3));
+    for (double e : observation_reprojection_errors_px(points[k], tracks[k], T_world_camera, rig))
+      if (std::isfinite(e)) scaled.push_back(dof_scale * e);
+  }
+  if (scaled.empty()) return std::numeric_limits<double>::infinity();
+  std::nth_element(scaled.begin(), scaled.begin() + scaled.size() / 2, scaled.end());
+  return scaled[scaled.size() / 2] / std::sqrt(2.0 * std::log(2.0));
+}
+
+bool gate_landmark_observations(const Eigen::Vector3d& point, FeatureTrack& track,
+                                const std::vector<Pose3>& T_world_camera, const BaRig& rig,
+                                double gate_px, const TriangulationOptions& options) {
+  const std::vector<double> errors =
+      observation_reprojection_errors_px(point, track, T_world_camera, rig);
+  std::vector<FeatureObservation> consistent;
+  for (size_t o = 0; o < errors.size(); ++o)
+    if (errors[o] <= gate_px) consistent.push_back(track.observations[o]);
+  track.observations = std::move(consistent);
+  const bool stereo = std::any_of(track.observations.begin(), track.observations.end(),
+                                  [](const FeatureObservation& o) { return o.pixel_bottom; });
+  const size_t min_views = stereo ? 2 : static_cast<size_t>(options.min_monocular_views);
+  return track.observations.size() >= min_views &&
+         landmark_within_gates(point, track, T_world_camera, rig, gate_px, options);
 }
 
 std::optional<Eigen::Vector3d> triangulate_track(const FeatureTrack& track,

@@ -515,6 +515,9 @@ class BaStage : public Stage {
     r["tracks_in"] = result.tracks_in;
     r["landmarks_triangulated"] = result.landmarks_triangulated;
     r["landmarks_dropped_after_initialisation"] = result.landmarks_dropped_after_initialisation;
+    r["observations_dropped_after_initialisation"] =
+        result.observations_dropped_after_initialisation;
+    r["post_initialisation_gate_px"] = result.post_initialisation_gate_px;
     r["dvl_ranges_in"] = result.dvl_ranges_in;
     r["dvl_ranges_used"] = result.dvl_ranges_used;
     r["gicp"] = {{"ran", result.gicp_ran},

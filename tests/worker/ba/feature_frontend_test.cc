@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
 
 #include "worker/ba/model_assisted_ba.h"
 #include "worker/ba/rigid_ransac.h"
@@ -189,6 +190,52 @@ TEST(FeatureFrontend, ImagesRunThroughTheWholePipeline) {
   for (const auto& p : in_camera) EXPECT_NEAR(p.point_camera.z(), kPlateZ, 0.02);
 }
 
+Eigen::Vector2d project(const PinholeCamera& c, const Pose3& T_world_camera,
+                        const Eigen::Vector3d& p_world) {
+  const Eigen::Vector3d p = T_world_camera.inverse() * p_world;
+  return Eigen::Vector2d(c.fx * p.x() / p.z() + c.cx, c.fy * p.y() / p.z() + c.cy);
+}
+
+// Two views 0.3 m apart of points 1.2-2 m away, plus wrong matches that obey the epipolar
+// constraint exactly: b's pixel is where a's ray meets b's image at infinity (x_b ~ R x_a), or
+// a's ray 40 m out. RANSAC keeps them; the depth check must not.
+TEST(FeatureFrontend, MonocularVerificationRejectsMatchesOutOfDepthRange) {
+  const PinholeCamera c{500, 500, 320, 240, 640, 480};
+  Pose3 T_world_b = Pose3::Identity();
+  T_world_b.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  T_world_b.translation() = Eigen::Vector3d(0.3, 0.02, 0.0);
+  const Pose3 T_world_a = Pose3::Identity();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  std::vector<Eigen::Vector2d> pa, pb;
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector3d p(0.15 + 0.6 * u(rng), 0.45 * u(rng), 1.6 + 0.4 * u(rng));
+    pa.push_back(project(c, T_world_a, p) + Eigen::Vector2d(noise(rng), noise(rng)));
+    pb.push_back(project(c, T_world_b, p) + Eigen::Vector2d(noise(rng), noise(rng)));
+  }
+  const std::vector<Eigen::Vector2d> false_a = {{200, 150}, {400, 300}, {300, 200}};
+  const std::vector<double> false_depth_m = {1e9, 1e9, 40.0};
+  for (size_t f = 0; f < false_a.size(); ++f) {
+    const Eigen::Vector3d ray((false_a[f].x() - c.cx) / c.fx, (false_a[f].y() - c.cy) / c.fy, 1);
+    pa.push_back(false_a[f]);
+    pb.push_back(project(c, T_world_b, false_depth_m[f] * ray));
+  }
+  FrontendOptions options;
+  options.essential_threshold_px = 0.5;
+  const std::vector<bool> gated = verify_monocular_matches(pa, pb, c, 0.3, options);
+  int true_kept = 0;
+  for (int i = 0; i < 60; ++i) true_kept += gated[i];
+  EXPECT_GE(true_kept, 57);
+  for (size_t f = 0; f < false_a.size(); ++f) EXPECT_FALSE(gated[60 + f]) << "false match " << f;
+  // The epipolar test alone accepts the matches at infinity.
+  options.gate_two_view_depth = false;
+  const std::vector<bool> epipolar_only = verify_monocular_matches(pa, pb, c, 0.3, options);
+  EXPECT_TRUE(epipolar_only[60]);
+  EXPECT_TRUE(epipolar_only[61]);
+  EXPECT_THROW(verify_monocular_matches(pa, {pb[0]}, c, 0.3, options), std::invalid_argument);
+}
+
 TEST(RigidRansac, RecoversMotionDespiteOutliers) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -252,6 +299,107 @@ TEST(Triangulation, ExactObservationsGiveThePoint) {
   TriangulationOptions close;
   close.min_depth_m = 2.0;
   EXPECT_FALSE(triangulate_track(track, cameras, rig, close));
+}
+
+// Four cameras 0.2 m apart along x, looking along +z.
+std::vector<Pose3> camera_row(int n) {
+  std::vector<Pose3> cameras;
+  for (int i = 0; i < n; ++i) {
+    Pose3 T = Pose3::Identity();
+    T.translation() = Eigen::Vector3d(0.2 * i, 0.0, 0.0);
+    cameras.push_back(T);
+  }
+  return cameras;
+}
+
+TEST(Triangulation, GateRemovesAnOutlierViewAndUncheckedTwoViewTracks) {
+  BaRig rig;
+  rig.camera_top = PinholeCamera{600, 600, 320, 240, 640, 480};
+  const std::vector<Pose3> cameras = camera_row(4);
+  const Eigen::Vector3d point(0.3, -0.1, 1.5);
+  FeatureTrack track;
+  for (int i = 0; i < 4; ++i)
+    track.observations.push_back({i, project(rig.camera_top, cameras[i], point), {}});
+  track.observations[2].pixel += Eigen::Vector2d(0, 10);  // a wrong match in view 2
+  TriangulationOptions options;                           // min_monocular_views 3
+  FeatureTrack four = track;
+  EXPECT_TRUE(gate_landmark_observations(point, four, cameras, rig, 3.0, options));
+  ASSERT_EQ(four.observations.size(), 3u);
+  for (const auto& o : four.observations) EXPECT_NE(o.keyframe, 2);
+  // Three views with one wrong: two remain, too few for a monocular landmark.
+  FeatureTrack three{0, {track.observations[0], track.observations[1], track.observations[2]}};
+  EXPECT_FALSE(gate_landmark_observations(point, three, cameras, rig, 3.0, options));
+  EXPECT_EQ(three.observations.size(), 2u);
+
+  // A two-view wrong match displaced along the epipolar line (here the x axis) by 8 px: the
+  // triangulated point fits both views, only its depth is wrong, so the reprojection gate
+  // passes it and only the view count rejects it.
+  FeatureTrack two{0,
+                   {{0, project(rig.camera_top, cameras[0], point), {}},
+                    {1, project(rig.camera_top, cameras[1], point) + Eigen::Vector2d(8, 0), {}}}};
+  TriangulationOptions loose;
+  loose.min_parallax_deg = 0;
+  const auto wrong = triangulate_track(two, cameras, rig, loose);
+  ASSERT_TRUE(wrong);
+  EXPECT_GT((*wrong - point).norm(), 0.1);
+  for (double e : observation_reprojection_errors_px(*wrong, two, cameras, rig)) EXPECT_LT(e, 1e-6);
+  FeatureTrack two_copy = two;
+  EXPECT_FALSE(gate_landmark_observations(*wrong, two_copy, cameras, rig, 3.0, options));
+  TriangulationOptions two_views = options;
+  two_views.min_monocular_views = 2;
+  EXPECT_TRUE(gate_landmark_observations(*wrong, two, cameras, rig, 3.0, two_views));
+
+  // A stereo track checks depth by itself: two observations suffice.
+  BaRig stereo = rig;
+  stereo.camera_bottom = rig.camera_top;
+  stereo.T_top_bottom.translation() = Eigen::Vector3d(0, 0.1, 0);
+  FeatureTrack pair;
+  for (int i = 0; i < 2; ++i) {
+    pair.observations.push_back({i, project(rig.camera_top, cameras[i], point),
+                                 project(rig.camera_top, cameras[i] * stereo.T_top_bottom, point)});
+  }
+  EXPECT_TRUE(gate_landmark_observations(point, pair, cameras, stereo, 3.0, options));
+}
+
+// Points seen by 2-4 cameras with 0.5 px Gaussian noise and 2 % wrong observations, each fitted
+// by triangulation: the estimate must be the noise, not the (smaller) fitted residual.
+TEST(Triangulation, RobustPixelSigmaRecoversTheNoiseOfFittedTracks) {
+  BaRig rig;
+  rig.camera_top = PinholeCamera{600, 600, 320, 240, 640, 480};
+  const std::vector<Pose3> cameras = camera_row(4);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  TriangulationOptions loose;
+  loose.max_reprojection_px = 1e9;
+  loose.min_parallax_deg = 0;
+  std::vector<FeatureTrack> tracks;
+  std::vector<Eigen::Vector3d> points;
+  double raw_sum_sq = 0;
+  int raw_n = 0;
+  for (int k = 0; k < 600; ++k) {
+    const Eigen::Vector3d p(0.3 + 0.5 * u(rng), 0.4 * u(rng), 1.5 + 0.3 * u(rng));
+    const int views = 2 + k % 3;
+    FeatureTrack t;
+    for (int i = 0; i < views; ++i) {
+      Eigen::Vector2d px = project(rig.camera_top, cameras[i], p);
+      px += (k * 4 + i) % 50 == 0 ? Eigen::Vector2d(30, -20)
+                                  : Eigen::Vector2d(noise(rng), noise(rng));
+      t.observations.push_back({i, px, {}});
+    }
+    const auto fitted = triangulate_track(t, cameras, rig, loose);
+    if (!fitted) continue;
+    for (double e : observation_reprojection_errors_px(*fitted, t, cameras, rig))
+      if (e < 5) raw_sum_sq += e * e, ++raw_n;
+    tracks.push_back(t);
+    points.push_back(*fitted);
+  }
+  ASSERT_GE(tracks.size(), 550u);
+  const double sigma = robust_pixel_sigma_px(points, tracks, cameras, rig);
+  EXPECT_NEAR(sigma, 0.5, 0.06);
+  // The fitted residuals alone understate the noise: that is what the correction is for.
+  EXPECT_LT(std::sqrt(raw_sum_sq / raw_n / 2), 0.4);
+  EXPECT_TRUE(std::isinf(robust_pixel_sigma_px({}, {}, cameras, rig)));
 }
 
 }  // namespace

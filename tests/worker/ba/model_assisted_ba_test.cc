@@ -113,7 +113,13 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
   ASSERT_GE(mp.on_model_count, 100);
   for (const BaModeResult* r : {&naive, &geva, &proposed}) {
     EXPECT_LT(r->final_cost, r->initial_cost);
-    EXPECT_EQ(r->landmarks.size(), size_t(result.landmarks_triangulated));
+    EXPECT_EQ(r->landmarks.size(), size_t(result.landmarks_triangulated -
+                                          result.landmarks_dropped_after_initialisation));
+  }
+  // The post-initialisation gate leaves no monocular landmark seen fewer than 3 times.
+  EXPECT_GT(result.post_initialisation_gate_px, 0.0);
+  if (!sim_options.stereo) {
+    for (const BaLandmark& l : proposed.landmarks) EXPECT_GE(l.keyframes.size(), 3u);
   }
   // proposed recovers the bump: heights within 1.5 cm, labelled foreign (lambda = 0).
   EXPECT_LT(mp.bump_mean_height_error_m, 0.015);
@@ -194,6 +200,20 @@ TEST(ModelAssistedBa, RejectsBadInputNamingTheField) {
     EXPECT_NE(std::string(e.what()).find("sigma1_m"), std::string::npos) << e.what();
   }
   EXPECT_THROW(ba_mode_from_string("fast"), std::invalid_argument);
+  for (int views : {1, 0}) {
+    BaOptions few;
+    few.triangulation.min_monocular_views = views;
+    try {
+      run_model_assisted_ba(sim.problem, few);
+      FAIL() << "expected std::invalid_argument";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("triangulation.min_monocular_views"), std::string::npos)
+          << e.what();
+    }
+  }
+  BaOptions depths;
+  depths.frontend.max_depth_m = depths.frontend.min_depth_m;
+  EXPECT_THROW(run_model_assisted_ba(sim.problem, depths), std::invalid_argument);
 }
 
 }  // namespace
