@@ -4,6 +4,7 @@
 
 #include <array>
 #include <chrono>
+#include <ctime>
 #include <memory>
 #include <stdexcept>
 
@@ -70,10 +71,18 @@ class BaGraph {
     if (!labels_.empty()) solver.callbacks.push_back(&callback);
     ceres::Solver::Summary summary;
     const auto start = std::chrono::steady_clock::now();
+    const std::clock_t cpu_start = std::clock();
     ceres::Solve(solver, &ceres_problem_, &summary);
     result.solve_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.solve_cpu_s = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+    result.unsuccessful_steps = summary.num_unsuccessful_steps;
+    // Ceres reports a rejected step's candidate cost; the curve keeps the state's cost.
+    for (const ceres::IterationSummary& it : summary.iterations) {
+      const bool kept = !result.cost_per_iteration.empty() && !it.step_is_successful;
+      result.cost_per_iteration.push_back(kept ? result.cost_per_iteration.back() : it.cost);
+    }
     result.initial_cost = summary.initial_cost;
     result.final_cost = summary.final_cost;
     result.converged = summary.termination_type == ceres::CONVERGENCE;

@@ -36,15 +36,22 @@ struct CameraFramePoint {
 
 struct BaModeResult {
   BaMode mode = BaMode::kProposed;
-  int iterations = 0;  // Ceres iterations (successful and unsuccessful steps)
-  double solve_time_s = 0;
-  double initial_cost = 0;  // Ceres cost, 0.5 * sum of squared whitened residuals
+  // Ceres iterations, successful and unsuccessful (Ceres counts iteration 0, the initial
+  // state, as a successful step).
+  int iterations = 0;
+  int unsuccessful_steps = 0;  // of those, steps Levenberg-Marquardt rejected
+  double solve_time_s = 0;     // wall
+  double solve_cpu_s = 0;      // CPU of the whole process during the solve (all threads)
+  double initial_cost = 0;     // Ceres cost, 0.5 * sum of squared whitened residuals
   double final_cost = 0;
   bool converged = false;
   std::string termination;  // Ceres' message
   // Fig. 16: fraction of landmarks with lambda = 1, at the initial state (index 0) and after
   // each Ceres iteration. Empty for `naive` (no surface factors to label).
   std::vector<double> lambda1_fraction_per_iteration;
+  // Fig. 17: Ceres cost per iteration, iteration 0 being the initial state (a rejected step
+  // keeps the cost).
+  std::vector<double> cost_per_iteration;
   // Fig. 18: measured minus predicted range (m) of every DVL beam used, at the start (after
   // GICP) and at the end.
   std::vector<double> dvl_residuals_initial_m;

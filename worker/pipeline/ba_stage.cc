@@ -411,7 +411,10 @@ json mode_report(const ba::BaModeResult& m, const std::optional<Pose3>& truth,
   int on_model = 0;
   for (const auto& l : m.landmarks) on_model += l.lambda;
   json r = {{"iterations", m.iterations},
+            {"unsuccessful_steps", m.unsuccessful_steps},
             {"solve_time_s", m.solve_time_s},
+            {"solve_cpu_s", m.solve_cpu_s},
+            {"cost_per_iteration", m.cost_per_iteration},
             {"initial_cost", m.initial_cost},
             {"final_cost", m.final_cost},
             {"converged", m.converged},

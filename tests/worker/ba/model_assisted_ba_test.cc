@@ -144,6 +144,17 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
                                               [](const BaLandmark& l) { return l.lambda == 1; }) /
                                 double(proposed.landmarks.size());
   EXPECT_NEAR(proposed.lambda1_fraction_per_iteration.back(), final_fraction, 0.01);
+  // Fig. 17 curve: one entry per Ceres iteration (iteration 0 is the initial state), never
+  // rising (rejected steps keep the cost), ending at the final cost.
+  for (const BaModeResult* m : {&naive, &geva, &proposed}) {
+    ASSERT_EQ(m->cost_per_iteration.size(), size_t(m->iterations));
+    EXPECT_DOUBLE_EQ(m->cost_per_iteration.front(), m->initial_cost);
+    EXPECT_DOUBLE_EQ(m->cost_per_iteration.back(), m->final_cost);
+    for (size_t k = 1; k < m->cost_per_iteration.size(); ++k)
+      EXPECT_LE(m->cost_per_iteration[k], m->cost_per_iteration[k - 1]);
+    EXPECT_LE(m->unsuccessful_steps, m->iterations);
+    EXPECT_GT(m->solve_cpu_s, 0.0);
+  }
   // Fig. 18: BA tightens the DVL residuals to about their 3 mm noise; the servo slop (1 deg)
   // is estimated.
   EXPECT_LT(median_abs(proposed.dvl_residuals_final_m),
