@@ -5,7 +5,6 @@
 #include <draco/mesh/mesh.h>
 #include <draco/metadata/geometry_metadata.h>
 #include <draco/point_cloud/point_cloud.h>
-#include <draco/point_cloud/point_cloud_builder.h>
 
 #include <algorithm>
 #include <cmath>
@@ -163,6 +162,44 @@ void measure_error(const std::vector<Vector>& originals, const std::vector<bool>
   result->error_method = "nearest_decoded";
 }
 
+// A point cloud's positions as consecutive parts (a combined map's sensor maps): encoded and
+// measured as their concatenation, without building it.
+using PositionParts = std::vector<const std::vector<Eigen::Vector3f>*>;
+
+// One pass over the positions: per-axis extremes (float, as Draco computes them) and the
+// largest |coordinate| (for the float-rounding allowance of error_tolerance).
+struct PositionBounds {
+  Eigen::Vector3f min, max;
+  double largest_abs = 0.0;
+};
+
+PositionBounds position_bounds(const PositionParts& parts) {
+  PositionBounds b;
+  bool first = true;
+  for (const std::vector<Eigen::Vector3f>* part : parts) {
+    for (const Eigen::Vector3f& p : *part) {
+      if (first) {
+        b.min = b.max = p;
+        first = false;
+      }
+      b.min = b.min.cwiseMin(p);
+      b.max = b.max.cwiseMax(p);
+    }
+  }
+  b.largest_abs = std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff());
+  return b;
+}
+
+// error_tolerance for a point cloud, from its bounds (same figures, one pass fewer).
+double cloud_error_tolerance(const PositionBounds& bounds, const DracoOptions& options,
+                             DracoEncoded* result) {
+  const float range = (bounds.max - bounds.min).maxCoeff();
+  result->position_range_m = range > 0.f ? range : 1.0;
+  const double step = result->position_range_m / ((1u << options.position_bits) - 1);
+  result->position_error_bound_m = 0.5 * std::sqrt(3.0) * step;
+  return result->position_error_bound_m + 8.0 * bounds.largest_abs * 1.2e-7;
+}
+
 // The position Draco's decoder returns for each input position, computed with Draco's own
 // float arithmetic: AttributeQuantizationTransform::ComputeParameters (per-axis minimum, range
 // = largest extent, 1 when all points coincide), Quantizer (q = floor((p - min) *
@@ -170,13 +207,9 @@ void measure_error(const std::vector<Vector>& originals, const std::vector<bool>
 // draco/attributes/attribute_quantization_transform.cc and draco/core/quantization_utils.cc.
 class DracoPositionReplica {
  public:
-  DracoPositionReplica(const std::vector<Eigen::Vector3f>& positions, int bits) {
-    Eigen::Vector3f hi = positions[0];
-    min_ = positions[0];
-    for (const auto& p : positions) {
-      min_ = min_.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
+  // `min` and `hi`: the per-axis extremes of the input positions.
+  DracoPositionReplica(const Eigen::Vector3f& min, const Eigen::Vector3f& hi, int bits)
+      : min_(min) {
     float range = 0.f;
     for (int c = 0; c < 3; ++c) range = std::max(range, hi[c] - min_[c]);
     if (range == 0.f) range = 1.f;
@@ -240,25 +273,38 @@ class MultisetDigest {
 // decoded point is exactly the quantization of an input point, and the largest |predicted -
 // original| is the largest error. O(n) time, O(1) memory. Returns false (nothing measured)
 // when the decoded points differ from the prediction.
-bool measure_error_by_replica(const std::vector<Eigen::Vector3f>& originals,
+bool measure_error_by_replica(const PositionParts& originals, const PositionBounds& bounds,
                               const draco::PointCloud& decoded, const DracoOptions& options,
                               double tolerance, DracoEncoded* result) {
   const draco::PointAttribute* position =
       decoded.GetNamedAttribute(draco::GeometryAttribute::POSITION);
   if (position == nullptr || position->num_components() != 3) return false;
   MultisetDigest actual;
-  for (draco::PointIndex i(0); i < decoded.num_points(); ++i) {
-    Eigen::Vector3f p;
-    position->ConvertValue<float>(position->mapped_index(i), 3, p.data());
-    actual.add(p);
+  if (position->data_type() == draco::DT_FLOAT32 && position->is_mapping_identity() &&
+      position->byte_stride() == 3 * sizeof(float)) {
+    // The decoder's float buffer, read directly (ConvertValue per point costs ~4x more).
+    const uint8_t* data = position->GetAddress(draco::AttributeValueIndex(0));
+    for (uint32_t i = 0; i < decoded.num_points(); ++i) {
+      Eigen::Vector3f p;
+      std::memcpy(p.data(), data + 3 * sizeof(float) * i, 3 * sizeof(float));
+      actual.add(p);
+    }
+  } else {
+    for (draco::PointIndex i(0); i < decoded.num_points(); ++i) {
+      Eigen::Vector3f p;
+      position->ConvertValue<float>(position->mapped_index(i), 3, p.data());
+      actual.add(p);
+    }
   }
-  const DracoPositionReplica replica(originals, options.position_bits);
+  const DracoPositionReplica replica(bounds.min, bounds.max, options.position_bits);
   MultisetDigest predicted;
   double max_squared = 0.0;
-  for (const Eigen::Vector3f& p : originals) {
-    const Eigen::Vector3f d = replica.decoded(p);
-    predicted.add(d);
-    max_squared = std::max(max_squared, (d.cast<double>() - p.cast<double>()).squaredNorm());
+  for (const std::vector<Eigen::Vector3f>* part : originals) {
+    for (const Eigen::Vector3f& p : *part) {
+      const Eigen::Vector3f d = replica.decoded(p);
+      predicted.add(d);
+      max_squared = std::max(max_squared, (d.cast<double>() - p.cast<double>()).squaredNorm());
+    }
   }
   if (!(predicted == actual)) return false;
   const double max_error = std::sqrt(max_squared);
@@ -334,30 +380,63 @@ void add_scalar_attribute(draco::Mesh* mesh, const ScalarField& field) {
   name_attribute(mesh, id, field.name);
 }
 
-}  // namespace
+// A scalar field of a cloud given as parts: its values in each part, in part order.
+struct FieldParts {
+  std::string name;
+  std::vector<const std::vector<float>*> parts;
+};
 
-DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positions,
-                                      const std::vector<ScalarField>& fields,
-                                      const DracoOptions& options) {
-  check_options(options);
-  check_positions(positions, "encode_draco_point_cloud");
-  check_scalar_fields(fields, positions.size(), {});
-
-  draco::PointCloudBuilder builder;
-  builder.Start(static_cast<draco::PointIndex::ValueType>(positions.size()));
-  const int position_id =
-      builder.AddAttribute(draco::GeometryAttribute::POSITION, 3, draco::DT_FLOAT32);
-  // Eigen::Vector3f is three packed floats, so the vector is the interleaved buffer.
-  builder.SetAttributeValuesForAllPoints(position_id, positions.data(), sizeof(Eigen::Vector3f));
-  std::vector<int> field_ids;
-  for (const auto& field : fields) {
-    field_ids.push_back(
-        builder.AddAttribute(draco::GeometryAttribute::GENERIC, 1, draco::DT_FLOAT32));
-    builder.SetAttributeValuesForAllPoints(field_ids.back(), field.values.data(), sizeof(float));
+// Appends each part's values to the attribute's buffer (one contiguous block per part, as
+// draco::PointCloudBuilder::SetAttributeValuesForAllPoints writes a whole cloud).
+template <typename Value>
+void fill_attribute(draco::PointAttribute* attribute,
+                    const std::vector<const std::vector<Value>*>& parts) {
+  int64_t offset = 0;
+  for (const std::vector<Value>* part : parts) {
+    const size_t bytes = part->size() * sizeof(Value);
+    attribute->buffer()->Write(offset, part->data(), bytes);
+    offset += static_cast<int64_t>(bytes);
   }
-  std::unique_ptr<draco::PointCloud> cloud = builder.Finalize(false);
-  for (size_t f = 0; f < fields.size(); ++f)
-    name_attribute(cloud.get(), field_ids[f], fields[f].name);
+}
+
+int add_attribute(draco::PointCloud* cloud, draco::GeometryAttribute::Type type, int components) {
+  draco::GeometryAttribute attribute;
+  attribute.Init(type, nullptr, components, draco::DT_FLOAT32, false, sizeof(float) * components,
+                 0);
+  return cloud->AddAttribute(attribute, true, cloud->num_points());
+}
+
+// The encoding of the concatenated parts (the same draco::PointCloud, hence the same bytes as
+// encoding the concatenated cloud); `bytes` only.
+DracoEncoded encode_cloud_bytes(const PositionParts& positions,
+                                const std::vector<FieldParts>& fields,
+                                const DracoOptions& options) {
+  check_options(options);
+  size_t n = 0;
+  for (const std::vector<Eigen::Vector3f>* part : positions) n += part->size();
+  if (n == 0) throw std::invalid_argument("encode_draco_point_cloud: no points to encode");
+  size_t offset = 0;
+  for (const std::vector<Eigen::Vector3f>* part : positions) {
+    for (size_t i = 0; i < part->size(); ++i) {
+      if (!(*part)[i].allFinite()) {
+        throw std::invalid_argument("encode_draco_point_cloud: position " +
+                                    std::to_string(offset + i) + " is not finite (NaN or inf)");
+      }
+    }
+    offset += part->size();
+  }
+
+  auto cloud = std::make_unique<draco::PointCloud>();
+  cloud->set_num_points(static_cast<draco::PointIndex::ValueType>(n));
+  // Eigen::Vector3f is three packed floats, so each part is an interleaved buffer.
+  fill_attribute(
+      cloud->attribute(add_attribute(cloud.get(), draco::GeometryAttribute::POSITION, 3)),
+      positions);
+  for (const auto& field : fields) {
+    const int id = add_attribute(cloud.get(), draco::GeometryAttribute::GENERIC, 1);
+    fill_attribute(cloud->attribute(id), field.parts);
+    name_attribute(cloud.get(), id, field.name);
+  }
 
   draco::Encoder encoder = make_encoder(options);
   draco::EncoderBuffer buffer;
@@ -367,23 +446,81 @@ DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positi
 
   DracoEncoded result;
   result.bytes = to_string(buffer);
-  buffer.Clear();
+  return result;
+}
+
+// The round trip of encode_cloud_bytes' result: decode, compare, measure the error.
+void measure_cloud(const PositionParts& positions, const DracoOptions& options,
+                   DracoEncoded* encoded) {
+  DracoEncoded& result = *encoded;
+  size_t n = 0;
+  for (const std::vector<Eigen::Vector3f>* part : positions) n += part->size();
   auto decoded = decode_cloud(result.bytes);
   check_status(decoded.status(), "encoded point cloud: not a valid Draco geometry");
   const draco::PointCloud& decoded_cloud = *decoded.value();
-  if (decoded_cloud.num_points() != positions.size()) {
-    throw std::runtime_error("draco round trip: " + std::to_string(positions.size()) +
-                             " points encoded, " + std::to_string(decoded_cloud.num_points()) +
-                             " decoded");
+  if (decoded_cloud.num_points() != n) {
+    throw std::runtime_error("draco round trip: " + std::to_string(n) + " points encoded, " +
+                             std::to_string(decoded_cloud.num_points()) + " decoded");
   }
-  const double tolerance = error_tolerance(positions, options, &result);
-  if (!measure_error_by_replica(positions, decoded_cloud, options, tolerance, &result)) {
+  const PositionBounds bounds = position_bounds(positions);
+  const double tolerance = cloud_error_tolerance(bounds, options, &result);
+  if (!measure_error_by_replica(positions, bounds, decoded_cloud, options, tolerance, &result)) {
     // Draco quantized differently from the replica (another Draco version, say): match each
     // input point to its nearest decoded point instead.
-    measure_error(positions, nullptr, read_positions(decoded_cloud, "encoded point cloud"), options,
+    std::vector<Eigen::Vector3f> originals;
+    originals.reserve(n);
+    for (const std::vector<Eigen::Vector3f>* part : positions)
+      originals.insert(originals.end(), part->begin(), part->end());
+    measure_error(originals, nullptr, read_positions(decoded_cloud, "encoded point cloud"), options,
                   &result);
   }
+}
+
+DracoEncoded encode_cloud_parts(const PositionParts& positions,
+                                const std::vector<FieldParts>& fields,
+                                const DracoOptions& options) {
+  DracoEncoded result = encode_cloud_bytes(positions, fields, options);
+  measure_cloud(positions, options, &result);
   return result;
+}
+
+// A cloud given as parts: positions, and intensity when every non-empty part has it.
+struct CloudParts {
+  PositionParts positions;
+  std::vector<FieldParts> fields;
+};
+
+CloudParts cloud_parts(const std::vector<const PointCloud*>& parts) {
+  CloudParts out;
+  FieldParts intensity{"intensity", {}};
+  bool all_intensity = true;
+  for (const PointCloud* part : parts) {
+    if (part->empty()) continue;
+    if (part->has_intensity() && part->intensity.size() != part->size())
+      throw std::invalid_argument("encode_draco_point_cloud: a part has " +
+                                  std::to_string(part->intensity.size()) + " intensities for " +
+                                  std::to_string(part->size()) + " points");
+    out.positions.push_back(&part->xyz);
+    intensity.parts.push_back(&part->intensity);
+    all_intensity = all_intensity && part->has_intensity();
+  }
+  if (out.positions.empty())
+    throw std::invalid_argument("encode_draco_point_cloud: no points to encode");
+  if (all_intensity) out.fields.push_back(std::move(intensity));
+  return out;
+}
+
+}  // namespace
+
+DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positions,
+                                      const std::vector<ScalarField>& fields,
+                                      const DracoOptions& options) {
+  check_options(options);
+  check_positions(positions, "encode_draco_point_cloud");
+  check_scalar_fields(fields, positions.size(), {});
+  std::vector<FieldParts> field_parts;
+  for (const auto& field : fields) field_parts.push_back({field.name, {&field.values}});
+  return encode_cloud_parts({&positions}, field_parts, options);
 }
 
 DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
@@ -393,6 +530,24 @@ DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
   std::vector<ScalarField> with_intensity{{"intensity", cloud.intensity}};
   with_intensity.insert(with_intensity.end(), fields.begin(), fields.end());
   return encode_draco_point_cloud(cloud.xyz, with_intensity, options);
+}
+
+DracoEncoded encode_draco_point_cloud(const std::vector<const PointCloud*>& parts,
+                                      const DracoOptions& options) {
+  const CloudParts cloud = cloud_parts(parts);
+  return encode_cloud_parts(cloud.positions, cloud.fields, options);
+}
+
+DracoEncoded encode_draco_point_cloud_bytes(const std::vector<const PointCloud*>& parts,
+                                            const DracoOptions& options) {
+  const CloudParts cloud = cloud_parts(parts);
+  return encode_cloud_bytes(cloud.positions, cloud.fields, options);
+}
+
+void measure_draco_point_cloud(const std::vector<const PointCloud*>& parts,
+                               const DracoOptions& options, DracoEncoded* encoded) {
+  check_options(options);
+  measure_cloud(cloud_parts(parts).positions, options, encoded);
 }
 
 DracoEncoded encode_draco_mesh(const TriangleMesh& mesh,

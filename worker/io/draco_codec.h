@@ -49,6 +49,19 @@ DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
                                       const std::vector<ScalarField>& fields = {},
                                       const DracoOptions& options = {});
 
+// The concatenation of `parts` (a combined map's sensor maps, Eq. (21)) without building it:
+// the same bytes and figures as encoding the concatenated cloud. Intensity is stored when every
+// non-empty part has it (as mapping::append_points merges clouds). Throws as above.
+DracoEncoded encode_draco_point_cloud(const std::vector<const PointCloud*>& parts,
+                                      const DracoOptions& options = {});
+// The same in two steps, to run on different threads: the encoding (`bytes` only), then the
+// round trip that fills the other fields (throwing as the encoder does). `parts` and `options`
+// must be the same in both.
+DracoEncoded encode_draco_point_cloud_bytes(const std::vector<const PointCloud*>& parts,
+                                            const DracoOptions& options = {});
+void measure_draco_point_cloud(const std::vector<const PointCloud*>& parts,
+                               const DracoOptions& options, DracoEncoded* encoded);
+
 // Positions, faces (edgebreaker) and per-vertex scalar fields such as `deviation`. Vertices
 // that no face uses are not stored (Draco drops them).
 DracoEncoded encode_draco_mesh(const TriangleMesh& mesh,

@@ -1,9 +1,11 @@
 #include "worker/io/ply_cloud_writer.h"
 
+#include <cstring>
+#include <fstream>
 #include <stdexcept>
 #include <string>
-
-#include "worker/io/mesh_ply_binary_writer.h"
+#include <system_error>
+#include <vector>
 
 namespace keel::io {
 namespace {
@@ -16,35 +18,129 @@ void check_optional_size(const char* name, size_t size, size_t expected) {
   }
 }
 
-}  // namespace
+// Points per chunk written: the body streams through a buffer of ~1 MB instead of being built
+// whole in memory (a 14 M-point combined map would take 230 MB).
+constexpr size_t kChunkPoints = 1 << 16;
 
-void write_ply_cloud(const std::filesystem::path& path, const PointCloud& cloud,
-                     const std::vector<ScalarField>& point_fields) {
-  const size_t n = cloud.size();
-  check_optional_size("intensity", cloud.intensity.size(), n);
-  check_optional_size("ring", cloud.ring.size(), n);
-  check_optional_size("time_s", cloud.time_s.size(), n);
+template <typename T>
+void put(char*& at, T value) {
+  std::memcpy(at, &value, sizeof(T));  // little endian, as are Keel's hosts
+  at += sizeof(T);
+}
+
+// A file written through a temporary sibling renamed into place by commit(), so a failed
+// write never leaves a half-written PLY behind (as mesh_detail::PlyBinaryWriter, streamed).
+class StreamedFile {
+ public:
+  explicit StreamedFile(std::filesystem::path path)
+      : path_(std::move(path)), temporary_(path_.string() + ".partial") {
+    out_.open(temporary_, std::ios::binary | std::ios::trunc);
+    if (!out_) throw std::runtime_error(path_.string() + ": cannot open for writing");
+  }
+  ~StreamedFile() {
+    if (committed_) return;
+    out_.close();
+    std::error_code ignored;
+    std::filesystem::remove(temporary_, ignored);
+  }
+  StreamedFile(const StreamedFile&) = delete;
+  StreamedFile& operator=(const StreamedFile&) = delete;
+
+  void append(const char* bytes, size_t size) {
+    out_.write(bytes, static_cast<std::streamsize>(size));
+    if (!out_) throw std::runtime_error(path_.string() + ": write failed (disk full?)");
+  }
+  void commit() {
+    out_.close();
+    if (!out_) throw std::runtime_error(path_.string() + ": write failed (disk full?)");
+    std::error_code error;
+    std::filesystem::rename(temporary_, path_, error);
+    if (error) {
+      throw std::runtime_error(path_.string() +
+                               ": cannot move the written file into place: " + error.message());
+    }
+    committed_ = true;
+  }
+
+ private:
+  std::filesystem::path path_, temporary_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+
+// The optional properties the (concatenated) cloud carries: each one every non-empty part has.
+struct Properties {
+  bool intensity = true, ring = true, time = true;
+};
+
+Properties properties_of(const std::vector<const PointCloud*>& parts) {
+  Properties p;
+  bool any_point = false;
+  for (const PointCloud* part : parts) {
+    const size_t n = part->size();
+    check_optional_size("intensity", part->intensity.size(), n);
+    check_optional_size("ring", part->ring.size(), n);
+    check_optional_size("time_s", part->time_s.size(), n);
+    if (n == 0) continue;
+    any_point = true;
+    p.intensity = p.intensity && part->has_intensity();
+    p.ring = p.ring && part->has_ring();
+    p.time = p.time && part->has_time();
+  }
+  return any_point ? p : Properties{false, false, false};
+}
+
+// Writes the parts' points one after the other; `point_fields` index the concatenation.
+void write_parts(const std::filesystem::path& path, const std::vector<const PointCloud*>& parts,
+                 const std::vector<ScalarField>& point_fields) {
+  size_t n = 0;
+  for (const PointCloud* part : parts) n += part->size();
+  const Properties has = properties_of(parts);
   check_scalar_fields(point_fields, n, {"x", "y", "z", "intensity", "ring", "time"});
 
   std::string header = "element vertex " + std::to_string(n) + "\n";
   header += "property float x\nproperty float y\nproperty float z\n";
-  if (cloud.has_intensity()) header += "property float intensity\n";
-  if (cloud.has_ring()) header += "property ushort ring\n";
-  if (cloud.has_time()) header += "property float time\n";
+  if (has.intensity) header += "property float intensity\n";
+  if (has.ring) header += "property ushort ring\n";
+  if (has.time) header += "property float time\n";
   for (const auto& field : point_fields) header += "property float " + field.name + "\n";
 
-  const size_t point_bytes = 12 + (cloud.has_intensity() ? 4 : 0) + (cloud.has_ring() ? 2 : 0) +
-                             (cloud.has_time() ? 4 : 0) + 4 * point_fields.size();
-  mesh_detail::PlyBinaryWriter writer(path);
-  writer.begin(header, point_bytes * n);
-  for (size_t i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) writer.put(cloud.xyz[i][c]);
-    if (cloud.has_intensity()) writer.put(cloud.intensity[i]);
-    if (cloud.has_ring()) writer.put(cloud.ring[i]);
-    if (cloud.has_time()) writer.put(cloud.time_s[i]);
-    for (const auto& field : point_fields) writer.put(field.values[i]);
+  const size_t point_bytes = 12 + (has.intensity ? 4 : 0) + (has.ring ? 2 : 0) +
+                             (has.time ? 4 : 0) + 4 * point_fields.size();
+  StreamedFile file(path);
+  header =
+      "ply\nformat binary_little_endian 1.0\ncomment written by keel\n" + header + "end_header\n";
+  file.append(header.data(), header.size());
+  std::vector<char> chunk(kChunkPoints * point_bytes);
+  char* at = chunk.data();
+  size_t k = 0;  // index into the concatenation
+  for (const PointCloud* part : parts) {
+    for (size_t i = 0; i < part->size(); ++i, ++k) {
+      for (int c = 0; c < 3; ++c) put(at, part->xyz[i][c]);
+      if (has.intensity) put(at, part->intensity[i]);
+      if (has.ring) put(at, part->ring[i]);
+      if (has.time) put(at, part->time_s[i]);
+      for (const auto& field : point_fields) put(at, field.values[k]);
+      if (at == chunk.data() + chunk.size()) {
+        file.append(chunk.data(), chunk.size());
+        at = chunk.data();
+      }
+    }
   }
-  writer.finish();
+  file.append(chunk.data(), static_cast<size_t>(at - chunk.data()));
+  file.commit();
+}
+
+}  // namespace
+
+void write_ply_cloud(const std::filesystem::path& path, const PointCloud& cloud,
+                     const std::vector<ScalarField>& point_fields) {
+  write_parts(path, {&cloud}, point_fields);
+}
+
+void write_ply_cloud(const std::filesystem::path& path,
+                     const std::vector<const PointCloud*>& parts) {
+  write_parts(path, parts, {});
 }
 
 }  // namespace keel::io

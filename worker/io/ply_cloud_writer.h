@@ -16,5 +16,10 @@ namespace keel::io {
 // file when writing fails.
 void write_ply_cloud(const std::filesystem::path& path, const PointCloud& cloud,
                      const std::vector<ScalarField>& point_fields = {});
+// The concatenation of `parts` (a combined map's sensor maps) without building it: the same
+// bytes as write_ply_cloud of the cloud mapping::append_points would merge (intensity, ring and
+// time written when every non-empty part has them).
+void write_ply_cloud(const std::filesystem::path& path,
+                     const std::vector<const PointCloud*>& parts);
 
 }  // namespace keel::io

@@ -6,20 +6,27 @@
 //      the recorded `map` poses, correcting the recorded `odometry` by Algorithm 2 so every
 //      scan between keyframes has a pose; the TF tree W -> B -> S_i with the extrinsics of
 //      MissionReader::extrinsic (mission.yaml, else the bag's /tf_static);
-//   3. every scan of every sensor through MapBuilder (Fig. 5), `threads` scans at a time and
-//      committed in order (MapBuilder::add_scans); the SLAM lidar's scans also through
-//      SlamMapBuilder for the SLAM-map baseline;
-//   4. per sensor: Draco (.drc) and PLY maps, written side by side;
-//   5. metrics of the SLAM map and the SLAM lidar's inspection map (Eqs. (23)-(26)), then the
-//      combined map (Eq. (21)): its Draco file beside its PLY file and metrics; Table V with
-//      the ratios. docs/map-filters.md explains the throughput and memory choices.
+//   3. every scan of every sensor through a MapBuilder of its own (Fig. 5), `threads` scans at
+//      a time and committed in order (MapBuilder::add_scans); the SLAM lidar's scans also
+//      through SlamMapBuilder for the SLAM-map baseline;
+//   4. per sensor: Draco (.drc) and PLY maps;
+//   5. metrics of the SLAM map and the SLAM lidar's inspection map (Eqs. (23)-(26)), and the
+//      combined map (Eq. (21)): its Draco and PLY files and metrics; Table V with the ratios.
+//   Steps 4 and 5 are output tasks (OutputRunner): a sensor's start on one extra thread as soon
+//   as its scans are in, while the next sensors scan; the rest, costliest first, on `threads`
+//   threads once every map is built, as many side by side as a memory bound allows. The
+//   combined map is encoded, written and measured from the sensor maps, never copied whole.
+//   docs/map-filters.md explains the throughput and memory choices.
 #include "worker/pipeline/map_stage.h"
 #include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <ctime>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <mutex>
@@ -47,9 +54,8 @@ using nlohmann::json;
 using proto::ContractError;
 using proto::SensorType;
 
-// Progress: scans take [0, kScansDone], outputs up to kOutputsDone, metrics the rest.
+// Progress: scans take [0, kScansDone], the outputs and metrics the rest.
 constexpr double kScansDone = 0.75;
-constexpr double kOutputsDone = 0.85;
 
 void require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.map." + option + ": expected " + expected);
@@ -228,31 +234,200 @@ std::string emptied_by(const mapping::SensorMapStats& s) {
   return "";
 }
 
-// Runs the tasks on up to `threads` threads, each task once, in order of submission; the first
-// exception is rethrown after every started task has finished (the others are not started).
-void run_tasks(const std::vector<std::function<void()>>& tasks, int threads) {
-  std::atomic<size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto work = [&] {
-    for (size_t i = next++; i < tasks.size() && !failed; i = next++) {
-      try {
-        tasks[i]();
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
-        failed = true;
+double process_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+// Start (seconds after the scans began), wall and CPU seconds of each output task, for the job
+// log (CPU of the task's own thread: the metrics' helper threads are not counted).
+class TaskLog {
+ public:
+  explicit TaskLog(std::chrono::steady_clock::time_point origin) : origin_(origin) {}
+  void run(const std::string& name, const std::function<void()>& task) {
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = thread_cpu_seconds();
+    task();
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "map: output task %-28s start %6.2f s, %6.2f s wall, %6.2f s cpu", name.c_str(),
+                  std::chrono::duration<double>(start - origin_).count(), seconds_since(start),
+                  thread_cpu_seconds() - cpu_start);
+    std::lock_guard<std::mutex> lock(mutex_);
+    lines_.push_back(line);
+  }
+  void flush(const std::function<void(const std::string&)>& log) {
+    for (const auto& line : lines_) log(line);
+    lines_.clear();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point origin_;
+  std::mutex mutex_;
+  std::vector<std::string> lines_;
+};
+
+// One task of the outputs phase: `cost` (estimated CPU seconds) orders the tasks longest first,
+// `bytes` (estimated peak allocation while it runs) bounds which may run side by side.
+struct OutputTask {
+  std::string name;
+  double cost = 0.0;
+  double bytes = 0.0;
+  std::function<void()> run;
+};
+
+// Estimates per map point, measured on the keel-sim bridge (14.4 M points in the combined map):
+// Draco encode and round trip ~0.34 us and, at its peak, ~48 bytes (Draco's copy of the input,
+// its quantized attributes and the kd-tree's copy of them, the output); the metrics (20000
+// query points) ~0.15 us and ~29 bytes (the cell grid); a PLY ~0.05 us (mostly the kernel's
+// copy) and a buffer of fixed size.
+constexpr double kDracoSecondsPerPoint = 0.34e-6;
+constexpr double kDracoBytesPerPoint = 48.0;
+// The two steps of a Draco file on their own: the encoding (same peak), and the round trip
+// (~0.1 us; the decoder's quantized and float copies, ~32 bytes, and the file's ~3.6).
+constexpr double kDracoEncodeSecondsPerPoint = 0.24e-6;
+constexpr double kDracoCheckSecondsPerPoint = 0.10e-6;
+constexpr double kDracoCheckBytesPerPoint = 35.0;
+constexpr double kMetricsSecondsPerPoint = 0.15e-6;
+constexpr double kMetricsBytesPerPoint = 29.0;
+constexpr double kPlySecondsPerPoint = 0.05e-6;
+
+OutputTask draco_task(const std::string& map, size_t points, std::function<void()> run) {
+  return {"draco " + map, kDracoSecondsPerPoint * points, kDracoBytesPerPoint * points,
+          std::move(run)};
+}
+OutputTask ply_task(const std::string& map, size_t points, std::function<void()> run) {
+  return {"ply " + map, kPlySecondsPerPoint * points, 0.0, std::move(run)};
+}
+// `extra_bytes`: what the task allocates besides the cell grid.
+OutputTask metrics_task(const std::string& map, size_t points, size_t extra_bytes,
+                        std::function<void()> run) {
+  return {"metrics " + map, kMetricsSecondsPerPoint * points,
+          kMetricsBytesPerPoint * points + static_cast<double>(extra_bytes), std::move(run)};
+}
+
+// Runs output tasks, each once, on worker threads. A free worker starts the costliest task not
+// started whose bytes fit beside those of the running tasks within the memory budget (any task
+// runs when it would run alone), so the cores stay busy to the end (the longest task first)
+// without raising the memory peak. Tasks may be added while workers run, also by a task: a
+// sensor's outputs start on one worker while the next sensors scan, the rest once every map is
+// built, and the combined map's Draco encoding adds its round trip.
+class OutputRunner {
+ public:
+  explicit OutputRunner(TaskLog& log) : log_(log) {}
+  // Stops before any task not started (after an exception elsewhere) and joins the workers.
+  ~OutputRunner() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    changed_.notify_all();
+    for (auto& worker : workers_) worker.join();
+  }
+  OutputRunner(const OutputRunner&) = delete;
+  OutputRunner& operator=(const OutputRunner&) = delete;
+
+  void add(std::vector<OutputTask> tasks) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto& task : tasks) {
+        total_cost_ += task.cost;
+        tasks_.push_back(std::move(task));
+        started_.push_back(false);
+        ++unstarted_;
       }
     }
-  };
-  std::vector<std::thread> workers;
-  const size_t count = std::min<size_t>(std::max(threads, 1), tasks.size());
-  for (size_t w = 1; w < count; ++w) workers.emplace_back(work);
-  work();
-  for (auto& worker : workers) worker.join();
-  if (error) std::rethrow_exception(error);
-}
+    changed_.notify_all();
+  }
+  // At least `threads` workers from now on, with this memory budget (bytes).
+  void run_with(int threads, double memory_budget) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      memory_budget_ = memory_budget;
+    }
+    changed_.notify_all();
+    while (workers_.size() < static_cast<size_t>(std::max(threads, 1)))
+      workers_.emplace_back([this] { work(); });
+  }
+  // No more tasks: waits for every task to run, reporting `done(fraction of the cost)` after
+  // each from now on (serialized), and rethrows the first exception of a task.
+  void finish(std::function<void(double)> done) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = std::move(done);
+      closed_ = true;
+    }
+    changed_.notify_all();
+    for (auto& worker : workers_) worker.join();
+    workers_.clear();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  static constexpr size_t kNone = static_cast<size_t>(-1);
+
+  size_t fitting() const {
+    size_t best = kNone;
+    for (size_t i = 0; i < tasks_.size(); ++i) {
+      if (started_[i]) continue;
+      if (running_ > 0 && running_bytes_ + tasks_[i].bytes > memory_budget_) continue;
+      if (best == kNone || tasks_[i].cost > tasks_[best].cost) best = i;
+    }
+    return best;
+  }
+
+  void work() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      size_t i = kNone;
+      changed_.wait(lock, [&] {
+        // A running task may still add tasks: no worker leaves before it ends.
+        return error_ || stopping_ || (closed_ && unstarted_ == 0 && running_ == 0) ||
+               (i = fitting()) != kNone;
+      });
+      if (error_ || stopping_ || i == kNone) return;
+      started_[i] = true;
+      --unstarted_;
+      ++running_;
+      running_bytes_ += tasks_[i].bytes;
+      const std::string name = tasks_[i].name;
+      const std::function<void()> run = tasks_[i].run;
+      lock.unlock();
+      std::exception_ptr failure;
+      try {
+        log_.run(name, run);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      lock.lock();
+      --running_;
+      running_bytes_ -= tasks_[i].bytes;
+      if (failure && !error_) error_ = failure;
+      cost_done_ += tasks_[i].cost;
+      if (!failure && closed_ && done_ && total_cost_ > 0.0) done_(cost_done_ / total_cost_);
+      changed_.notify_all();
+    }
+  }
+
+  TaskLog& log_;
+  std::mutex mutex_;
+  std::condition_variable changed_;  // tasks added, a task finished, closed or stopping
+  std::deque<OutputTask> tasks_;
+  std::vector<bool> started_;
+  size_t unstarted_ = 0, running_ = 0;
+  double running_bytes_ = 0.0, memory_budget_ = 0.0, total_cost_ = 0.0, cost_done_ = 0.0;
+  bool closed_ = false, stopping_ = false;
+  std::exception_ptr error_;
+  std::function<void(double)> done_;
+  std::vector<std::thread> workers_;
+};
 
 // One map's artifacts and their figures for the report.
 struct MapOutput {
@@ -260,37 +435,41 @@ struct MapOutput {
   std::vector<std::string> artifacts;
 };
 
-// Writes map_<name>.drc; report {"points", "draco": {...}}.
-MapOutput write_map_draco(const PointCloud& map, const std::string& name,
-                          const MapStageOptions& options, const fs::path& work_dir) {
+io::DracoOptions draco_options(const MapStageOptions& options) {
   io::DracoOptions draco;
   draco.position_bits = options.draco_position_bits;
   draco.compression_level = options.draco_compression_level;
-  const auto start = std::chrono::steady_clock::now();
-  io::DracoEncoded encoded = io::encode_draco_point_cloud(map, {}, draco);
+  return draco;
+}
+
+// Writes map_<name>.drc of a map of `points` points, whose encoding took `earlier_seconds`
+// and then ran from `start`; report {"points", "draco": {...}}.
+MapOutput write_map_draco(const io::DracoEncoded& encoded, size_t points,
+                          std::chrono::steady_clock::time_point start, double earlier_seconds,
+                          const std::string& name, const MapStageOptions& options,
+                          const fs::path& work_dir) {
   io::write_draco_file(work_dir / map_draco_file(name), encoded.bytes);
   MapOutput out;
   out.artifacts.push_back(map_draco_file(name));
-  out.report = {{"points", map.size()},
+  out.report = {{"points", points},
                 {"draco",
                  {{"file", map_draco_file(name)},
                   {"bytes", encoded.bytes.size()},
-                  {"bytes_per_point", static_cast<double>(encoded.bytes.size()) / map.size()},
-                  {"position_bits", draco.position_bits},
-                  {"compression_level", draco.compression_level},
+                  {"bytes_per_point", static_cast<double>(encoded.bytes.size()) / points},
+                  {"position_bits", options.draco_position_bits},
+                  {"compression_level", options.draco_compression_level},
                   {"position_range_m", encoded.position_range_m},
                   {"max_position_error_m", encoded.max_position_error_m},
                   {"position_error_bound_m", encoded.position_error_bound_m},
                   {"error_method", encoded.error_method},
-                  {"encode_seconds", seconds_since(start)}}}};
+                  {"encode_seconds", earlier_seconds + seconds_since(start)}}}};
   return out;
 }
 
-// Writes map_<name>.ply when options.write_ply; report {"ply": {...}} or nothing.
-MapOutput write_map_ply(const PointCloud& map, const std::string& name,
-                        const MapStageOptions& options, const fs::path& work_dir) {
+// Writes map_<name>.ply (a map, or a combined map as its parts); report {"ply": {...}}.
+template <typename Map>
+MapOutput write_map_ply(const Map& map, const std::string& name, const fs::path& work_dir) {
   MapOutput out;
-  if (!options.write_ply) return out;
   io::write_ply_cloud(work_dir / map_ply_file(name), map);
   out.artifacts.push_back(map_ply_file(name));
   out.report["ply"] = {{"file", map_ply_file(name)},
@@ -315,6 +494,8 @@ MetricsColumn measure(const std::string& name, const PointCloud& map,
                       const MapStageOptions& options) {
   mapping::MapMetricsOptions metrics_options;
   metrics_options.radius_m = options.metrics_radius_m;
+  // All threads, although the metrics run as an output task beside others: the last tasks
+  // then still use every core (the figures do not depend on the thread count).
   metrics_options.threads = options.threads;
   metrics_options.max_query_points = options.metrics_max_points;
   const auto start = std::chrono::steady_clock::now();
@@ -404,7 +585,15 @@ class MapStage : public Stage {
       tree.set_extrinsic(s.name, s.T_body_sensor);
       builder_options.sensors[s.name] = options.sensor_options(s.name, s.type);
     }
-    mapping::MapBuilder builder(tree, builder_options);
+    // One MapBuilder per sensor (a sensor's map depends on its own scans only, Fig. 5): a
+    // sensor's outputs start once its last scan is in, while the next sensors scan.
+    std::map<std::string, std::unique_ptr<mapping::MapBuilder>> builders;
+    for (const auto& s : selection.mapped) {
+      if (builders.count(s.name)) continue;
+      mapping::MapBuilderOptions one = builder_options;
+      one.sensors = {{s.name, builder_options.sensors.at(s.name)}};
+      builders.emplace(s.name, std::make_unique<mapping::MapBuilder>(tree, std::move(one)));
+    }
 
     // The SLAM-map baseline: the SLAM lidar's scans at the SLAM system's keyframes.
     const MappedSensor* slam_sensor = nullptr;
@@ -434,32 +623,116 @@ class MapStage : public Stage {
     context.log("map: " + std::to_string(total_scans) + " scans of " +
                 std::to_string(selection.mapped.size()) + " sensors, " +
                 std::to_string(poses.T_world_body.size()) + " poses");
+
+    // Steps 4 and 5 run as output tasks (OutputRunner): per sensor, Draco and PLY files; the
+    // metrics of the SLAM map and of the SLAM lidar's inspection map; then the combined map
+    // (Eq. (21)), kept as its parts, the sensor maps in name order (MapBuilder's), never
+    // copied whole. Results land in slots made before any task runs.
     const auto scans_start = std::chrono::steady_clock::now();
-    size_t scans_done = 0, source = 0;
-    // MapBuilder pulls scans from this feed on options.threads threads (calls never overlap,
-    // so the sources, the SLAM baseline and progress see scans one at a time, in order).
-    builder.add_scans([&](std::string& sensor_name, PointCloud& scan) {
-      while (source < sources.size()) {
-        context.check_canceled();
-        if (sources[source]->next(scan)) {
-          const MappedSensor& sensor = selection.mapped[source];
-          sensor_name = sensor.name;
-          if (slam && &sensor == slam_sensor) slam->add_scan(scan);
-          ++scans_done;
-          if (total_scans > 0)
-            context.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
-          return true;
-        }
-        sources[source++].reset();
+    TaskLog task_log(scans_start);
+    std::map<std::string, MapOutput> drc, ply;
+    for (const auto& s : selection.mapped) {
+      drc[s.name];
+      ply[s.name];
+    }
+    MapOutput combined_output, combined_ply;
+    PointCloud slam_map;
+    std::optional<MetricsColumn> slam_column, inspection, combined_column;
+    auto sensor_map = [&](const std::string& name) -> const PointCloud& {
+      return builders.at(name)->sensor_map(name);
+    };
+    auto guarded = [&context](std::vector<OutputTask> tasks) {
+      for (auto& task : tasks)
+        task.run = [&context, run = std::move(task.run)] {
+          context.check_canceled();
+          run();
+        };
+      return tasks;
+    };
+    // The tasks of a sensor whose map is built.
+    auto sensor_tasks = [&](const std::string& name) {
+      std::vector<OutputTask> tasks;
+      const PointCloud& map = sensor_map(name);
+      if (map.empty()) return tasks;
+      tasks.push_back(draco_task(name, map.size(), [&, name, &map = map] {
+        const auto start = std::chrono::steady_clock::now();
+        drc.at(name) =
+            write_map_draco(io::encode_draco_point_cloud(map, {}, draco_options(options)),
+                            map.size(), start, 0.0, name, options, context.work_dir);
+      }));
+      if (options.write_ply)
+        tasks.push_back(ply_task(name, map.size(), [&, name, &map = map] {
+          ply.at(name) = write_map_ply(map, name, context.work_dir);
+        }));
+      if (slam && name == slam_sensor->name) {
+        tasks.push_back(metrics_task("inspection_" + name, map.size(), 0, [&, name, &map = map] {
+          inspection = measure("inspection_" + name, map, options);
+        }));
       }
-      return false;
-    });
+      return tasks;
+    };
+    auto slam_tasks = [&] {
+      std::vector<OutputTask> tasks;
+      if (!slam_map.empty())
+        tasks.push_back(metrics_task("slam_map", slam_map.size(), 0, [&] {
+          slam_column = measure("slam_map", slam_map, options);
+        }));
+      return tasks;
+    };
+    std::vector<const PointCloud*> combined_parts;
+    size_t combined_points = 0;
+    io::DracoEncoded combined_encoded;
+    double combined_encode_seconds = 0.0;
+    OutputTask combined_check;
+    // Declared after everything its tasks use: on an exception it joins them first.
+    OutputRunner runner(task_log);
+    // Early outputs take one thread beside the scans' `threads` (none when threads = 1).
+    const bool early_outputs = options.threads >= 2;
+    if (early_outputs) runner.run_with(1, 0.0);
+    std::vector<std::string> output_queued;  // sensors whose tasks were added
+    bool slam_queued = false;
+
+    size_t scans_done = 0;
+    for (size_t k = 0; k < sources.size(); ++k) {
+      const MappedSensor& sensor = selection.mapped[k];
+      // MapBuilder pulls scans from this feed on options.threads threads (calls never overlap,
+      // so the source, the SLAM baseline and progress see scans one at a time, in order).
+      builders.at(sensor.name)->add_scans([&](std::string& sensor_name, PointCloud& scan) {
+        context.check_canceled();
+        if (!sources[k]->next(scan)) return false;
+        sensor_name = sensor.name;
+        if (slam && &sensor == slam_sensor) slam->add_scan(scan);
+        ++scans_done;
+        if (total_scans > 0)
+          context.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
+        return true;
+      });
+      sources[k].reset();
+      const bool last_of_sensor =
+          std::none_of(selection.mapped.begin() + k + 1, selection.mapped.end(),
+                       [&](const MappedSensor& s) { return s.name == sensor.name; });
+      if (!last_of_sensor) continue;
+      context.check_canceled();
+      builders.at(sensor.name)->finish();
+      if (slam && sensor.name == slam_sensor->name) slam_map = slam->finish();
+      if (early_outputs && k + 1 < sources.size()) {
+        if (!builders.at(sensor.name)->sensors().empty()) {
+          runner.add(guarded(sensor_tasks(sensor.name)));
+          output_queued.push_back(sensor.name);
+        }
+        if (slam && sensor.name == slam_sensor->name) {
+          runner.add(guarded(slam_tasks()));
+          slam_queued = true;
+        }
+      }
+    }
     context.check_canceled();
-    builder.finish();
     const double scans_seconds = seconds_since(scans_start);
-    const std::vector<std::string> built = builder.sensors();  // sensors that had scans
+    std::vector<std::string> built;  // sensors that had scans, in name order
+    for (const auto& [name, builder] : builders)
+      if (!builder->sensors().empty()) built.push_back(name);
     size_t points_in = 0;
-    for (const auto& name : built) points_in += builder.stats(name).points_in;
+    for (const auto& name : built) points_in += builders.at(name)->stats(name).points_in;
     context.log("map: " + std::to_string(points_in) + " points in " +
                 std::to_string(scans_seconds) + " s");
 
@@ -472,6 +745,7 @@ class MapStage : public Stage {
     json warnings = json::array();
     json sensors = json::object();
     const auto outputs_start = std::chrono::steady_clock::now();
+    const double outputs_cpu_start = process_cpu_seconds();
     std::vector<std::string> written;  // sensors with a non-empty map, largest first
     for (const auto& s : selection.mapped) {
       json entry = {{"type", s.type},
@@ -482,95 +756,115 @@ class MapStage : public Stage {
         sensors[s.name] = entry;
         continue;
       }
-      entry["stats"] = stats_json(builder.stats(s.name));
-      if (builder.sensor_map(s.name).empty()) {
+      const mapping::SensorMapStats& stats = builders.at(s.name)->stats(s.name);
+      entry["stats"] = stats_json(stats);
+      if (sensor_map(s.name).empty()) {
         warnings.push_back("sensor '" + s.name + "': the map is empty (every point filtered, or " +
                            "every scan outside the trajectory); no artifacts written");
-      } else {
+      } else if (std::find(written.begin(), written.end(), s.name) == written.end()) {
         written.push_back(s.name);
       }
-      if (builder.stats(s.name).scans_outside_trajectory > 0)
+      if (stats.scans_outside_trajectory > 0)
         warnings.push_back("sensor '" + s.name +
-                           "': " + std::to_string(builder.stats(s.name).scans_outside_trajectory) +
+                           "': " + std::to_string(stats.scans_outside_trajectory) +
                            " scans outside the trajectory were skipped");
-      if (const std::string w = emptied_by(builder.stats(s.name)); !w.empty())
+      if (const std::string w = emptied_by(stats); !w.empty())
         warnings.push_back("sensor '" + s.name + "': " + w);
       sensors[s.name] = entry;
     }
-    // Draco encoding is single-threaded: the maps are written side by side, largest first.
-    std::sort(written.begin(), written.end(), [&](const std::string& a, const std::string& b) {
-      return builder.sensor_map(a).size() > builder.sensor_map(b).size();
-    });
-    std::vector<MapOutput> drc(written.size()), ply(written.size());
-    std::vector<std::function<void()>> write_tasks;
-    for (size_t i = 0; i < written.size(); ++i)
-      write_tasks.push_back([&, i] {
-        context.check_canceled();
-        drc[i] =
-            write_map_draco(builder.sensor_map(written[i]), written[i], options, context.work_dir);
-      });
-    for (size_t i = 0; i < written.size(); ++i)
-      write_tasks.push_back([&, i] {
-        ply[i] =
-            write_map_ply(builder.sensor_map(written[i]), written[i], options, context.work_dir);
-      });
-    run_tasks(write_tasks, options.threads);
-    for (size_t i = 0; i < written.size(); ++i) {
-      merge_output(drc[i], ply[i]);
-      sensors[written[i]]["map"] = drc[i].report;
-      out.artifacts.insert(out.artifacts.end(), drc[i].artifacts.begin(), drc[i].artifacts.end());
-    }
+    std::stable_sort(written.begin(), written.end(),
+                     [&](const std::string& a, const std::string& b) {
+                       return sensor_map(a).size() > sensor_map(b).size();
+                     });
     r["sensors"] = sensors;
-    context.progress(kOutputsDone);
-    context.check_canceled();
-
-    // Step 5: Table V (the SLAM map and the SLAM lidar's inspection map), then the combined
-    // map (Eq. (21)): built once the sensor maps are written, which it replaces in memory,
-    // written (Draco and PLY side by side) and measured.
-    std::vector<MetricsColumn> columns;
-    std::string primary = "inspection_combined";
+    std::string primary = "inspection_combined";  // Table V's inspection map
     if (slam) {
-      const PointCloud slam_map = slam->finish();
       r["slam_map"] = {{"sensor", slam_sensor->name},
                        {"keyframes", slam->keyframes()},
                        {"keyframes_used", slam->keyframes_used()},
                        {"keyframe_leaf_m", options.slam_keyframe_leaf_m},
                        {"points", slam_map.size()}};
-      if (!slam_map.empty()) {
-        columns.push_back(measure("slam_map", slam_map, options));
-      } else {
+      if (slam_map.empty())
         warnings.push_back("SLAM map: no scan of '" + slam_sensor->name +
                            "' matches a keyframe; no baseline");
-      }
-      if (std::find(written.begin(), written.end(), slam_sensor->name) != written.end()) {
-        primary = "inspection_" + slam_sensor->name;
-        columns.push_back(measure(primary, builder.sensor_map(slam_sensor->name), options));
-      }
-      context.check_canceled();
     } else {
       r["slam_map"] = nullptr;
       warnings.push_back("no lidar mapped: no SLAM-map baseline");
     }
-    context.progress(kOutputsDone + 0.05);
+    for (const auto& name : built) {
+      const PointCloud& map = sensor_map(name);
+      if (map.empty()) continue;
+      combined_parts.push_back(&map);
+      combined_points += map.size();
+    }
+    if (combined_points == 0) throw std::runtime_error("map: every map is empty; nothing to write");
+    if (slam && std::find(written.begin(), written.end(), slam_sensor->name) != written.end())
+      primary = "inspection_" + slam_sensor->name;
 
-    const PointCloud combined = builder.take_combined_map();
-    if (combined.empty()) throw std::runtime_error("map: every map is empty; nothing to write");
-    MapOutput combined_output, combined_ply;
-    MetricsColumn combined_metrics;
-    run_tasks(
-        {[&] {
-           combined_output = write_map_draco(combined, kCombinedMapName, options, context.work_dir);
-         },
-         [&] {
-           combined_ply = write_map_ply(combined, kCombinedMapName, options, context.work_dir);
-           combined_metrics = measure("inspection_combined", combined, options);
-         }},
-        options.threads);
+    std::vector<OutputTask> tasks;
+    for (const auto& name : built) {
+      if (std::find(output_queued.begin(), output_queued.end(), name) != output_queued.end())
+        continue;
+      for (auto& task : sensor_tasks(name)) tasks.push_back(std::move(task));
+    }
+    if (slam && !slam_queued)
+      for (auto& task : slam_tasks()) tasks.push_back(std::move(task));
+    // The combined map's Draco file, the longest task, in two: its round trip may then run
+    // beside the combined metrics (the encoding's peak could not).
+    const double n_combined = static_cast<double>(combined_points);
+    combined_check = {
+        "draco combined (check)", kDracoCheckSecondsPerPoint * n_combined,
+        kDracoCheckBytesPerPoint * n_combined, [&] {
+          const auto start = std::chrono::steady_clock::now();
+          io::measure_draco_point_cloud(combined_parts, draco_options(options), &combined_encoded);
+          combined_output =
+              write_map_draco(combined_encoded, combined_points, start, combined_encode_seconds,
+                              kCombinedMapName, options, context.work_dir);
+          combined_encoded = io::DracoEncoded{};
+        }};
+    tasks.push_back({"draco combined (encode)", kDracoEncodeSecondsPerPoint * n_combined,
+                     kDracoBytesPerPoint * n_combined, [&] {
+                       const auto start = std::chrono::steady_clock::now();
+                       combined_encoded = io::encode_draco_point_cloud_bytes(
+                           combined_parts, draco_options(options));
+                       combined_encode_seconds = seconds_since(start);
+                       runner.add(guarded({std::move(combined_check)}));
+                     }});
+    if (options.write_ply)
+      tasks.push_back(ply_task(kCombinedMapName, combined_points, [&] {
+        combined_ply = write_map_ply(combined_parts, kCombinedMapName, context.work_dir);
+      }));
+    // The metrics read positions only: the combined positions are gathered for them alone.
+    tasks.push_back(metrics_task(
+        "inspection_combined", combined_points, sizeof(Eigen::Vector3f) * combined_points, [&] {
+          PointCloud positions;
+          positions.xyz.reserve(combined_points);
+          for (const PointCloud* part : combined_parts)
+            positions.xyz.insert(positions.xyz.end(), part->xyz.begin(), part->xyz.end());
+          combined_column = measure("inspection_combined", positions, options);
+        }));
+    runner.add(guarded(std::move(tasks)));
+    // Memory: the combined map's Draco encode and metrics together, the peak of the outputs
+    // when they ran once the sensor maps were merged, bounds the tasks running at once.
+    runner.run_with(options.threads, (kDracoBytesPerPoint + kMetricsBytesPerPoint) *
+                                         static_cast<double>(combined_points));
+    runner.finish([&](double f) { context.progress(kScansDone + (1.0 - kScansDone) * f); });
+    context.check_canceled();
+
+    for (const auto& name : written) {
+      MapOutput& map_output = drc.at(name);
+      merge_output(map_output, ply.at(name));
+      r["sensors"][name]["map"] = map_output.report;
+      out.artifacts.insert(out.artifacts.end(), map_output.artifacts.begin(),
+                           map_output.artifacts.end());
+    }
     merge_output(combined_output, combined_ply);
     r["combined"] = combined_output.report;
     out.artifacts.insert(out.artifacts.end(), combined_output.artifacts.begin(),
                          combined_output.artifacts.end());
-    columns.push_back(std::move(combined_metrics));
+    std::vector<MetricsColumn> columns;
+    for (auto* column : {&slam_column, &inspection, &combined_column})
+      if (*column) columns.push_back(std::move(**column));
     json metrics = {{"radius_m", options.metrics_radius_m},
                     {"max_query_points", options.metrics_max_points},
                     {"maps", json::object()}};
@@ -597,6 +891,9 @@ class MapStage : public Stage {
         {"metrics_query_points_per_second",
          metrics_seconds > 0 ? metrics_queries / metrics_seconds : 0.0}};
     r["warnings"] = warnings;
+    task_log.flush(context.log);
+    context.log("map: outputs and metrics " + std::to_string(seconds_since(outputs_start)) +
+                " s wall, " + std::to_string(process_cpu_seconds() - outputs_cpu_start) + " s cpu");
     context.progress(1.0);
     return out;
   }

@@ -136,6 +136,54 @@ TEST(DracoCodec, PointCloudIntensityBecomesAField) {
             std::multiset<float>(cloud.intensity.begin(), cloud.intensity.end()));
 }
 
+// A combined map encoded from its parts must be the file of the concatenated cloud (built here
+// by hand), byte for byte, with the same error figures; intensity is kept only when every
+// non-empty part has it.
+TEST(DracoCodec, PartsEncodeAsTheirConcatenation) {
+  PointCloud a, empty, b;
+  a.xyz = random_points(700, 3);
+  b.xyz = random_points(300, 4);
+  for (auto& p : b.xyz) p += Eigen::Vector3f(30.f, -8.f, 2.f);  // widens the quantization range
+  for (size_t i = 0; i < a.size(); ++i) a.intensity.push_back(static_cast<float>(i % 200));
+  for (size_t i = 0; i < b.size(); ++i) b.intensity.push_back(static_cast<float>(i % 50));
+  PointCloud concatenated;
+  concatenated.xyz = a.xyz;
+  concatenated.xyz.insert(concatenated.xyz.end(), b.xyz.begin(), b.xyz.end());
+  concatenated.intensity = a.intensity;
+  concatenated.intensity.insert(concatenated.intensity.end(), b.intensity.begin(),
+                                b.intensity.end());
+  DracoOptions options;
+  options.position_bits = 16;
+  const DracoEncoded whole = encode_draco_point_cloud(concatenated, {}, options);
+  const DracoEncoded parts = encode_draco_point_cloud({&a, &empty, &b}, options);
+  EXPECT_EQ(parts.bytes, whole.bytes);
+  EXPECT_EQ(parts.max_position_error_m, whole.max_position_error_m);
+  EXPECT_EQ(parts.position_range_m, whole.position_range_m);
+  EXPECT_EQ(parts.position_error_bound_m, whole.position_error_bound_m);
+  EXPECT_EQ(parts.error_method, "replica");
+  EXPECT_GT(parts.max_position_error_m, 0.0);
+  EXPECT_LE(parts.max_position_error_m, parts.position_error_bound_m);
+  DracoEncoded two_steps = encode_draco_point_cloud_bytes({&a, &empty, &b}, options);
+  EXPECT_EQ(two_steps.bytes, whole.bytes);
+  EXPECT_EQ(two_steps.max_position_error_m, 0.0);  // not measured yet
+  measure_draco_point_cloud({&a, &empty, &b}, options, &two_steps);
+  EXPECT_EQ(two_steps.max_position_error_m, whole.max_position_error_m);
+  EXPECT_EQ(two_steps.position_error_bound_m, whole.position_error_bound_m);
+  EXPECT_EQ(two_steps.error_method, "replica");
+  DracoEncoded truncated = encode_draco_point_cloud_bytes({&a, &b}, options);
+  truncated.bytes.resize(truncated.bytes.size() / 2);
+  EXPECT_THROW(measure_draco_point_cloud({&a, &b}, options, &truncated), std::runtime_error);
+
+  b.intensity.clear();  // one part without intensity: the union carries none
+  const DracoEncoded without = encode_draco_point_cloud({&a, &b}, options);
+  EXPECT_EQ(without.bytes, encode_draco_point_cloud(concatenated.xyz, {}, options).bytes);
+  EXPECT_EQ(find_field(decode_draco_point_cloud(without.bytes).fields, "intensity"), nullptr);
+
+  EXPECT_THROW(encode_draco_point_cloud({&empty}, options), std::invalid_argument);
+  a.intensity.pop_back();
+  EXPECT_THROW(encode_draco_point_cloud({&a, &b}, options), std::invalid_argument);
+}
+
 TEST(DracoCodec, MeshRoundTripKeepsTopologyAndBoundsError) {
   const TriangleMesh mesh = testing::make_icosphere(3, 4.0, {1, 2, 3});  // 642 vertices
   const size_t n = mesh.vertices.size();

@@ -6,6 +6,8 @@
 #include <pcl/io/ply_io.h>
 
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 #include "tests/worker/ba/mesh_fixtures.h"
@@ -117,6 +119,49 @@ TEST(PlyCloudWriter, FieldsReadBackWithPcl) {
     EXPECT_EQ(pcl_float(read, "density", i), density.values[i]);
     EXPECT_EQ(pcl_float(read, "deviation", i), deviation.values[i]);
   }
+}
+
+std::string file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// A combined map written from its parts must be the PLY of the concatenated cloud (built here
+// by hand), byte for byte; the first part spans more than one streamed chunk (65536 points).
+TEST(PlyCloudWriter, PartsWriteTheirConcatenation) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-50.f, 50.f);
+  PointCloud a, empty, b;
+  for (int i = 0; i < 70001; ++i) {
+    a.xyz.emplace_back(u(rng), u(rng), u(rng));
+    a.intensity.push_back(u(rng));
+  }
+  for (int i = 0; i < 123; ++i) {
+    b.xyz.emplace_back(u(rng), u(rng), u(rng));
+    b.intensity.push_back(u(rng));
+  }
+  PointCloud concatenated = a;
+  concatenated.xyz.insert(concatenated.xyz.end(), b.xyz.begin(), b.xyz.end());
+  concatenated.intensity.insert(concatenated.intensity.end(), b.intensity.begin(),
+                                b.intensity.end());
+  const auto dir = testing::scratch_dir();
+  write_ply_cloud(dir / "whole.ply", concatenated);
+  write_ply_cloud(dir / "parts.ply", std::vector<const PointCloud*>{&a, &empty, &b});
+  const std::string whole = file_bytes(dir / "whole.ply");
+  EXPECT_EQ(whole.size(), 16 * concatenated.size() + whole.find("end_header\n") + 11);
+  EXPECT_EQ(file_bytes(dir / "parts.ply"), whole);
+
+  b.intensity.clear();  // one part without intensity: the union carries none
+  concatenated.intensity.clear();
+  write_ply_cloud(dir / "whole_xyz.ply", concatenated);
+  write_ply_cloud(dir / "parts_xyz.ply", std::vector<const PointCloud*>{&a, &b});
+  EXPECT_EQ(file_bytes(dir / "parts_xyz.ply"), file_bytes(dir / "whole_xyz.ply"));
+
+  a.intensity.pop_back();  // a bad part: nothing written, not even a partial file
+  EXPECT_THROW(write_ply_cloud(dir / "bad.ply", std::vector<const PointCloud*>{&a}),
+               std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.ply"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.ply.partial"));
 }
 
 TEST(PlyCloudWriter, RejectsMismatchedSizes) {
