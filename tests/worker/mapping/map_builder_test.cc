@@ -145,7 +145,8 @@ TEST(MapBuilder, ParallelFeedEqualsScanByScan) {
   options.default_sensor.final_filters.filters.push_back(VoxelGridFilter{0.4});
   std::vector<std::pair<std::string, PointCloud>> scans;
   for (int s = 0; s < 40; ++s) {
-    PointCloud scan = random_cloud(300, -4.0f, 4.0f, 700 + s);
+    // Uneven scans, so later scans are often ready before earlier ones and wait their turn.
+    PointCloud scan = random_cloud(s % 4 == 0 ? 3000 : 100, -4.0f, 4.0f, 700 + s);
     scan.t_ns = seconds_to_ns(s == 17 ? 99.0 : 3.0 + 0.1 * s);  // 99 s: outside the poses
     scans.emplace_back(s % 3 == 0 ? "sonar" : "lidar", scan);
   }
@@ -153,28 +154,30 @@ TEST(MapBuilder, ParallelFeedEqualsScanByScan) {
   MapBuilder serial(tree, options);
   for (const auto& [sensor, scan] : scans) serial.add_scan(sensor, scan);
   serial.finish();
-  options.threads = 2;
-  MapBuilder parallel(tree, options);
-  size_t next = 0;
-  parallel.add_scans([&](std::string& sensor, PointCloud& scan) {
-    if (next == scans.size()) return false;
-    sensor = scans[next].first;
-    scan = scans[next].second;
-    ++next;
-    return true;
-  });
-  parallel.finish();
-  for (const std::string sensor : {"lidar", "sonar"}) {
-    SCOPED_TRACE(sensor);
-    const PointCloud& a = serial.sensor_map(sensor);
-    const PointCloud& b = parallel.sensor_map(sensor);
-    ASSERT_GT(a.size(), 0u);
-    ASSERT_EQ(a.size(), b.size());
-    for (size_t k = 0; k < a.size(); ++k) ASSERT_EQ(a.xyz[k], b.xyz[k]) << k;
-    EXPECT_EQ(serial.stats(sensor).scans, parallel.stats(sensor).scans);
-    EXPECT_EQ(serial.stats(sensor).scans_outside_trajectory,
-              parallel.stats(sensor).scans_outside_trajectory);
-    EXPECT_EQ(serial.stats(sensor).intermediary_maps, parallel.stats(sensor).intermediary_maps);
+  for (const int threads : {2, 5}) {
+    options.threads = threads;
+    MapBuilder parallel(tree, options);
+    size_t next = 0;
+    parallel.add_scans([&](std::string& sensor, PointCloud& scan) {
+      if (next == scans.size()) return false;
+      sensor = scans[next].first;
+      scan = scans[next].second;
+      ++next;
+      return true;
+    });
+    parallel.finish();
+    for (const std::string sensor : {"lidar", "sonar"}) {
+      SCOPED_TRACE(sensor + " on " + std::to_string(threads) + " threads");
+      const PointCloud& a = serial.sensor_map(sensor);
+      const PointCloud& b = parallel.sensor_map(sensor);
+      ASSERT_GT(a.size(), 0u);
+      ASSERT_EQ(a.size(), b.size());
+      for (size_t k = 0; k < a.size(); ++k) ASSERT_EQ(a.xyz[k], b.xyz[k]) << k;
+      EXPECT_EQ(serial.stats(sensor).scans, parallel.stats(sensor).scans);
+      EXPECT_EQ(serial.stats(sensor).scans_outside_trajectory,
+                parallel.stats(sensor).scans_outside_trajectory);
+      EXPECT_EQ(serial.stats(sensor).intermediary_maps, parallel.stats(sensor).intermediary_maps);
+    }
   }
   EXPECT_EQ(serial.stats("lidar").scans_outside_trajectory +
                 serial.stats("sonar").scans_outside_trajectory,
