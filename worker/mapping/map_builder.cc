@@ -340,7 +340,6 @@ std::vector<std::string> MapBuilder::sensors() const {
 
 const PointCloud& MapBuilder::sensor_map(const std::string& sensor) const {
   if (!finished_) throw std::logic_error("map builder: sensor_map before finish()");
-  if (maps_taken_) throw std::logic_error("map builder: sensor_map after take_combined_map()");
   return existing_state(sensor).map;
 }
 
@@ -348,31 +347,8 @@ const SensorMapStats& MapBuilder::stats(const std::string& sensor) const {
   return existing_state(sensor).stats;
 }
 
-PointCloud MapBuilder::take_combined_map() {
-  if (!finished_) throw std::logic_error("map builder: take_combined_map before finish()");
-  if (maps_taken_) throw std::logic_error("map builder: take_combined_map called twice");
-  PointCloud combined;
-  combined.frame = "world";
-  size_t total = 0;
-  for (const auto& [sensor, state] : states_) total += state->map.size();
-  // Reserved pages are only resident once written, so freeing each sensor's map right after
-  // copying it keeps the resident peak near one copy of the union.
-  combined.xyz.reserve(total);
-  bool all_intensity = true;
-  for (const auto& [sensor, state] : states_)
-    all_intensity = all_intensity && (state->map.empty() || state->map.has_intensity());
-  if (all_intensity) combined.intensity.reserve(total);
-  for (auto& [sensor, state] : states_) {
-    append_points(combined, state->map);
-    state->map = PointCloud{};
-  }
-  maps_taken_ = true;
-  return combined;
-}
-
 PointCloud MapBuilder::combined_map() const {
   if (!finished_) throw std::logic_error("map builder: combined_map before finish()");
-  if (maps_taken_) throw std::logic_error("map builder: combined_map after take_combined_map()");
   PointCloud combined;
   combined.frame = "world";
   size_t total = 0;

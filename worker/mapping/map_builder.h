@@ -103,9 +103,6 @@ class MapBuilder {
   const SensorMapStats& stats(const std::string& sensor) const;
   // Eq. (21): the union of every sensor's map (intensity kept when all carry it).
   PointCloud combined_map() const;
-  // The same union, releasing each sensor's map as it is copied (the peak holds the union
-  // once, not twice); sensor_map() throws afterwards.
-  PointCloud take_combined_map();
 
  private:
   struct SensorState;
@@ -123,7 +120,6 @@ class MapBuilder {
   MapBuilderOptions options_;
   std::map<std::string, std::unique_ptr<SensorState>> states_;
   bool finished_ = false;
-  bool maps_taken_ = false;
 };
 
 }  // namespace keel::mapping

@@ -1,4 +1,4 @@
-// Stage `map`, as numbered steps:
+// Stage `map`, as numbered steps (MapRun's step functions below):
 //   1. options (--set map.x=v) and the scan sensors to map: every lidar and sonar unless
 //      `sensors` names them; sensors on a servo tray (`mounted_on`) are skipped, because their
 //      extrinsic varies with the tray angle and MapBuilder's TF tree holds static extrinsics;
@@ -12,26 +12,20 @@
 //   4. per sensor: Draco (.drc) and PLY maps;
 //   5. metrics of the SLAM map and the SLAM lidar's inspection map (Eqs. (23)-(26)), and the
 //      combined map (Eq. (21)): its Draco and PLY files and metrics; Table V with the ratios.
-//   Steps 4 and 5 are output tasks (OutputRunner): a sensor's start on one extra thread as soon
-//   as its scans are in, while the next sensors scan; the rest, costliest first, on `threads`
-//   threads once every map is built, as many side by side as a memory bound allows. The
-//   combined map is encoded, written and measured from the sensor maps, never copied whole.
-//   docs/map-filters.md explains the throughput and memory choices.
+//   Steps 4 and 5 are output tasks (OutputRunner) that overlap the scans: a sensor's start on
+//   one extra thread as soon as its last scan is in, while the next sensors scan; the rest run
+//   costliest first on `threads` threads once every map is built, as many side by side as a
+//   memory budget allows. The combined map is encoded, written and measured from the sensor
+//   maps, never copied whole. docs/map-filters.md explains the throughput and memory choices.
 #include "worker/pipeline/map_stage.h"
 #include "worker/pipeline/stage_options.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
-#include <cstdio>
-#include <ctime>
-#include <deque>
 #include <filesystem>
 #include <functional>
-#include <mutex>
 #include <optional>
-#include <thread>
 
 #include "proto/contract_error.h"
 #include "worker/io/draco_codec.h"
@@ -43,6 +37,7 @@
 #include "worker/mapping/slam_map.h"
 #include "worker/mapping/transform_tree.h"
 #include "worker/mapping/voxel_accumulator.h"
+#include "worker/pipeline/output_runner.h"
 #include "worker/pipeline/refine_stage.h"
 
 namespace keel::pipeline {
@@ -234,55 +229,6 @@ std::string emptied_by(const mapping::SensorMapStats& s) {
   return "";
 }
 
-double process_cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-double thread_cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-// Start (seconds after the scans began), wall and CPU seconds of each output task, for the job
-// log (CPU of the task's own thread: the metrics' helper threads are not counted).
-class TaskLog {
- public:
-  explicit TaskLog(std::chrono::steady_clock::time_point origin) : origin_(origin) {}
-  void run(const std::string& name, const std::function<void()>& task) {
-    const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = thread_cpu_seconds();
-    task();
-    char line[256];
-    std::snprintf(line, sizeof(line),
-                  "map: output task %-28s start %6.2f s, %6.2f s wall, %6.2f s cpu", name.c_str(),
-                  std::chrono::duration<double>(start - origin_).count(), seconds_since(start),
-                  thread_cpu_seconds() - cpu_start);
-    std::lock_guard<std::mutex> lock(mutex_);
-    lines_.push_back(line);
-  }
-  void flush(const std::function<void(const std::string&)>& log) {
-    for (const auto& line : lines_) log(line);
-    lines_.clear();
-  }
-
- private:
-  std::chrono::steady_clock::time_point origin_;
-  std::mutex mutex_;
-  std::vector<std::string> lines_;
-};
-
-// One task of the outputs phase: `cost` (estimated CPU seconds) orders the tasks longest first,
-// `bytes` (estimated peak allocation while it runs) bounds which may run side by side.
-struct OutputTask {
-  std::string name;
-  double cost = 0.0;
-  double bytes = 0.0;
-  std::function<void()> run;
-};
-
 // Estimates per map point, measured on the keel-sim bridge (14.4 M points in the combined map):
 // Draco encode and round trip ~0.34 us and, at its peak, ~48 bytes (Draco's copy of the input,
 // its quantized attributes and the kd-tree's copy of them, the output); the metrics (20000
@@ -312,122 +258,6 @@ OutputTask metrics_task(const std::string& map, size_t points, size_t extra_byte
   return {"metrics " + map, kMetricsSecondsPerPoint * points,
           kMetricsBytesPerPoint * points + static_cast<double>(extra_bytes), std::move(run)};
 }
-
-// Runs output tasks, each once, on worker threads. A free worker starts the costliest task not
-// started whose bytes fit beside those of the running tasks within the memory budget (any task
-// runs when it would run alone), so the cores stay busy to the end (the longest task first)
-// without raising the memory peak. Tasks may be added while workers run, also by a task: a
-// sensor's outputs start on one worker while the next sensors scan, the rest once every map is
-// built, and the combined map's Draco encoding adds its round trip.
-class OutputRunner {
- public:
-  explicit OutputRunner(TaskLog& log) : log_(log) {}
-  // Stops before any task not started (after an exception elsewhere) and joins the workers.
-  ~OutputRunner() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopping_ = true;
-    }
-    changed_.notify_all();
-    for (auto& worker : workers_) worker.join();
-  }
-  OutputRunner(const OutputRunner&) = delete;
-  OutputRunner& operator=(const OutputRunner&) = delete;
-
-  void add(std::vector<OutputTask> tasks) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (auto& task : tasks) {
-        total_cost_ += task.cost;
-        tasks_.push_back(std::move(task));
-        started_.push_back(false);
-        ++unstarted_;
-      }
-    }
-    changed_.notify_all();
-  }
-  // At least `threads` workers from now on, with this memory budget (bytes).
-  void run_with(int threads, double memory_budget) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      memory_budget_ = memory_budget;
-    }
-    changed_.notify_all();
-    while (workers_.size() < static_cast<size_t>(std::max(threads, 1)))
-      workers_.emplace_back([this] { work(); });
-  }
-  // No more tasks: waits for every task to run, reporting `done(fraction of the cost)` after
-  // each from now on (serialized), and rethrows the first exception of a task.
-  void finish(std::function<void(double)> done) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      done_ = std::move(done);
-      closed_ = true;
-    }
-    changed_.notify_all();
-    for (auto& worker : workers_) worker.join();
-    workers_.clear();
-    if (error_) std::rethrow_exception(error_);
-  }
-
- private:
-  static constexpr size_t kNone = static_cast<size_t>(-1);
-
-  size_t fitting() const {
-    size_t best = kNone;
-    for (size_t i = 0; i < tasks_.size(); ++i) {
-      if (started_[i]) continue;
-      if (running_ > 0 && running_bytes_ + tasks_[i].bytes > memory_budget_) continue;
-      if (best == kNone || tasks_[i].cost > tasks_[best].cost) best = i;
-    }
-    return best;
-  }
-
-  void work() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    for (;;) {
-      size_t i = kNone;
-      changed_.wait(lock, [&] {
-        // A running task may still add tasks: no worker leaves before it ends.
-        return error_ || stopping_ || (closed_ && unstarted_ == 0 && running_ == 0) ||
-               (i = fitting()) != kNone;
-      });
-      if (error_ || stopping_ || i == kNone) return;
-      started_[i] = true;
-      --unstarted_;
-      ++running_;
-      running_bytes_ += tasks_[i].bytes;
-      const std::string name = tasks_[i].name;
-      const std::function<void()> run = tasks_[i].run;
-      lock.unlock();
-      std::exception_ptr failure;
-      try {
-        log_.run(name, run);
-      } catch (...) {
-        failure = std::current_exception();
-      }
-      lock.lock();
-      --running_;
-      running_bytes_ -= tasks_[i].bytes;
-      if (failure && !error_) error_ = failure;
-      cost_done_ += tasks_[i].cost;
-      if (!failure && closed_ && done_ && total_cost_ > 0.0) done_(cost_done_ / total_cost_);
-      changed_.notify_all();
-    }
-  }
-
-  TaskLog& log_;
-  std::mutex mutex_;
-  std::condition_variable changed_;  // tasks added, a task finished, closed or stopping
-  std::deque<OutputTask> tasks_;
-  std::vector<bool> started_;
-  size_t unstarted_ = 0, running_ = 0;
-  double running_bytes_ = 0.0, memory_budget_ = 0.0, total_cost_ = 0.0, cost_done_ = 0.0;
-  bool closed_ = false, stopping_ = false;
-  std::exception_ptr error_;
-  std::function<void(double)> done_;
-  std::vector<std::thread> workers_;
-};
 
 // One map's artifacts and their figures for the report.
 struct MapOutput {
@@ -551,352 +381,455 @@ json table_v(const std::vector<MetricsColumn>& columns, const std::string& prima
 
 // ---- the stage ----------------------------------------------------------------------------
 
-class MapStage : public Stage {
+// The mapping settings of the selected sensors (their filter chains), before the TF tree.
+mapping::MapBuilderOptions map_builder_options(const MapStageOptions& options,
+                                               const SensorSelection& selection) {
+  mapping::MapBuilderOptions builder_options;
+  builder_options.scans_per_intermediary = options.scans_per_intermediary;
+  builder_options.final_voxel_merge_radius_leaves = options.final_voxel_merge_radius_leaves;
+  builder_options.deskew.max_sweep_duration_s = options.max_sweep_duration_s;
+  builder_options.threads = options.threads;
+  for (const auto& s : selection.mapped)
+    builder_options.sensors[s.name] = options.sensor_options(s.name, s.type);
+  return builder_options;
+}
+
+// The lidar whose keyframe scans build the SLAM-map baseline: `slam_sensor`, else the first
+// lidar mapped; nullptr when no lidar is mapped.
+const MappedSensor* find_slam_sensor(const MapStageOptions& options,
+                                     const SensorSelection& selection) {
+  for (const auto& s : selection.mapped)
+    if (options.slam_sensor.empty() ? s.type == "lidar" : s.name == options.slam_sensor) return &s;
+  if (!options.slam_sensor.empty())
+    throw ContractError("options.map.slam_sensor: '" + options.slam_sensor +
+                        "' is not among the mapped sensors");
+  return nullptr;
+}
+
+// One run of the stage, as the steps of the header comment; members hold what the steps pass
+// on. The output tasks capture members by reference, so `runner_`, which joins them on an
+// exception, is declared last (destroyed first).
+class MapRun {
  public:
-  std::string name() const override { return "map"; }
+  explicit MapRun(StageContext& context)
+      : context_(context),
+        stage_start_(std::chrono::steady_clock::now()),
+        options_(MapStageOptions::from_json(context.options)) {}
 
-  StageResult run(StageContext& context) override {
-    const auto stage_start = std::chrono::steady_clock::now();
-    // Step 1: options, mission, sensors.
-    const MapStageOptions options = MapStageOptions::from_json(context.options);
-    io::MissionReader reader(io::load_mission(context.mission_dir));
-    const SensorSelection selection = select_sensors(reader, options);
-    for (const auto& item : options.sensor_filters.items()) {
-      const bool mapped = std::any_of(selection.mapped.begin(), selection.mapped.end(),
+  StageResult run() {
+    io::MissionReader reader(io::load_mission(context_.mission_dir));
+    choose_sensors(reader);
+    prepare_mapping(reader);
+    scan_every_sensor(reader);
+    StageResult out;
+    json& r = out.report;
+    r["options"] = options_.to_json();
+    r["poses"] = poses_.report;
+    r["skipped_sensors"] = selection_.skipped;
+    outputs_start_ = std::chrono::steady_clock::now();
+    outputs_cpu_start_ = process_cpu_seconds();
+    r["sensors"] = describe_sensors();
+    r["slam_map"] = describe_slam_map();
+    run_outputs();
+    collect_artifacts(out);
+    r["metrics"] = metrics_report();
+    r["timing"] = timing_report();
+    r["warnings"] = warnings_;
+    task_log_->flush(context_.log);
+    context_.log("map: outputs and metrics " + std::to_string(seconds_since(outputs_start_)) +
+                 " s wall, " + std::to_string(process_cpu_seconds() - outputs_cpu_start_) +
+                 " s cpu");
+    context_.progress(1.0);
+    return out;
+  }
+
+ private:
+  // Step 1: the sensors to map (the options were read by the constructor); every
+  // sensor_filters entry must name one of them.
+  void choose_sensors(const io::MissionReader& reader) {
+    selection_ = select_sensors(reader, options_);
+    for (const auto& item : options_.sensor_filters.items()) {
+      const bool mapped = std::any_of(selection_.mapped.begin(), selection_.mapped.end(),
                                       [&](const MappedSensor& s) { return s.name == item.key(); });
-      if (!mapped) {
-        std::vector<std::string> names;
-        for (const auto& s : selection.mapped) names.push_back(s.name);
-        throw ContractError("options.map.sensor_filters." + item.key() +
-                            ": no such sensor is mapped (mapped: " + join_names(names) + ")");
-      }
+      if (mapped) continue;
+      std::vector<std::string> names;
+      for (const auto& s : selection_.mapped) names.push_back(s.name);
+      throw ContractError("options.map.sensor_filters." + item.key() +
+                          ": no such sensor is mapped (mapped: " + join_names(names) + ")");
     }
-    context.check_canceled();
+    context_.check_canceled();
+  }
 
-    // Step 2: poses and the TF tree.
-    const Poses poses = build_poses(reader, options, context);
-    mapping::TransformTree tree(poses.T_world_body, "map poses");
-    mapping::MapBuilderOptions builder_options;
-    builder_options.scans_per_intermediary = options.scans_per_intermediary;
-    builder_options.final_voxel_merge_radius_leaves = options.final_voxel_merge_radius_leaves;
-    builder_options.deskew.max_sweep_duration_s = options.max_sweep_duration_s;
-    builder_options.threads = options.threads;
-    for (const auto& s : selection.mapped) {
-      tree.set_extrinsic(s.name, s.T_body_sensor);
-      builder_options.sensors[s.name] = options.sensor_options(s.name, s.type);
-    }
+  // Step 2: poses, the TF tree, one MapBuilder per sensor and the SLAM-map baseline.
+  void prepare_mapping(const io::MissionReader& reader) {
+    poses_ = build_poses(reader, options_, context_);
+    tree_.emplace(poses_.T_world_body, "map poses");
+    builder_options_ = map_builder_options(options_, selection_);
+    for (const auto& s : selection_.mapped) tree_->set_extrinsic(s.name, s.T_body_sensor);
     // One MapBuilder per sensor (a sensor's map depends on its own scans only, Fig. 5): a
     // sensor's outputs start once its last scan is in, while the next sensors scan.
-    std::map<std::string, std::unique_ptr<mapping::MapBuilder>> builders;
-    for (const auto& s : selection.mapped) {
-      if (builders.count(s.name)) continue;
-      mapping::MapBuilderOptions one = builder_options;
-      one.sensors = {{s.name, builder_options.sensors.at(s.name)}};
-      builders.emplace(s.name, std::make_unique<mapping::MapBuilder>(tree, std::move(one)));
+    for (const auto& s : selection_.mapped) {
+      if (builders_.count(s.name)) continue;
+      mapping::MapBuilderOptions one = builder_options_;
+      one.sensors = {{s.name, builder_options_.sensors.at(s.name)}};
+      builders_.emplace(s.name, std::make_unique<mapping::MapBuilder>(*tree_, std::move(one)));
     }
-
     // The SLAM-map baseline: the SLAM lidar's scans at the SLAM system's keyframes.
-    const MappedSensor* slam_sensor = nullptr;
-    for (const auto& s : selection.mapped)
-      if (options.slam_sensor.empty() ? s.type == "lidar" : s.name == options.slam_sensor) {
-        slam_sensor = &s;
-        break;
-      }
-    if (!options.slam_sensor.empty() && !slam_sensor)
-      throw ContractError("options.map.slam_sensor: '" + options.slam_sensor +
-                          "' is not among the mapped sensors");
-    std::optional<mapping::SlamMapBuilder> slam;
-    if (slam_sensor) {
+    slam_sensor_ = find_slam_sensor(options_, selection_);
+    if (slam_sensor_) {
       mapping::SlamMapOptions slam_options;
-      slam_options.keyframe_leaf_m = options.slam_keyframe_leaf_m;
-      slam.emplace(poses.slam_keyframes, slam_sensor->T_body_sensor, slam_options, &tree,
-                   slam_sensor->name);
+      slam_options.keyframe_leaf_m = options_.slam_keyframe_leaf_m;
+      slam_.emplace(poses_.slam_keyframes, slam_sensor_->T_body_sensor, slam_options, &*tree_,
+                    slam_sensor_->name);
     }
+  }
 
-    // Step 3: every scan, one at a time. Scan counts are known up front (index.csv / bag).
+  // Step 3: every scan of every sensor. As soon as a sensor's last scan is in, its outputs
+  // (steps 4 and 5) start on one extra thread while the next sensors scan.
+  void scan_every_sensor(const io::MissionReader& reader) {
+    // Scan counts are known up front (index.csv / bag), for the progress.
     std::vector<std::unique_ptr<io::ScanSource>> sources;
     size_t total_scans = 0;
-    for (const auto& s : selection.mapped) {
+    for (const auto& s : selection_.mapped) {
       sources.push_back(reader.open_scans(s.name));
       total_scans += sources.back()->size();
     }
-    context.log("map: " + std::to_string(total_scans) + " scans of " +
-                std::to_string(selection.mapped.size()) + " sensors, " +
-                std::to_string(poses.T_world_body.size()) + " poses");
-
-    // Steps 4 and 5 run as output tasks (OutputRunner): per sensor, Draco and PLY files; the
-    // metrics of the SLAM map and of the SLAM lidar's inspection map; then the combined map
-    // (Eq. (21)), kept as its parts, the sensor maps in name order (MapBuilder's), never
-    // copied whole. Results land in slots made before any task runs.
+    context_.log("map: " + std::to_string(total_scans) + " scans of " +
+                 std::to_string(selection_.mapped.size()) + " sensors, " +
+                 std::to_string(poses_.T_world_body.size()) + " poses");
     const auto scans_start = std::chrono::steady_clock::now();
-    TaskLog task_log(scans_start);
-    std::map<std::string, MapOutput> drc, ply;
-    for (const auto& s : selection.mapped) {
-      drc[s.name];
-      ply[s.name];
+    task_log_.emplace(scans_start, "map: output task");
+    for (const auto& s : selection_.mapped) {  // result slots, made before any task runs
+      drc_[s.name];
+      ply_[s.name];
     }
-    MapOutput combined_output, combined_ply;
-    PointCloud slam_map;
-    std::optional<MetricsColumn> slam_column, inspection, combined_column;
-    auto sensor_map = [&](const std::string& name) -> const PointCloud& {
-      return builders.at(name)->sensor_map(name);
-    };
-    auto guarded = [&context](std::vector<OutputTask> tasks) {
-      for (auto& task : tasks)
-        task.run = [&context, run = std::move(task.run)] {
-          context.check_canceled();
-          run();
-        };
-      return tasks;
-    };
-    // The tasks of a sensor whose map is built.
-    auto sensor_tasks = [&](const std::string& name) {
-      std::vector<OutputTask> tasks;
-      const PointCloud& map = sensor_map(name);
-      if (map.empty()) return tasks;
-      tasks.push_back(draco_task(name, map.size(), [&, name, &map = map] {
-        const auto start = std::chrono::steady_clock::now();
-        drc.at(name) =
-            write_map_draco(io::encode_draco_point_cloud(map, {}, draco_options(options)),
-                            map.size(), start, 0.0, name, options, context.work_dir);
-      }));
-      if (options.write_ply)
-        tasks.push_back(ply_task(name, map.size(), [&, name, &map = map] {
-          ply.at(name) = write_map_ply(map, name, context.work_dir);
-        }));
-      if (slam && name == slam_sensor->name) {
-        tasks.push_back(metrics_task("inspection_" + name, map.size(), 0, [&, name, &map = map] {
-          inspection = measure("inspection_" + name, map, options);
-        }));
-      }
-      return tasks;
-    };
-    auto slam_tasks = [&] {
-      std::vector<OutputTask> tasks;
-      if (!slam_map.empty())
-        tasks.push_back(metrics_task("slam_map", slam_map.size(), 0, [&] {
-          slam_column = measure("slam_map", slam_map, options);
-        }));
-      return tasks;
-    };
-    std::vector<const PointCloud*> combined_parts;
-    size_t combined_points = 0;
-    io::DracoEncoded combined_encoded;
-    double combined_encode_seconds = 0.0;
-    OutputTask combined_check;
-    // Declared after everything its tasks use: on an exception it joins them first.
-    OutputRunner runner(task_log);
+    runner_.emplace(*task_log_);
     // Early outputs take one thread beside the scans' `threads` (none when threads = 1).
-    const bool early_outputs = options.threads >= 2;
-    if (early_outputs) runner.run_with(1, 0.0);
-    std::vector<std::string> output_queued;  // sensors whose tasks were added
-    bool slam_queued = false;
-
+    const bool early_outputs = options_.threads >= 2;
+    if (early_outputs) runner_->run_with(1, 0.0);
     size_t scans_done = 0;
     for (size_t k = 0; k < sources.size(); ++k) {
-      const MappedSensor& sensor = selection.mapped[k];
-      // MapBuilder pulls scans from this feed on options.threads threads (calls never overlap,
-      // so the source, the SLAM baseline and progress see scans one at a time, in order).
-      builders.at(sensor.name)->add_scans([&](std::string& sensor_name, PointCloud& scan) {
-        context.check_canceled();
-        if (!sources[k]->next(scan)) return false;
-        sensor_name = sensor.name;
-        if (slam && &sensor == slam_sensor) slam->add_scan(scan);
-        ++scans_done;
-        if (total_scans > 0)
-          context.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
-        return true;
-      });
+      scan_sensor(selection_.mapped[k], *sources[k], total_scans, scans_done);
       sources[k].reset();
-      const bool last_of_sensor =
-          std::none_of(selection.mapped.begin() + k + 1, selection.mapped.end(),
-                       [&](const MappedSensor& s) { return s.name == sensor.name; });
-      if (!last_of_sensor) continue;
-      context.check_canceled();
-      builders.at(sensor.name)->finish();
-      if (slam && sensor.name == slam_sensor->name) slam_map = slam->finish();
-      if (early_outputs && k + 1 < sources.size()) {
-        if (!builders.at(sensor.name)->sensors().empty()) {
-          runner.add(guarded(sensor_tasks(sensor.name)));
-          output_queued.push_back(sensor.name);
-        }
-        if (slam && sensor.name == slam_sensor->name) {
-          runner.add(guarded(slam_tasks()));
-          slam_queued = true;
-        }
-      }
+      if (!is_last_of_sensor(k)) continue;
+      context_.check_canceled();
+      finish_sensor(selection_.mapped[k], early_outputs && k + 1 < sources.size());
     }
-    context.check_canceled();
-    const double scans_seconds = seconds_since(scans_start);
-    std::vector<std::string> built;  // sensors that had scans, in name order
-    for (const auto& [name, builder] : builders)
-      if (!builder->sensors().empty()) built.push_back(name);
-    size_t points_in = 0;
-    for (const auto& name : built) points_in += builders.at(name)->stats(name).points_in;
-    context.log("map: " + std::to_string(points_in) + " points in " +
-                std::to_string(scans_seconds) + " s");
+    context_.check_canceled();
+    scans_seconds_ = seconds_since(scans_start);
+    for (const auto& [name, builder] : builders_)
+      if (!builder->sensors().empty()) built_.push_back(name);
+    for (const auto& name : built_) points_in_ += builders_.at(name)->stats(name).points_in;
+    context_.log("map: " + std::to_string(points_in_) + " points in " +
+                 std::to_string(scans_seconds_) + " s");
+  }
 
-    // Step 4: per-sensor and combined maps.
-    StageResult out;
-    json& r = out.report;
-    r["options"] = options.to_json();
-    r["poses"] = poses.report;
-    r["skipped_sensors"] = selection.skipped;
-    json warnings = json::array();
+  // MapBuilder pulls the sensor's scans from this feed on options.threads threads (calls never
+  // overlap, so the source, the SLAM baseline and progress see scans one at a time, in order).
+  void scan_sensor(const MappedSensor& sensor, io::ScanSource& source, size_t total_scans,
+                   size_t& scans_done) {
+    builders_.at(sensor.name)->add_scans([&](std::string& sensor_name, PointCloud& scan) {
+      context_.check_canceled();
+      if (!source.next(scan)) return false;
+      sensor_name = sensor.name;
+      if (slam_ && &sensor == slam_sensor_) slam_->add_scan(scan);
+      ++scans_done;
+      if (total_scans > 0)
+        context_.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
+      return true;
+    });
+  }
+
+  // Whether selection_.mapped[k] is the last entry of its sensor (a name listed twice maps
+  // once, in one builder).
+  bool is_last_of_sensor(size_t k) const {
+    const std::string& name = selection_.mapped[k].name;
+    return std::none_of(selection_.mapped.begin() + k + 1, selection_.mapped.end(),
+                        [&](const MappedSensor& s) { return s.name == name; });
+  }
+
+  // A sensor's scans are all in: its map (and the SLAM map) are final; `start_outputs`: queue
+  // their tasks now, beside the next sensors' scans.
+  void finish_sensor(const MappedSensor& sensor, bool start_outputs) {
+    builders_.at(sensor.name)->finish();
+    const bool is_slam_sensor = slam_ && sensor.name == slam_sensor_->name;
+    if (is_slam_sensor) slam_map_ = slam_->finish();
+    if (!start_outputs) return;
+    if (!builders_.at(sensor.name)->sensors().empty()) {
+      runner_->add(guarded(sensor_tasks(sensor.name)));
+      output_queued_.push_back(sensor.name);
+    }
+    if (is_slam_sensor) {
+      runner_->add(guarded(slam_tasks()));
+      slam_queued_ = true;
+    }
+  }
+
+  const PointCloud& sensor_map(const std::string& name) const {
+    return builders_.at(name)->sensor_map(name);
+  }
+
+  // The report's `sensors` section (filters, stats, warnings_). Sets written_: the sensors
+  // with a non-empty map, largest first.
+  json describe_sensors() {
     json sensors = json::object();
-    const auto outputs_start = std::chrono::steady_clock::now();
-    const double outputs_cpu_start = process_cpu_seconds();
-    std::vector<std::string> written;  // sensors with a non-empty map, largest first
-    for (const auto& s : selection.mapped) {
+    for (const auto& s : selection_.mapped) {
       json entry = {{"type", s.type},
-                    {"filters", mapping::to_json(builder_options.sensors.at(s.name))}};
-      if (std::find(built.begin(), built.end(), s.name) == built.end()) {
+                    {"filters", mapping::to_json(builder_options_.sensors.at(s.name))}};
+      if (std::find(built_.begin(), built_.end(), s.name) == built_.end()) {
         entry["stats"] = nullptr;
-        warnings.push_back("sensor '" + s.name + "': no scans");
+        warnings_.push_back("sensor '" + s.name + "': no scans");
         sensors[s.name] = entry;
         continue;
       }
-      const mapping::SensorMapStats& stats = builders.at(s.name)->stats(s.name);
+      const mapping::SensorMapStats& stats = builders_.at(s.name)->stats(s.name);
       entry["stats"] = stats_json(stats);
       if (sensor_map(s.name).empty()) {
-        warnings.push_back("sensor '" + s.name + "': the map is empty (every point filtered, or " +
-                           "every scan outside the trajectory); no artifacts written");
-      } else if (std::find(written.begin(), written.end(), s.name) == written.end()) {
-        written.push_back(s.name);
+        warnings_.push_back("sensor '" + s.name + "': the map is empty (every point filtered, " +
+                            "or every scan outside the trajectory); no artifacts written");
+      } else if (std::find(written_.begin(), written_.end(), s.name) == written_.end()) {
+        written_.push_back(s.name);
       }
       if (stats.scans_outside_trajectory > 0)
-        warnings.push_back("sensor '" + s.name +
-                           "': " + std::to_string(stats.scans_outside_trajectory) +
-                           " scans outside the trajectory were skipped");
+        warnings_.push_back("sensor '" + s.name +
+                            "': " + std::to_string(stats.scans_outside_trajectory) +
+                            " scans outside the trajectory were skipped");
       if (const std::string w = emptied_by(stats); !w.empty())
-        warnings.push_back("sensor '" + s.name + "': " + w);
+        warnings_.push_back("sensor '" + s.name + "': " + w);
       sensors[s.name] = entry;
     }
-    std::stable_sort(written.begin(), written.end(),
+    std::stable_sort(written_.begin(), written_.end(),
                      [&](const std::string& a, const std::string& b) {
                        return sensor_map(a).size() > sensor_map(b).size();
                      });
-    r["sensors"] = sensors;
-    std::string primary = "inspection_combined";  // Table V's inspection map
-    if (slam) {
-      r["slam_map"] = {{"sensor", slam_sensor->name},
-                       {"keyframes", slam->keyframes()},
-                       {"keyframes_used", slam->keyframes_used()},
-                       {"keyframe_leaf_m", options.slam_keyframe_leaf_m},
-                       {"points", slam_map.size()}};
-      if (slam_map.empty())
-        warnings.push_back("SLAM map: no scan of '" + slam_sensor->name +
-                           "' matches a keyframe; no baseline");
-    } else {
-      r["slam_map"] = nullptr;
-      warnings.push_back("no lidar mapped: no SLAM-map baseline");
+    return sensors;
+  }
+
+  // The report's `slam_map` section (null without a lidar), with its warnings.
+  json describe_slam_map() {
+    if (!slam_) {
+      warnings_.push_back("no lidar mapped: no SLAM-map baseline");
+      return nullptr;
     }
-    for (const auto& name : built) {
+    if (slam_map_.empty())
+      warnings_.push_back("SLAM map: no scan of '" + slam_sensor_->name +
+                          "' matches a keyframe; no baseline");
+    return {{"sensor", slam_sensor_->name},
+            {"keyframes", slam_->keyframes()},
+            {"keyframes_used", slam_->keyframes_used()},
+            {"keyframe_leaf_m", options_.slam_keyframe_leaf_m},
+            {"points", slam_map_.size()}};
+  }
+
+  // Steps 4 and 5: the tasks not started during the scans and the combined map's, costliest
+  // first on `threads` threads under a memory budget. The combined map (Eq. (21)) is kept as
+  // its parts, the sensor maps in name order (MapBuilder's), never copied whole.
+  void run_outputs() {
+    for (const auto& name : built_) {
       const PointCloud& map = sensor_map(name);
       if (map.empty()) continue;
-      combined_parts.push_back(&map);
-      combined_points += map.size();
+      combined_parts_.push_back(&map);
+      combined_points_ += map.size();
     }
-    if (combined_points == 0) throw std::runtime_error("map: every map is empty; nothing to write");
-    if (slam && std::find(written.begin(), written.end(), slam_sensor->name) != written.end())
-      primary = "inspection_" + slam_sensor->name;
+    if (combined_points_ == 0)
+      throw std::runtime_error("map: every map is empty; nothing to write");
+    if (slam_ && std::find(written_.begin(), written_.end(), slam_sensor_->name) != written_.end())
+      primary_ = "inspection_" + slam_sensor_->name;
 
     std::vector<OutputTask> tasks;
-    for (const auto& name : built) {
-      if (std::find(output_queued.begin(), output_queued.end(), name) != output_queued.end())
+    for (const auto& name : built_) {
+      if (std::find(output_queued_.begin(), output_queued_.end(), name) != output_queued_.end())
         continue;
       for (auto& task : sensor_tasks(name)) tasks.push_back(std::move(task));
     }
-    if (slam && !slam_queued)
+    if (slam_ && !slam_queued_)
       for (auto& task : slam_tasks()) tasks.push_back(std::move(task));
-    // The combined map's Draco file, the longest task, in two: its round trip may then run
-    // beside the combined metrics (the encoding's peak could not).
-    const double n_combined = static_cast<double>(combined_points);
-    combined_check = {
-        "draco combined (check)", kDracoCheckSecondsPerPoint * n_combined,
-        kDracoCheckBytesPerPoint * n_combined, [&] {
-          const auto start = std::chrono::steady_clock::now();
-          io::measure_draco_point_cloud(combined_parts, draco_options(options), &combined_encoded);
-          combined_output =
-              write_map_draco(combined_encoded, combined_points, start, combined_encode_seconds,
-                              kCombinedMapName, options, context.work_dir);
-          combined_encoded = io::DracoEncoded{};
-        }};
-    tasks.push_back({"draco combined (encode)", kDracoEncodeSecondsPerPoint * n_combined,
-                     kDracoBytesPerPoint * n_combined, [&] {
-                       const auto start = std::chrono::steady_clock::now();
-                       combined_encoded = io::encode_draco_point_cloud_bytes(
-                           combined_parts, draco_options(options));
-                       combined_encode_seconds = seconds_since(start);
-                       runner.add(guarded({std::move(combined_check)}));
-                     }});
-    if (options.write_ply)
-      tasks.push_back(ply_task(kCombinedMapName, combined_points, [&] {
-        combined_ply = write_map_ply(combined_parts, kCombinedMapName, context.work_dir);
-      }));
-    // The metrics read positions only: the combined positions are gathered for them alone.
-    tasks.push_back(metrics_task(
-        "inspection_combined", combined_points, sizeof(Eigen::Vector3f) * combined_points, [&] {
-          PointCloud positions;
-          positions.xyz.reserve(combined_points);
-          for (const PointCloud* part : combined_parts)
-            positions.xyz.insert(positions.xyz.end(), part->xyz.begin(), part->xyz.end());
-          combined_column = measure("inspection_combined", positions, options);
-        }));
-    runner.add(guarded(std::move(tasks)));
+    for (auto& task : combined_tasks()) tasks.push_back(std::move(task));
+    runner_->add(guarded(std::move(tasks)));
     // Memory: the combined map's Draco encode and metrics together, the peak of the outputs
     // when they ran once the sensor maps were merged, bounds the tasks running at once.
-    runner.run_with(options.threads, (kDracoBytesPerPoint + kMetricsBytesPerPoint) *
-                                         static_cast<double>(combined_points));
-    runner.finish([&](double f) { context.progress(kScansDone + (1.0 - kScansDone) * f); });
-    context.check_canceled();
+    runner_->run_with(options_.threads, (kDracoBytesPerPoint + kMetricsBytesPerPoint) *
+                                            static_cast<double>(combined_points_));
+    runner_->finish([&](double f) { context_.progress(kScansDone + (1.0 - kScansDone) * f); });
+    context_.check_canceled();
+  }
 
-    for (const auto& name : written) {
-      MapOutput& map_output = drc.at(name);
-      merge_output(map_output, ply.at(name));
-      r["sensors"][name]["map"] = map_output.report;
+  // Tasks that first check for a cancel request, so a canceled job starts no further output.
+  std::vector<OutputTask> guarded(std::vector<OutputTask> tasks) const {
+    for (auto& task : tasks)
+      task.run = [&context = context_, run = std::move(task.run)] {
+        context.check_canceled();
+        run();
+      };
+    return tasks;
+  }
+
+  // The tasks of a sensor whose map is built: Draco, PLY, and the inspection map's metrics
+  // for the SLAM lidar. Results land in the slots made before the scans.
+  std::vector<OutputTask> sensor_tasks(const std::string& name) {
+    std::vector<OutputTask> tasks;
+    const PointCloud& map = sensor_map(name);
+    if (map.empty()) return tasks;
+    tasks.push_back(draco_task(name, map.size(), [this, name, &map] {
+      const auto start = std::chrono::steady_clock::now();
+      drc_.at(name) =
+          write_map_draco(io::encode_draco_point_cloud(map, {}, draco_options(options_)),
+                          map.size(), start, 0.0, name, options_, context_.work_dir);
+    }));
+    if (options_.write_ply)
+      tasks.push_back(ply_task(name, map.size(), [this, name, &map] {
+        ply_.at(name) = write_map_ply(map, name, context_.work_dir);
+      }));
+    if (slam_ && name == slam_sensor_->name)
+      tasks.push_back(metrics_task("inspection_" + name, map.size(), 0, [this, name, &map] {
+        inspection_ = measure("inspection_" + name, map, options_);
+      }));
+    return tasks;
+  }
+
+  std::vector<OutputTask> slam_tasks() {
+    std::vector<OutputTask> tasks;
+    if (!slam_map_.empty())
+      tasks.push_back(metrics_task("slam_map", slam_map_.size(), 0, [this] {
+        slam_column_ = measure("slam_map", slam_map_, options_);
+      }));
+    return tasks;
+  }
+
+  // The combined map's Draco file, the longest task, in two: the encoding adds its round trip
+  // (the check), which may then run beside the combined metrics (the encoding's peak could
+  // not). Its PLY is written from the parts; the metrics read positions only, so the combined
+  // positions are gathered for them alone.
+  std::vector<OutputTask> combined_tasks() {
+    std::vector<OutputTask> tasks;
+    const double n_combined = static_cast<double>(combined_points_);
+    tasks.push_back({"draco combined (encode)", kDracoEncodeSecondsPerPoint * n_combined,
+                     kDracoBytesPerPoint * n_combined, [this] {
+                       const auto start = std::chrono::steady_clock::now();
+                       combined_encoded_ = io::encode_draco_point_cloud_bytes(
+                           combined_parts_, draco_options(options_));
+                       combined_encode_seconds_ = seconds_since(start);
+                       runner_->add(guarded({combined_draco_check()}));
+                     }});
+    if (options_.write_ply)
+      tasks.push_back(ply_task(kCombinedMapName, combined_points_, [this] {
+        combined_ply_ = write_map_ply(combined_parts_, kCombinedMapName, context_.work_dir);
+      }));
+    tasks.push_back(metrics_task(
+        "inspection_combined", combined_points_, sizeof(Eigen::Vector3f) * combined_points_,
+        [this] {
+          PointCloud positions;
+          positions.xyz.reserve(combined_points_);
+          for (const PointCloud* part : combined_parts_)
+            positions.xyz.insert(positions.xyz.end(), part->xyz.begin(), part->xyz.end());
+          combined_column_ = measure("inspection_combined", positions, options_);
+        }));
+    return tasks;
+  }
+
+  // The combined Draco file's round trip (the error it reports), then the file itself.
+  OutputTask combined_draco_check() {
+    const double n_combined = static_cast<double>(combined_points_);
+    return {"draco combined (check)", kDracoCheckSecondsPerPoint * n_combined,
+            kDracoCheckBytesPerPoint * n_combined, [this] {
+              const auto start = std::chrono::steady_clock::now();
+              io::measure_draco_point_cloud(combined_parts_, draco_options(options_),
+                                            &combined_encoded_);
+              combined_output_ = write_map_draco(combined_encoded_, combined_points_, start,
+                                                 combined_encode_seconds_, kCombinedMapName,
+                                                 options_, context_.work_dir);
+              combined_encoded_ = io::DracoEncoded{};
+            }};
+  }
+
+  // The per-sensor maps' (largest first) and the combined map's files and report sections.
+  void collect_artifacts(StageResult& out) {
+    for (const auto& name : written_) {
+      MapOutput& map_output = drc_.at(name);
+      merge_output(map_output, ply_.at(name));
+      out.report["sensors"][name]["map"] = map_output.report;
       out.artifacts.insert(out.artifacts.end(), map_output.artifacts.begin(),
                            map_output.artifacts.end());
     }
-    merge_output(combined_output, combined_ply);
-    r["combined"] = combined_output.report;
-    out.artifacts.insert(out.artifacts.end(), combined_output.artifacts.begin(),
-                         combined_output.artifacts.end());
+    merge_output(combined_output_, combined_ply_);
+    out.report["combined"] = combined_output_.report;
+    out.artifacts.insert(out.artifacts.end(), combined_output_.artifacts.begin(),
+                         combined_output_.artifacts.end());
+  }
+
+  // Step 5's report: each map's metrics (Eqs. (23)-(26)) and Table V.
+  json metrics_report() {
     std::vector<MetricsColumn> columns;
-    for (auto* column : {&slam_column, &inspection, &combined_column})
+    for (auto* column : {&slam_column_, &inspection_, &combined_column_})
       if (*column) columns.push_back(std::move(**column));
-    json metrics = {{"radius_m", options.metrics_radius_m},
-                    {"max_query_points", options.metrics_max_points},
+    json metrics = {{"radius_m", options_.metrics_radius_m},
+                    {"max_query_points", options_.metrics_max_points},
                     {"maps", json::object()}};
-    double metrics_seconds = 0.0;
-    size_t metrics_queries = 0;
     for (const auto& c : columns) {
       metrics["maps"][c.name] = mapping::to_json(c.metrics);
       metrics["maps"][c.name]["seconds"] = c.seconds;
-      metrics_seconds += c.seconds;
-      metrics_queries += c.metrics.query_points;
+      metrics_seconds_ += c.seconds;
+      metrics_queries_ += c.metrics.query_points;
     }
-    metrics["table_v"] = table_v(columns, primary);
-    r["metrics"] = metrics;
-    const double stage_seconds = seconds_since(stage_start);
-    r["timing"] = {
-        {"stage_seconds", stage_seconds},
-        {"stage_input_points_per_second", stage_seconds > 0 ? points_in / stage_seconds : 0.0},
-        {"outputs_and_metrics_seconds", seconds_since(outputs_start)},
-        {"threads", options.threads},
-        {"scans_seconds", scans_seconds},
-        {"input_points", points_in},
-        {"input_points_per_second", scans_seconds > 0 ? points_in / scans_seconds : 0.0},
-        {"metrics_seconds", metrics_seconds},
-        {"metrics_query_points_per_second",
-         metrics_seconds > 0 ? metrics_queries / metrics_seconds : 0.0}};
-    r["warnings"] = warnings;
-    task_log.flush(context.log);
-    context.log("map: outputs and metrics " + std::to_string(seconds_since(outputs_start)) +
-                " s wall, " + std::to_string(process_cpu_seconds() - outputs_cpu_start) + " s cpu");
-    context.progress(1.0);
-    return out;
+    metrics["table_v"] = table_v(columns, primary_);
+    return metrics;
   }
+
+  json timing_report() const {
+    const double stage_seconds = seconds_since(stage_start_);
+    return {{"stage_seconds", stage_seconds},
+            {"stage_input_points_per_second", stage_seconds > 0 ? points_in_ / stage_seconds : 0.0},
+            {"outputs_and_metrics_seconds", seconds_since(outputs_start_)},
+            {"threads", options_.threads},
+            {"scans_seconds", scans_seconds_},
+            {"input_points", points_in_},
+            {"input_points_per_second", scans_seconds_ > 0 ? points_in_ / scans_seconds_ : 0.0},
+            {"metrics_seconds", metrics_seconds_},
+            {"metrics_query_points_per_second",
+             metrics_seconds_ > 0 ? metrics_queries_ / metrics_seconds_ : 0.0}};
+  }
+
+  StageContext& context_;
+  const std::chrono::steady_clock::time_point stage_start_;
+  const MapStageOptions options_;
+  // Steps 1 and 2.
+  SensorSelection selection_;
+  Poses poses_;
+  std::optional<mapping::TransformTree> tree_;  // the builders and the SLAM baseline read it
+  mapping::MapBuilderOptions builder_options_;
+  std::map<std::string, std::unique_ptr<mapping::MapBuilder>> builders_;
+  const MappedSensor* slam_sensor_ = nullptr;  // in selection_.mapped
+  std::optional<mapping::SlamMapBuilder> slam_;
+  // Step 3.
+  PointCloud slam_map_;
+  std::vector<std::string> built_;  // sensors that had scans, in name order
+  size_t points_in_ = 0;
+  double scans_seconds_ = 0.0;
+  std::vector<std::string> output_queued_;  // sensors whose tasks started during the scans
+  bool slam_queued_ = false;
+  // Steps 4 and 5: the report's pieces and the tasks' results.
+  json warnings_ = json::array();
+  std::vector<std::string> written_;             // sensors with a non-empty map, largest first
+  std::string primary_ = "inspection_combined";  // Table V's inspection map
+  std::chrono::steady_clock::time_point outputs_start_;
+  double outputs_cpu_start_ = 0.0;
+  std::map<std::string, MapOutput> drc_, ply_;
+  MapOutput combined_output_, combined_ply_;
+  std::vector<const PointCloud*> combined_parts_;
+  size_t combined_points_ = 0;
+  io::DracoEncoded combined_encoded_;
+  double combined_encode_seconds_ = 0.0;
+  std::optional<MetricsColumn> slam_column_, inspection_, combined_column_;
+  double metrics_seconds_ = 0.0;
+  size_t metrics_queries_ = 0;
+  std::optional<TaskLog> task_log_;
+  std::optional<OutputRunner> runner_;  // last: joins the tasks before what they use goes
+};
+
+class MapStage : public Stage {
+ public:
+  std::string name() const override { return "map"; }
+  StageResult run(StageContext& context) override { return MapRun(context).run(); }
 };
 
 }  // namespace
