@@ -56,6 +56,7 @@ void validate(const BaOptions& o) {
       {"frontend.max_depth_m", o.frontend.max_depth_m},
       {"triangulation.post_initialisation_gate_sigmas",
        o.triangulation.post_initialisation_gate_sigmas},
+      {"triangulation.min_pixel_sigma_px", o.triangulation.min_pixel_sigma_px},
   };
   for (const auto& [name, value] : positive) {
     if (!std::isfinite(value) || value <= 0) {

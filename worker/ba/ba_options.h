@@ -68,6 +68,10 @@ struct TriangulationOptions {
   // median). The paper's 2 px is a modelling figure; where the images are sharper a 7.4 px gate
   // keeps matches several px off along the epipolar line.
   bool measure_pixel_sigma = true;
+  // Floor of that measured sigma. SIFT localises a keypoint to ~0.1 px at best; below that the
+  // median measures numerical noise (exact or synthetic tracks), and a gate of a few 1e-7 px
+  // would drop good landmarks.
+  double min_pixel_sigma_px = 0.1;
   // Views a monocular track must keep after that gate. Two views have no redundancy along the
   // epipolar line: a wrong match displaced along it fits both rays exactly and only its depth
   // is wrong, so no reprojection gate can see it. On keel-sim hauv-hull (120 s) such two-view

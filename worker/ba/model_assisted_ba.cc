@@ -59,8 +59,10 @@ void drop_inconsistent_landmarks(const BaProblem& problem, const BaOptions& opti
   }
   double sigma_px = options.pixel_sigma;
   if (options.triangulation.measure_pixel_sigma) {
-    sigma_px = std::min(sigma_px, robust_pixel_sigma_px(state.landmarks_world, state.tracks,
-                                                        T_world_camera, problem.rig));
+    const double measured_px = std::max(
+        options.triangulation.min_pixel_sigma_px,
+        robust_pixel_sigma_px(state.landmarks_world, state.tracks, T_world_camera, problem.rig));
+    sigma_px = std::min(sigma_px, measured_px);
   }
   const double gate_px = options.triangulation.post_initialisation_gate_sigmas * sigma_px;
   result.post_initialisation_gate_px = gate_px;

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 namespace keel::ba {
 namespace {
@@ -110,6 +112,9 @@ bool landmark_within_gates(const Eigen::Vector3d& point, const FeatureTrack& tra
 double robust_pixel_sigma_px(const std::vector<Eigen::Vector3d>& points,
                              const std::vector<FeatureTrack>& tracks,
                              const std::vector<Pose3>& T_world_camera, const BaRig& rig) {
+  if (points.size() != tracks.size())
+    throw std::invalid_argument("robust_pixel_sigma_px: " + std::to_string(points.size()) +
+                                " points for " + std::to_string(tracks.size()) + " tracks");
   std::vector<double> scaled;
   for (size_t k = 0; k < tracks.size(); ++k) {
     const size_t m = 2 * views_of(tracks[k], T_world_camera, rig).size();

@@ -197,8 +197,9 @@ void MapBuilder::add_scans(const ScanFeed& next) {
   // Prepared scans wait in `ready` for their turn; whichever thread hands in the scan that is
   // next in feed order commits it and every consecutive one already waiting, while the other
   // threads go on preparing. No thread sleeps until its own turn comes (it did before: on
-  // 2 cores the scan phase kept ~1.45 of them busy). At most kMaxReadyPerWorker scans per
-  // thread wait, so memory stays a few scans per thread however uneven the scans are.
+  // 2 cores the scan phase kept ~1.45 of them busy). A thread takes a new scan only while
+  // fewer than kMaxReadyPerWorker scans per thread wait, so at most that many plus one per
+  // thread are held, however uneven the scans are.
   constexpr size_t kMaxReadyPerWorker = 2;
   const size_t max_ready = kMaxReadyPerWorker * static_cast<size_t>(workers);
   std::mutex feed_mutex;  // serializes `next` (and state_for)
@@ -279,12 +280,22 @@ void MapBuilder::add_scans(const ScanFeed& next) {
       }
       std::unique_lock<std::mutex> lock(mutex);
       if (error) return;
-      ready.emplace(sequence, std::move(*prepared));
+      try {
+        ready.emplace(sequence, std::move(*prepared));
+      } catch (...) {  // bad_alloc: the scan is lost, so nothing after it may commit
+        error = std::current_exception();
+        changed.notify_all();
+        return;
+      }
       if (!committing) commit_in_order(lock);
     }
   };
   std::vector<std::thread> threads;
-  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
+  try {
+    for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
+  } catch (...) {  // no thread: stop the ones started before they outlive this frame
+    fail(std::current_exception());
+  }
   worker();
   for (std::thread& thread : threads) thread.join();
   if (error) std::rethrow_exception(error);

@@ -110,6 +110,11 @@ SensorSelection select_sensors(const io::MissionReader& reader, const MapStageOp
   }
   SensorSelection selection;
   for (const proto::SensorSpec* spec : candidates) {
+    // Its files would be the combined map's (map_combined.drc/.ply), written concurrently.
+    if (spec->name == kCombinedMapName)
+      throw ContractError("sensor '" + spec->name + "': the name is reserved for the combined " +
+                          "map (map_" + kCombinedMapName + ".drc); rename the sensor in " +
+                          "mission.yaml");
     if (!spec->mounted_on.empty()) {
       selection.skipped.push_back(
           {{"sensor", spec->name},

@@ -176,6 +176,27 @@ TEST(ModelAssistedBa, StereoProposedKeepsTheBumpGevaFlattensIt) {
   run_and_check(o);
 }
 
+// Exact pixels: the noise measured after initialisation is only the model's misfit (0.07 px
+// here); the gate's sigma is floored at min_pixel_sigma_px, so exact or synthetic tracks do
+// not shrink the gate towards zero (with 1e-12 m of numerical noise it reached ~1e-7 px).
+TEST(ModelAssistedBa, PostInitialisationGateSigmaIsFloored) {
+  testing::SyntheticHullOptions sim_options;
+  sim_options.pixel_noise = 0.0;
+  const testing::SyntheticHull sim = testing::make_synthetic_hull(sim_options);
+  BaOptions options;
+  options.modes = {BaMode::kNaive};
+  const BaResult floored = run_model_assisted_ba(sim.problem, options);
+  const double sigmas = options.triangulation.post_initialisation_gate_sigmas;
+  EXPECT_NEAR(floored.post_initialisation_gate_px,
+              sigmas * options.triangulation.min_pixel_sigma_px, 1e-12);
+  options.triangulation.min_pixel_sigma_px = 1e-6;  // the measured sigma itself
+  const BaResult measured = run_model_assisted_ba(sim.problem, options);
+  EXPECT_GT(measured.post_initialisation_gate_px, sigmas * 1e-6);
+  EXPECT_LT(measured.post_initialisation_gate_px, floored.post_initialisation_gate_px);
+  options.triangulation.min_pixel_sigma_px = 0;
+  EXPECT_THROW(run_model_assisted_ba(sim.problem, options), std::invalid_argument);
+}
+
 TEST(ModelAssistedBa, RejectsBadInputNamingTheField) {
   testing::SyntheticHullOptions o;
   o.landmarks = 50;

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <unordered_map>
@@ -300,6 +301,19 @@ TEST_F(MapStageTest, TraySensorsAreSkippedWithTheReason) {
   for (const auto& p : map.xyz) EXPECT_NEAR(p.z(), -5.0f, 1e-4f);
   // No odometry: the keyframes are interpolated; every scan is inside them.
   EXPECT_EQ(report["sensors"]["lidar_fixed"]["stats"]["scans_outside_trajectory"], 0);
+}
+
+TEST_F(MapStageTest, ASensorNamedLikeTheCombinedMapIsRefused) {
+  const fs::path mission = tray_mission();
+  std::ifstream in(mission / "mission.yaml");
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "- name: lidar_fixed";
+  yaml.replace(yaml.find(from), from.size(), std::string("- name: ") + kCombinedMapName);
+  std::ofstream(mission / "mission.yaml") << yaml;
+  fs::remove_all(temp_root() / "work_error");
+  const std::string error = error_of(mission, {{"metrics_max_points", 1000}});
+  EXPECT_NE(error.find("reserved for the combined map"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(temp_root() / "work_error" / map_draco_file(kCombinedMapName)));
 }
 
 TEST_F(MapStageTest, OptionErrorsNameTheOption) {
