@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <ctime>
+#include <stdexcept>
 #include <utility>
 
 namespace keel::pipeline {
@@ -93,6 +94,9 @@ void OutputRunner::run_with(int threads, double memory_budget) {
 void OutputRunner::finish(std::function<void(double)> done) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    // Without workers nothing would run the tasks, and finish() would report success.
+    if (workers_.empty() && unstarted_ > 0)
+      throw std::logic_error("output runner: finish() with tasks left and no run_with()");
     done_ = std::move(done);
     closed_ = true;
   }

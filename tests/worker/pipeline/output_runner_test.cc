@@ -240,6 +240,15 @@ TEST(OutputRunner, DestroyedWithoutFinishStartsNothingMore) {
   EXPECT_TRUE(events.events().empty());
 }
 
+TEST(OutputRunner, FinishWithoutWorkersRefusesToReportSuccess) {
+  TaskLog task_log(now(), "test");
+  EventLog events;
+  OutputRunner runner(task_log);
+  runner.add({recorded(events, "never", 1.0, 1.0)});
+  EXPECT_THROW(runner.finish([](double) {}), std::logic_error);
+  EXPECT_TRUE(events.starts().empty());
+}
+
 TEST(TaskLog, KeepsOneLinePerTaskThatEnded) {
   TaskLog task_log(now(), "label:");
   task_log.run("alpha", [] {});
