@@ -518,6 +518,7 @@ class MapRun {
       sources[k].reset();
       if (!is_last_of_sensor(k)) continue;
       context_.check_canceled();
+      runner_->rethrow_if_failed();  // an earlier sensor's output failed: stop scanning
       finish_sensor(selection_.mapped[k], early_outputs && k + 1 < sources.size());
     }
     context_.check_canceled();

@@ -106,6 +106,15 @@ void OutputRunner::finish(std::function<void(double)> done) {
   if (error_) std::rethrow_exception(error_);
 }
 
+void OutputRunner::rethrow_if_failed() {
+  std::exception_ptr error;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    error = error_;
+  }
+  if (error) std::rethrow_exception(error);
+}
+
 // The costliest task not started that may start now, or kNone. Called with mutex_ held.
 size_t OutputRunner::fitting() const {
   size_t best = kNone;

@@ -76,6 +76,10 @@ class OutputRunner {
   // `done(fraction of the total cost done)` after each task that ends from now on (one call
   // at a time), and rethrows the first exception of a task. Not from a task.
   void finish(std::function<void(double)> done);
+  // Rethrows the first task exception so far, if any, so a caller with other work (the map
+  // stage between sensors) fails fast; tasks still running are joined by finish() or the
+  // destructor.
+  void rethrow_if_failed();
 
  private:
   size_t fitting() const;

@@ -240,6 +240,33 @@ TEST(OutputRunner, DestroyedWithoutFinishStartsNothingMore) {
   EXPECT_TRUE(events.events().empty());
 }
 
+TEST(OutputRunner, AFailedTaskIsReportedBeforeFinish) {
+  TaskLog task_log(now(), "test");
+  OutputRunner runner(task_log);
+  EXPECT_NO_THROW(runner.rethrow_if_failed());
+  std::atomic<bool> thrown{false};
+  runner.add({{"fails", 1.0, 1.0, [&] {
+                 thrown = true;
+                 throw std::runtime_error("disk full");
+               }}});
+  runner.run_with(1, 1e9);
+  while (!thrown) std::this_thread::yield();
+  // The error is recorded after the throw leaves the task; poll until it is (the deadline
+  // only keeps a broken runner from hanging the test).
+  bool reported = false;
+  const auto deadline = now() + std::chrono::seconds(30);
+  while (!reported && now() < deadline) {
+    try {
+      runner.rethrow_if_failed();
+      std::this_thread::yield();
+    } catch (const std::runtime_error& e) {
+      reported = std::string(e.what()) == "disk full";
+    }
+  }
+  EXPECT_TRUE(reported);
+  EXPECT_THROW(runner.finish([](double) {}), std::runtime_error);
+}
+
 TEST(OutputRunner, FinishWithoutWorkersRefusesToReportSuccess) {
   TaskLog task_log(now(), "test");
   EventLog events;
