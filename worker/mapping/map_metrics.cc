@@ -317,8 +317,10 @@ double quantile(std::vector<float>* values, double p, size_t* selected) {
 
 PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
                                    const MapMetricsOptions& options) {
-  if (!std::isfinite(options.radius_m) || options.radius_m <= 0.0) {
-    throw std::invalid_argument("map metrics: radius must be positive, got " +
+  if (!std::isfinite(options.radius_m) || options.radius_m <= 0.0 ||
+      options.radius_m > kMaxMetricsRadiusM) {
+    throw std::invalid_argument("map metrics: radius must lie in (0, " +
+                                std::to_string(kMaxMetricsRadiusM) + "] m (Table V: 0.25), got " +
                                 std::to_string(options.radius_m));
   }
   for (size_t k = 0; k < points.size(); ++k) {
@@ -358,6 +360,7 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
       const uint32_t input = grid.input_index()[i];
       const uint32_t q = query_of(input, points.size(), queries);
       if (q == kNotQueried) continue;
+      if (options.check_canceled) options.check_canceled();
       const size_t n = select_neighbours(grid.x()[i], grid.y()[i], grid.z()[i], squared_radius, *s);
       out.surface_density[q] = static_cast<float>(n / area);  // Eq. (23)
       const NeighbourhoodMetrics metrics = neighbourhood_metrics(*s, n);

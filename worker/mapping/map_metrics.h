@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "worker/core/point_cloud.h"
@@ -32,7 +33,14 @@ struct MapMetricsOptions {
   // (neighbours always come from the whole map), to bound report time on huge maps.
   size_t max_query_points = 0;
   int histogram_bins = 20;
+  // Called once per query point from the metrics threads (so it must be thread-safe); it may
+  // throw to stop the computation, which rethrows it: the stage passes its cancel check.
+  std::function<void()> check_canceled;
 };
+// Largest radius accepted: Table V uses 0.25 m; a wider neighbourhood measures the structure's
+// shape rather than its surface, and the work grows with r^2 per point (r = 1e9 m made every
+// point a neighbour of every other).
+inline constexpr double kMaxMetricsRadiusM = 1.0;
 
 // Per query point; NaN where a metric is undefined (roughness with < 3 other neighbours,
 // planarity with a degenerate neighbourhood).

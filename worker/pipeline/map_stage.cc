@@ -90,7 +90,12 @@ SensorSelection select_sensors(const io::MissionReader& reader, const MapStageOp
   const bool explicit_list = !options.sensors.empty();
   std::vector<const proto::SensorSpec*> candidates;
   if (explicit_list) {
-    for (const auto& name : options.sensors) {
+    for (size_t k = 0; k < options.sensors.size(); ++k) {
+      const std::string& name = options.sensors[k];
+      // Listed twice, its scans would go into its map twice.
+      if (std::find(options.sensors.begin(), options.sensors.begin() + k, name) !=
+          options.sensors.begin() + k)
+        throw ContractError("options.map.sensors: '" + name + "' is listed twice");
       const proto::SensorSpec* spec = manifest.find_sensor(name);
       if (!spec) {
         std::vector<std::string> names;
@@ -326,8 +331,9 @@ struct MetricsColumn {
 };
 
 MetricsColumn measure(const std::string& name, const PointCloud& map,
-                      const MapStageOptions& options) {
+                      const MapStageOptions& options, const StageContext& context) {
   mapping::MapMetricsOptions metrics_options;
+  metrics_options.check_canceled = [&context] { context.check_canceled(); };
   metrics_options.radius_m = options.metrics_radius_m;
   // All threads, although the metrics run as an output task beside others: the last tasks
   // then still use every core (the figures do not depend on the thread count).
@@ -414,10 +420,30 @@ const MappedSensor* find_slam_sensor(const MapStageOptions& options,
 // One run of the stage, as the steps of the header comment; members hold what the steps pass
 // on. The output tasks capture members by reference, so `runner_`, which joins them on an
 // exception, is declared last (destroyed first).
+// Files a stage run has written so far (output tasks add from any thread). A failed run
+// removes them, so nothing it leaves behind can pass for a finished map.
+class WrittenFiles {
+ public:
+  void add(const std::vector<std::string>& names) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    names_.insert(names_.end(), names.begin(), names.end());
+  }
+  void remove_from(const fs::path& dir) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::error_code ignored;  // best effort: the stage's own error is the one to report
+    for (const auto& name : names_) fs::remove(dir / name, ignored);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::string> names_;
+};
+
 class MapRun {
  public:
-  explicit MapRun(StageContext& context)
+  MapRun(StageContext& context, WrittenFiles& written)
       : context_(context),
+        written_files_(written),
         stage_start_(std::chrono::steady_clock::now()),
         options_(MapStageOptions::from_json(context.options)) {}
 
@@ -516,7 +542,6 @@ class MapRun {
     for (size_t k = 0; k < sources.size(); ++k) {
       scan_sensor(selection_.mapped[k], *sources[k], total_scans, scans_done);
       sources[k].reset();
-      if (!is_last_of_sensor(k)) continue;
       context_.check_canceled();
       runner_->rethrow_if_failed();  // an earlier sensor's output failed: stop scanning
       finish_sensor(selection_.mapped[k], early_outputs && k + 1 < sources.size());
@@ -544,14 +569,6 @@ class MapRun {
         context_.progress(kScansDone * static_cast<double>(scans_done) / total_scans);
       return true;
     });
-  }
-
-  // Whether selection_.mapped[k] is the last entry of its sensor (a name listed twice maps
-  // once, in one builder).
-  bool is_last_of_sensor(size_t k) const {
-    const std::string& name = selection_.mapped[k].name;
-    return std::none_of(selection_.mapped.begin() + k + 1, selection_.mapped.end(),
-                        [&](const MappedSensor& s) { return s.name == name; });
   }
 
   // A sensor's scans are all in: its map (and the SLAM map) are final; `start_outputs`: queue
@@ -681,14 +698,16 @@ class MapRun {
       drc_.at(name) =
           write_map_draco(io::encode_draco_point_cloud(map, {}, draco_options(options_)),
                           map.size(), start, 0.0, name, options_, context_.work_dir);
+      written_files_.add(drc_.at(name).artifacts);
     }));
     if (options_.write_ply)
       tasks.push_back(ply_task(name, map.size(), [this, name, &map] {
         ply_.at(name) = write_map_ply(map, name, context_.work_dir);
+        written_files_.add(ply_.at(name).artifacts);
       }));
     if (slam_ && name == slam_sensor_->name)
       tasks.push_back(metrics_task("inspection_" + name, map.size(), 0, [this, name, &map] {
-        inspection_ = measure("inspection_" + name, map, options_);
+        inspection_ = measure("inspection_" + name, map, options_, context_);
       }));
     return tasks;
   }
@@ -697,7 +716,7 @@ class MapRun {
     std::vector<OutputTask> tasks;
     if (!slam_map_.empty())
       tasks.push_back(metrics_task("slam_map", slam_map_.size(), 0, [this] {
-        slam_column_ = measure("slam_map", slam_map_, options_);
+        slam_column_ = measure("slam_map", slam_map_, options_, context_);
       }));
     return tasks;
   }
@@ -720,6 +739,7 @@ class MapRun {
     if (options_.write_ply)
       tasks.push_back(ply_task(kCombinedMapName, combined_points_, [this] {
         combined_ply_ = write_map_ply(combined_parts_, kCombinedMapName, context_.work_dir);
+        written_files_.add(combined_ply_.artifacts);
       }));
     tasks.push_back(metrics_task(
         "inspection_combined", combined_points_, sizeof(Eigen::Vector3f) * combined_points_,
@@ -728,7 +748,7 @@ class MapRun {
           positions.xyz.reserve(combined_points_);
           for (const PointCloud* part : combined_parts_)
             positions.xyz.insert(positions.xyz.end(), part->xyz.begin(), part->xyz.end());
-          combined_column_ = measure("inspection_combined", positions, options_);
+          combined_column_ = measure("inspection_combined", positions, options_, context_);
         }));
     return tasks;
   }
@@ -744,6 +764,7 @@ class MapRun {
               combined_output_ = write_map_draco(combined_encoded_, combined_points_, start,
                                                  combined_encode_seconds_, kCombinedMapName,
                                                  options_, context_.work_dir);
+              written_files_.add(combined_output_.artifacts);
               combined_encoded_ = io::DracoEncoded{};
             }};
   }
@@ -796,6 +817,7 @@ class MapRun {
   }
 
   StageContext& context_;
+  WrittenFiles& written_files_;
   const std::chrono::steady_clock::time_point stage_start_;
   const MapStageOptions options_;
   // Steps 1 and 2.
@@ -835,7 +857,15 @@ class MapRun {
 class MapStage : public Stage {
  public:
   std::string name() const override { return "map"; }
-  StageResult run(StageContext& context) override { return MapRun(context).run(); }
+  StageResult run(StageContext& context) override {
+    WrittenFiles written;
+    try {
+      return MapRun(context, written).run();  // the run's output tasks are joined by now
+    } catch (...) {
+      written.remove_from(context.work_dir);
+      throw;
+    }
+  }
 };
 
 }  // namespace
@@ -894,8 +924,11 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
           "an integer in [1, 30]");
   require(o.draco_compression_level >= 0 && o.draco_compression_level <= 10,
           "draco_compression_level", "an integer in [0, 10]");
-  require(std::isfinite(o.metrics_radius_m) && o.metrics_radius_m > 0.0, "metrics_radius_m",
-          "a radius in metres > 0");
+  require(std::isfinite(o.metrics_radius_m) && o.metrics_radius_m > 0.0 &&
+              o.metrics_radius_m <= mapping::kMaxMetricsRadiusM,
+          "metrics_radius_m",
+          "a radius in metres in (0, " + std::to_string(mapping::kMaxMetricsRadiusM) +
+              "] (Table V: 0.25)");
   require(std::isfinite(o.slam_keyframe_leaf_m) && o.slam_keyframe_leaf_m > 0.0,
           "slam_keyframe_leaf_m", "a leaf in metres > 0");
   require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");

@@ -3,9 +3,11 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 
 #include "tests/worker/mapping/test_clouds.h"
 #include "worker/mapping/map_metrics.h"
@@ -229,6 +231,30 @@ TEST(MapMetrics, UndefinedWhereNeighbourhoodsAreTooSmall) {
   EXPECT_TRUE(std::isnan(metrics.planarity[2]));
   EXPECT_NEAR(metrics.surface_density[2], 1.0 / (M_PI * 0.0625), 1e-4);
   EXPECT_THROW(compute_point_metrics({{0, 0, std::nanf("")}}), std::invalid_argument);
+}
+
+TEST(MapMetrics, RadiusBeyondOneMetreIsRefused) {
+  MapMetricsOptions options;
+  for (const double r : {0.0, -0.25, 1.0001, 1e9, std::nan("")}) {
+    options.radius_m = r;
+    EXPECT_THROW(compute_point_metrics({{0, 0, 0}}, options), std::invalid_argument) << r;
+  }
+  options.radius_m = kMaxMetricsRadiusM;
+  EXPECT_EQ(compute_point_metrics({{0, 0, 0}}, options).surface_density.size(), 1u);
+}
+
+TEST(MapMetrics, CancelCheckStopsTheComputation) {
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 100; ++i)
+    for (int j = 0; j < 100; ++j) points.emplace_back(0.01f * i, 0.01f * j, 0.0f);
+  MapMetricsOptions options;
+  options.threads = 2;
+  std::atomic<int> calls{0};
+  options.check_canceled = [&calls] {
+    if (++calls == 50) throw std::runtime_error("canceled");
+  };
+  EXPECT_THROW(compute_point_metrics(points, options), std::runtime_error);
+  EXPECT_LT(calls.load(), 10000);  // stopped long before every point was measured
 }
 
 }  // namespace

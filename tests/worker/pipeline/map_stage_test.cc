@@ -316,6 +316,34 @@ TEST_F(MapStageTest, ASensorNamedLikeTheCombinedMapIsRefused) {
   EXPECT_FALSE(fs::exists(temp_root() / "work_error" / map_draco_file(kCombinedMapName)));
 }
 
+// The first sensor's outputs start while the second still scans; when the second then fails,
+// the stage must not leave the first one's files behind looking finished.
+TEST_F(MapStageTest, AFailedStageLeavesNoMapFilesBehind) {
+  const fs::path mission = tray_mission();
+  std::ifstream in(mission / "mission.yaml");
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string tray = "    mounted_on: servo\n";
+  yaml.erase(yaml.find(tray), tray.size());  // lidar_tray becomes a fixed second sensor
+  std::ofstream(mission / "mission.yaml") << yaml;
+  const fs::path last_scan = mission / "lidar_tray" / "s3.pcd";
+  fs::resize_file(last_scan, fs::file_size(last_scan) / 2);
+  const fs::path work = temp_root() / "work_failed";
+  fs::remove_all(work);
+  const json options = {{"metrics_max_points", 1000},
+                        {"lidar_filters", {{"scan_filters", json::array()}}}};
+  std::string error;
+  try {
+    run_stage(mission, options, work);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  EXPECT_NE(error.find("s3.pcd"), std::string::npos) << error;
+  for (const auto& entry : fs::directory_iterator(work)) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name.rfind("map_", 0) != 0) << name << " left behind";
+  }
+}
+
 TEST_F(MapStageTest, OptionErrorsNameTheOption) {
   const fs::path mission = tray_mission();
   const std::string unknown = error_of(mission, {{"voxel_leaf", 0.1}});
@@ -333,6 +361,10 @@ TEST_F(MapStageTest, OptionErrorsNameTheOption) {
   EXPECT_NE(missing.find("lidar_nope"), std::string::npos) << missing;
   const std::string type = error_of(mission, {{"sensors", {"servo"}}});
   EXPECT_NE(type.find("expected a lidar or sonar"), std::string::npos) << type;
+  const std::string twice = error_of(mission, {{"sensors", {"lidar_fixed", "lidar_fixed"}}});
+  EXPECT_NE(twice.find("'lidar_fixed' is listed twice"), std::string::npos) << twice;
+  const std::string radius = error_of(mission, {{"metrics_radius_m", 1e9}});
+  EXPECT_NE(radius.find("options.map.metrics_radius_m"), std::string::npos) << radius;
 }
 
 }  // namespace
