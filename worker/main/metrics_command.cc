@@ -99,13 +99,19 @@ int run_metrics(const MetricsArgs& args) {
   }
   std::printf("%zu points, %zu query points, radius %g m\n", summary.points, summary.query_points,
               summary.radius_m);
-  std::printf("surface density mean %.6g points/m^2 (median %.6g, %zu undefined)\n",
-              summary.surface_density.mean, summary.surface_density.median,
-              summary.surface_density.undefined);
-  std::printf("roughness       mean %.6g m (median %.6g, %zu undefined)\n", summary.roughness.mean,
-              summary.roughness.median, summary.roughness.undefined);
-  std::printf("planarity       mean %.6g (median %.6g, %zu undefined)\n", summary.planarity.mean,
-              summary.planarity.median, summary.planarity.undefined);
+  // A metric defined nowhere (empty cloud, neighbourhoods too small) has no mean: say so
+  // rather than print the zeros of an empty distribution.
+  const auto line = [](const char* label, const char* unit, const mapping::Distribution& d) {
+    if (d.count == 0) {
+      std::printf("%s undefined at every query point (%zu)\n", label, d.undefined);
+      return;
+    }
+    std::printf("%s mean %.6g%s (median %.6g, %zu undefined)\n", label, d.mean, unit, d.median,
+                d.undefined);
+  };
+  line("surface density", " points/m^2", summary.surface_density);
+  line("roughness      ", " m", summary.roughness);
+  line("planarity      ", "", summary.planarity);
   if (!args.out.empty()) std::printf("per-point values: %s\n", args.out.c_str());
   std::fflush(stdout);
   return kExitOk;
