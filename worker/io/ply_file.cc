@@ -1,6 +1,9 @@
 // PLY point clouds (the `vertex` element): ascii and binary_little_endian. Own parser: the
 // vertex records of binary PLY are already packed, so they are unpacked in place.
+#include <algorithm>
 #include <cstring>
+#include <string_view>
+#include <vector>
 
 #include "worker/io/io_error.h"
 #include "worker/io/scan_file.h"
@@ -66,14 +69,52 @@ std::vector<std::string_view> words(std::string_view line) {
   return out;
 }
 
+// A property of an element after the vertices (faces, edges, ...): read only to be skipped.
+struct PlyOtherProperty {
+  FieldType type = FieldType::kUint8;  // item type for lists
+  bool is_list = false;
+  FieldType count_type = FieldType::kUint8;
+};
+
+struct PlyOtherElement {
+  std::string name;
+  size_t count = 0;
+  std::vector<PlyOtherProperty> properties;
+};
+
 struct PlyHeader {
   bool ascii = false;
   size_t num_vertices = 0;
   size_t point_step = 0;
   std::vector<PackedField> fields;
-  size_t body_offset = 0;  // byte offset of the first vertex
+  std::vector<PlyOtherElement> others;  // elements after the vertices, in file order
+  size_t body_offset = 0;               // byte offset of the first vertex
   size_t header_lines = 0;
 };
+
+// What the header declares, for messages: "element vertex 3, element face 1".
+std::string declared_elements(const PlyHeader& h) {
+  std::string out = "element vertex " + std::to_string(h.num_vertices);
+  for (const auto& e : h.others) out += ", element " + e.name + " " + std::to_string(e.count);
+  return out;
+}
+
+PlyOtherProperty parse_other_property(const std::vector<std::string_view>& w,
+                                      const std::string& file, size_t line) {
+  auto fail = [&](const std::string& message) {
+    return IoError(file + ":" + std::to_string(line) + ": " + message);
+  };
+  PlyOtherProperty property;
+  if (w.size() == 5 && w[1] == "list") {
+    property.is_list = true;
+    if (!ply_type(w[2], property.count_type) || !ply_type(w[3], property.type))
+      throw fail("malformed list property line");
+    if (!is_integer(property.count_type)) throw fail("list count type must be an integer type");
+  } else if (w.size() != 3 || !ply_type(w[1], property.type)) {
+    throw fail("malformed property line");
+  }
+  return property;
+}
 
 PlyHeader parse_header(const std::string& bytes, const std::string& file) {
   auto fail = [&](size_t line, const std::string& message) -> IoError {
@@ -119,10 +160,18 @@ PlyHeader parse_header(const std::string& bytes, const std::string& file) {
         if (state == kBeforeVertex)
           throw fail(line_number, "element '" + std::string(w[1]) +
                                       "' before vertex; a point cloud PLY starts with vertex");
+        int64_t count = 0;
+        if (!parse_int64(w[2], count) || count < 0)
+          throw fail(line_number, "bad count of element '" + std::string(w[1]) + "'");
+        h.others.push_back({std::string(w[1]), static_cast<size_t>(count), {}});
         state = kAfterVertex;
       }
     } else if (w[0] == "property") {
-      if (state != kInVertex) continue;  // properties of later elements (faces) are ignored
+      if (state == kAfterVertex) {  // later elements (faces) are skipped, but must be sized
+        h.others.back().properties.push_back(parse_other_property(w, file, line_number));
+        continue;
+      }
+      if (state != kInVertex) throw fail(line_number, "property before any element");
       if (w.size() >= 2 && w[1] == "list")
         throw fail(line_number, "list property in the vertex element is not supported");
       FieldType type;
@@ -141,12 +190,14 @@ PlyHeader parse_header(const std::string& bytes, const std::string& file) {
   return h;
 }
 
-// Parses `count` ascii vertex lines into packed records.
+// Parses `count` ascii vertex lines into packed records; `position` and `line_number` end
+// after the last vertex line.
 std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader& h,
-                                      const std::string& file) {
+                                      const std::string& file, size_t& position,
+                                      size_t& line_number) {
   std::vector<uint8_t> data(h.num_vertices * h.point_step);
-  size_t position = h.body_offset;
-  size_t line_number = h.header_lines;
+  position = h.body_offset;
+  line_number = h.header_lines;
   for (size_t i = 0; i < h.num_vertices; ++i) {
     ++line_number;
     if (position >= bytes.size())
@@ -160,6 +211,10 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader&
       throw IoError(file + ":" + std::to_string(line_number) + ": expected " +
                     std::to_string(h.fields.size()) + " vertex values, found " +
                     std::to_string(w.size()) + (position >= bytes.size() ? " (truncated?)" : ""));
+    if (w.size() > h.fields.size())
+      throw IoError(file + ":" + std::to_string(line_number) + ": expected " +
+                    std::to_string(h.fields.size()) + " vertex values, found " +
+                    std::to_string(w.size()) + " (header and data disagree)");
     uint8_t* record = data.data() + i * h.point_step;
     for (size_t f = 0; f < h.fields.size(); ++f) {
       const PackedField& field = h.fields[f];
@@ -215,6 +270,86 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyHeader&
   return data;
 }
 
+// The next line holding a value, advancing `position` and `line_number`; false at the end.
+bool next_content_line(const std::string& bytes, size_t& position, size_t& line_number) {
+  while (position < bytes.size()) {
+    size_t newline = bytes.find('\n', position);
+    if (newline == std::string::npos) newline = bytes.size();
+    const std::string_view line(bytes.data() + position, newline - position);
+    position = newline + 1;
+    ++line_number;
+    if (!words(line).empty()) return true;
+  }
+  return false;
+}
+
+// Skips the elements after the vertices (one line per item), then requires the rest of the
+// file to be blank: data the header does not declare means header and data disagree.
+void check_ascii_rest(const std::string& bytes, const PlyHeader& h, const std::string& file,
+                      size_t position, size_t line_number) {
+  for (const auto& element : h.others)
+    for (size_t i = 0; i < element.count; ++i)
+      if (!next_content_line(bytes, position, line_number))
+        throw IoError(file + ": truncated PLY: element '" + element.name + "' declares " +
+                      std::to_string(element.count) + " items, found " + std::to_string(i));
+  size_t extra_lines = 0, first_extra_line = 0;
+  while (next_content_line(bytes, position, line_number))
+    if (extra_lines++ == 0) first_extra_line = line_number;
+  if (extra_lines > 0)
+    throw IoError(file + ":" + std::to_string(first_extra_line) + ": " +
+                  std::to_string(extra_lines) +
+                  " data lines left over after every element the header declares (" +
+                  declared_elements(h) + ")");
+}
+
+uint64_t read_list_count(const std::string& bytes, size_t offset, FieldType type) {
+  const auto* p = reinterpret_cast<const unsigned char*>(bytes.data() + offset);
+  switch (type) {
+    case FieldType::kInt8:
+    case FieldType::kUint8:
+      return p[0];
+    case FieldType::kInt16:
+    case FieldType::kUint16:
+      return static_cast<uint64_t>(p[0]) | static_cast<uint64_t>(p[1]) << 8;
+    default:  // 32-bit counts (header parsing allows integer count types only)
+      return static_cast<uint64_t>(p[0]) | static_cast<uint64_t>(p[1]) << 8 |
+             static_cast<uint64_t>(p[2]) << 16 | static_cast<uint64_t>(p[3]) << 24;
+  }
+}
+
+// Binary counterpart of check_ascii_rest: walks the elements after the vertices (list
+// lengths are read from the data), then requires the file to end there.
+void check_binary_rest(const std::string& bytes, const PlyHeader& h, const std::string& file) {
+  size_t offset = h.body_offset + h.num_vertices * h.point_step;
+  for (const auto& element : h.others) {
+    if (element.properties.empty()) continue;  // items of no bytes
+    for (size_t i = 0; i < element.count; ++i) {
+      for (const auto& property : element.properties) {
+        auto need = [&](uint64_t size) {
+          if (size > bytes.size() - offset)
+            throw IoError(file + ": truncated PLY: element '" + element.name + "' item " +
+                          std::to_string(i) + " of " + std::to_string(element.count) +
+                          " runs past the end of the file (byte " + std::to_string(offset) +
+                          " of " + std::to_string(bytes.size()) + ")");
+        };
+        uint64_t items = 1;
+        if (property.is_list) {
+          need(field_size(property.count_type));
+          items = read_list_count(bytes, offset, property.count_type);
+          offset += field_size(property.count_type);
+        }
+        need(items * field_size(property.type));
+        offset += items * field_size(property.type);
+      }
+    }
+  }
+  if (offset < bytes.size())
+    throw IoError(file + ": " + std::to_string(bytes.size() - offset) +
+                  " bytes left over after every element the header declares (" +
+                  declared_elements(h) + ", ending at byte " + std::to_string(offset) + " of " +
+                  std::to_string(bytes.size()) + ")");
+}
+
 }  // namespace
 
 ScanFileInfo read_ply_info(const fs::path& path) {
@@ -232,15 +367,24 @@ PointCloud read_ply(const fs::path& path, TimeNs t_ns, const ScanReadOptions& op
   const std::string file = path.string();
   const std::string bytes = read_file_bytes(path);
   const PlyHeader h = parse_header(bytes, file);
+  const size_t body_bytes = bytes.size() - h.body_offset;
   if (h.ascii) {
-    const std::vector<uint8_t> data = parse_ascii_body(bytes, h, file);
+    // Every vertex line takes at least one byte: a larger count is a truncated file, refused
+    // before allocating records for it.
+    if (h.num_vertices > body_bytes)
+      throw IoError(file + ": truncated PLY: expected " + std::to_string(h.num_vertices) +
+                    " vertices, the body has only " + std::to_string(body_bytes) + " bytes");
+    size_t position = 0, line_number = 0;
+    const std::vector<uint8_t> data = parse_ascii_body(bytes, h, file, position, line_number);
+    check_ascii_rest(bytes, h, file, position, line_number);
     return unpack_cloud({data.data(), h.num_vertices, h.point_step, h.fields}, t_ns, options, file);
   }
-  const size_t body = h.num_vertices * h.point_step;
-  if (h.body_offset + body > bytes.size())
+  // Divided, not multiplied: a hostile vertex count must not overflow the size.
+  if (h.num_vertices > body_bytes / std::max<size_t>(1, h.point_step))
     throw IoError(file + ": truncated PLY: " + std::to_string(h.num_vertices) + " vertices of " +
-                  std::to_string(h.point_step) + " bytes need " + std::to_string(body) +
-                  " bytes, the file has " + std::to_string(bytes.size() - h.body_offset));
+                  std::to_string(h.point_step) + " bytes need more than the " +
+                  std::to_string(body_bytes) + " bytes of data the file has");
+  check_binary_rest(bytes, h, file);
   const auto* data = reinterpret_cast<const uint8_t*>(bytes.data() + h.body_offset);
   return unpack_cloud({data, h.num_vertices, h.point_step, h.fields}, t_ns, options, file);
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 
 #include "io_test_util.h"
 #include "worker/io/scan_source.h"
@@ -215,6 +216,115 @@ TEST(ScanFile, TruncatedPlyIsNamed) {
              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float "
              "y\nproperty float z\nend_header\n1 2 oops\n");
   expect_error([&] { read_scan_file(dir / "x.ply", 0); }, {"x.ply:8:", "property 'z'", "oops"});
+}
+
+std::string pcd_header(const std::string& fields, const std::string& counts, size_t points) {
+  std::string size, type;
+  for (size_t i = 0; i < counts.size(); i += 2) size += "4 ", type += "F ";
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + size + "\nTYPE " + type +
+         "\nCOUNT " + counts + "\nWIDTH " + std::to_string(points) +
+         "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(points) +
+         "\nDATA ascii\n";  // 11 lines: the first data row is line 12
+}
+
+TEST(ScanFile, MalformedAsciiPcdRowsAreNamed) {
+  TempDir dir;
+  const std::string xyzt = pcd_header("x y z t", "1 1 1 1", 2);
+  // A valid file (a blank line in the body holds no point) reads exactly.
+  write_text(dir / "ok.pcd", xyzt + "5 5 5 0.1\n\n6 7 8 0.2\n");
+  const PointCloud ok = read_scan_file(dir / "ok.pcd", 0);
+  ASSERT_EQ(ok.size(), 2u);
+  EXPECT_EQ(ok.xyz[0], Eigen::Vector3f(5, 5, 5));
+  EXPECT_EQ(ok.xyz[1], Eigen::Vector3f(6, 7, 8));
+  // PCL would read the short row as a point at the origin.
+  write_text(dir / "short.pcd", xyzt + "5 5 5 0.1\n6 6 6\n");
+  expect_error([&] { read_scan_file(dir / "short.pcd", 0); },
+               {"short.pcd:13:", "data row 2", "expected 4 values", "found 3"});
+  write_text(dir / "long.pcd", xyzt + "5 5 5 0.1 9\n6 6 6 0.2\n");
+  expect_error([&] { read_scan_file(dir / "long.pcd", 0); },
+               {"long.pcd:12:", "data row 1", "expected 4 values", "found 5"});
+  write_text(dir / "word.pcd", xyzt + "5 5 5 0.1\n6 six 6 0.2\n");
+  expect_error([&] { read_scan_file(dir / "word.pcd", 0); },
+               {"word.pcd:13:", "expected a number", "'six'"});
+  write_text(dir / "more.pcd", xyzt + "5 5 5 0.1\n6 6 6 0.2\n7 7 7 0.3\n8 8 8 0.4\n");
+  expect_error([&] { read_scan_file(dir / "more.pcd", 0); },
+               {"more.pcd:14:", "2 data rows beyond", "POINTS 2"});
+  write_text(dir / "fewer.pcd", xyzt + "5 5 5 0.1\n");
+  expect_error([&] { read_scan_file(dir / "fewer.pcd", 0); },
+               {"fewer.pcd", "truncated PCD", "POINTS declares 2", "has 1 rows"});
+  // A row holds the sum of COUNT over FIELDS values: 1 + 1 + 1 + 3 here.
+  const std::string counted = pcd_header("x y z n", "1 1 1 3", 1);
+  write_text(dir / "count.pcd", counted + "1 2 3 0 0 1\n");
+  const PointCloud c = read_scan_file(dir / "count.pcd", 0);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.xyz[0], Eigen::Vector3f(1, 2, 3));
+  write_text(dir / "count4.pcd", counted + "1 2 3 0\n");
+  expect_error([&] { read_scan_file(dir / "count4.pcd", 0); },
+               {"count4.pcd:12:", "expected 6 values", "found 4"});
+}
+
+const std::string kPlyXyz = "property float x\nproperty float y\nproperty float z\n";
+
+TEST(ScanFile, PlyDataBeyondTheHeaderIsNamed) {
+  TempDir dir;
+  const std::string one = "ply\nformat ascii 1.0\nelement vertex 1\n" + kPlyXyz + "end_header\n";
+  write_text(dir / "ok.ply", one + "1 2 3\n\n");  // trailing blank lines are not data
+  const PointCloud ok = read_scan_file(dir / "ok.ply", 0);
+  ASSERT_EQ(ok.size(), 1u);
+  EXPECT_EQ(ok.xyz[0], Eigen::Vector3f(1, 2, 3));
+  write_text(dir / "more.ply", one + "1 2 3\n4 5 6\n7 8 9\n");
+  expect_error([&] { read_scan_file(dir / "more.ply", 0); },
+               {"more.ply:9:", "2 data lines left over", "element vertex 1"});
+  write_text(dir / "long.ply", one + "1 2 3 4\n");
+  expect_error([&] { read_scan_file(dir / "long.ply", 0); },
+               {"long.ply:8:", "expected 3 vertex values, found 4"});
+  // Elements after the vertices are skipped, and counted.
+  const std::string faces = "ply\nformat ascii 1.0\nelement vertex 3\n" + kPlyXyz +
+                            "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                            "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  write_text(dir / "faces.ply", faces);
+  const PointCloud f = read_scan_file(dir / "faces.ply", 0);
+  ASSERT_EQ(f.size(), 3u);
+  EXPECT_EQ(f.xyz[2], Eigen::Vector3f(0, 1, 0));
+  write_text(dir / "faces_more.ply", faces + "3 2 1 0\n");
+  expect_error(
+      [&] { read_scan_file(dir / "faces_more.ply", 0); },
+      {"faces_more.ply:14:", "1 data lines left over", "element vertex 3, element face 1"});
+  write_text(dir / "count.ply", "ply\nformat ascii 1.0\nelement vertex 1\n" + kPlyXyz +
+                                    "element face x\nend_header\n");
+  expect_error([&] { read_scan_file(dir / "count.ply", 0); },
+               {"count.ply:7:", "bad count of element 'face'"});
+
+  // Binary: trailing bytes after the declared vertices.
+  const PointCloud sweep = make_sweep(500);
+  write_scan_file(dir / "b.ply", sweep, {ScanEncoding::kBinary, std::nullopt});
+  const PointCloud b = read_scan_file(dir / "b.ply", 0);
+  ASSERT_EQ(b.size(), 500u);
+  EXPECT_EQ(b.xyz[499], sweep.xyz[499]);
+  std::ofstream(dir / "b.ply", std::ios::binary | std::ios::app) << "12345";
+  expect_error([&] { read_scan_file(dir / "b.ply", 0); },
+               {"b.ply", "5 bytes left over", "element vertex 500"});
+  // Binary with a face list after the vertices: the list lengths are read from the data.
+  std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 3\n" + kPlyXyz +
+                    "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  bin.append(reinterpret_cast<const char*>(xyz), sizeof(xyz));
+  const int32_t triangle[3] = {0, 1, 2};
+  const int32_t quad[4] = {0, 1, 2, 0};
+  bin += '\3';
+  bin.append(reinterpret_cast<const char*>(triangle), sizeof(triangle));
+  bin += '\4';
+  bin.append(reinterpret_cast<const char*>(quad), sizeof(quad));
+  write_text(dir / "bf.ply", bin);
+  const PointCloud bf = read_scan_file(dir / "bf.ply", 0);
+  ASSERT_EQ(bf.size(), 3u);
+  EXPECT_EQ(bf.xyz[1], Eigen::Vector3f(1, 0, 0));
+  write_text(dir / "bf_more.ply", bin + "x");
+  expect_error([&] { read_scan_file(dir / "bf_more.ply", 0); },
+               {"bf_more.ply", "1 bytes left over", "element vertex 3, element face 2"});
+  write_text(dir / "bf_short.ply", bin.substr(0, bin.size() - 4));
+  expect_error([&] { read_scan_file(dir / "bf_short.ply", 0); },
+               {"bf_short.ply", "truncated PLY", "element 'face' item 1 of 2"});
 }
 
 TEST(ScanFile, ScanFolderReaderStreamsInIndexOrder) {
