@@ -185,6 +185,12 @@ class AsciiSource {
   size_t line() const { return lines_.line_number(); }
   std::string where() const { return ""; }
   uint64_t max_list_length() const { return tokens_.size(); }
+  // After every declared element only blank lines may follow.
+  void finish() {
+    std::string_view line;
+    if (lines_.next_content(&line, '\0'))
+      fail(path_, lines_.line_number(), "data left over after every element the header declares");
+  }
 
  private:
   const std::filesystem::path& path_;
@@ -226,6 +232,14 @@ class BinarySource {
   }
   // A list cannot be longer than the bytes left in the file.
   uint64_t max_list_length() const { return body_.size() - offset_; }
+  // After every declared element the file must end.
+  void finish() const {
+    if (offset_ != body_.size())
+      fail(path_, 0,
+           std::to_string(body_.size() - offset_) +
+               " bytes left over after every element the header declares (from byte " +
+               std::to_string(body_offset_ + offset_) + ")");
+  }
 
  private:
   static double decode(PlyType type, const unsigned char* b) {
@@ -423,10 +437,12 @@ TriangleMesh read_ply_mesh(const std::filesystem::path& path) {
   if (header.format == PlyFormat::kAscii) {
     AsciiSource source(path, body, header.body_first_line);
     read_body(path, header, source, body.size(), &mesh);
+    source.finish();
   } else {
     BinarySource source(path, body, header.body_offset,
                         header.format == PlyFormat::kBinaryBigEndian);
     read_body(path, header, source, body.size(), &mesh);
+    source.finish();
   }
   mesh_detail::require_faces(path, mesh);
   return mesh;

@@ -302,6 +302,17 @@ TEST(MeshReaderErrors, PlyTruncated) {
   expect_error(write_file(dir / "c.ply", binary.substr(0, 40)), "no 'end_header'");
 }
 
+TEST(MeshReaderErrors, PlyDataLeftOverAfterTheDeclaredElements) {
+  const auto dir = scratch_dir();
+  const std::string ascii = ply_ascii_cube(false);
+  EXPECT_NO_THROW(read_ply_mesh(write_file(dir / "blank.ply", ascii + "\n  \n")));
+  expect_error(write_file(dir / "a.ply", ascii + "0 0 0\n"),
+               ":25: data left over after every element the header declares");
+  const std::string binary = ply_binary_cube(false);
+  expect_error(write_file(dir / "b.ply", binary + "xyz"),
+               "3 bytes left over after every element the header declares");
+}
+
 TEST(MeshReaderErrors, PlyHostileCountsDoNotAllocate) {
   const auto dir = scratch_dir();
   std::string binary =
