@@ -117,11 +117,16 @@ double robust_pixel_sigma_px(const std::vector<Eigen::Vector3d>& points,
                                 " points for " + std::to_string(tracks.size()) + " tracks");
   std::vector<double> scaled;
   for (size_t k = 0; k < tracks.size(); ++k) {
-    const size_t m = 2 * views_of(tracks[k], T_world_camera, rig).size();
+    const std::vector<View> views = views_of(tracks[k], T_world_camera, rig);
+    const size_t m = 2 * views.size();
     if (m <= 3) continue;
     const double dof_scale = std::sqrt(double(m) / double(m - 3));
-    for (double e : observation_reprojection_errors_px(points[k], tracks[k], T_world_camera, rig))
+    // One error per image (a stereo observation's two cameras apart): the larger of two
+    // Rayleigh errors would put the median at 1.57 sigma, not 1.18.
+    for (const View& v : views) {
+      const double e = reprojection_error_px(v, points[k]);
       if (std::isfinite(e)) scaled.push_back(dof_scale * e);
+    }
   }
   if (scaled.empty()) return std::numeric_limits<double>::infinity();
   std::nth_element(scaled.begin(), scaled.begin() + scaled.size() / 2, scaled.end());

@@ -37,11 +37,12 @@ std::vector<double> observation_reprojection_errors_px(const Eigen::Vector3d& po
                                                        const BaRig& rig);
 
 // Robust per-axis pixel noise sigma of landmarks fitted to their tracks (points[k] to
-// tracks[k]): the median over observations of the reprojection error norm, each scaled by
-// sqrt(m / (m - 3)) for its track's m image coordinates (a fitted point absorbs 3 of them, so a
-// two-view track's residuals are half the noise), divided by sqrt(2 ln 2), the median of a
-// unit 2-D Gaussian's norm (Rayleigh). The median ignores wrong matches. Infinity when no
-// observation has a finite error.
+// tracks[k]): the median over images (a stereo observation's two cameras apart) of the
+// reprojection error norm, each scaled by sqrt(m / (m - 3)) for its track's m image
+// coordinates (a fitted point absorbs 3 of them, so a two-view track's residuals are half the
+// noise), divided by sqrt(2 ln 2), the median of a unit 2-D Gaussian's norm (Rayleigh). The
+// median ignores wrong matches. Infinity when no image has a finite error; throws
+// std::invalid_argument when points and tracks differ in number.
 double robust_pixel_sigma_px(const std::vector<Eigen::Vector3d>& points,
                              const std::vector<FeatureTrack>& tracks,
                              const std::vector<Pose3>& T_world_camera, const BaRig& rig);

@@ -402,5 +402,40 @@ TEST(Triangulation, RobustPixelSigmaRecoversTheNoiseOfFittedTracks) {
   EXPECT_TRUE(std::isinf(robust_pixel_sigma_px({}, {}, cameras, rig)));
 }
 
+// Stereo tracks: each camera's image counts once (the larger of the two errors per observation
+// would put the estimate ~33 % high).
+TEST(Triangulation, RobustPixelSigmaOfStereoTracks) {
+  BaRig rig;
+  rig.camera_top = PinholeCamera{600, 600, 320, 240, 640, 480};
+  rig.camera_bottom = rig.camera_top;
+  rig.T_top_bottom.translation() = Eigen::Vector3d(0, 0.1, 0);
+  const std::vector<Pose3> cameras = camera_row(3);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  TriangulationOptions loose;
+  loose.max_reprojection_px = 1e9;
+  loose.min_parallax_deg = 0;
+  std::vector<FeatureTrack> tracks;
+  std::vector<Eigen::Vector3d> points;
+  for (int k = 0; k < 600; ++k) {
+    const Eigen::Vector3d p(0.3 + 0.5 * u(rng), 0.4 * u(rng), 1.5 + 0.3 * u(rng));
+    FeatureTrack t;
+    for (int i = 0; i < 1 + k % 3; ++i) {
+      const Eigen::Vector2d top =
+          project(rig.camera_top, cameras[i], p) + Eigen::Vector2d(noise(rng), noise(rng));
+      const Eigen::Vector2d bottom = project(rig.camera_top, cameras[i] * rig.T_top_bottom, p) +
+                                     Eigen::Vector2d(noise(rng), noise(rng));
+      t.observations.push_back({i, top, bottom});
+    }
+    const auto fitted = triangulate_track(t, cameras, rig, loose);
+    if (!fitted) continue;
+    tracks.push_back(t);
+    points.push_back(*fitted);
+  }
+  ASSERT_GE(tracks.size(), 550u);
+  EXPECT_NEAR(robust_pixel_sigma_px(points, tracks, cameras, rig), 0.5, 0.06);
+}
+
 }  // namespace
 }  // namespace keel::ba
