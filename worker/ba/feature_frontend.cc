@@ -117,22 +117,29 @@ KeyframeFeatures features_of(const BaKeyframe& keyframe, size_t index, const BaR
   return out;
 }
 
-// Depth of each match in camera a, in metres, from the relative pose (R, t) recovered from E
-// (unit baseline) scaled by the initial poses' baseline; NaN where the rays do not meet in
-// front of both cameras.
-std::vector<double> two_view_depths_m(const std::vector<cv::Point2d>& pa,
-                                      const std::vector<cv::Point2d>& pb, const cv::Mat& E,
-                                      const cv::Mat& K, double baseline_m, cv::Mat& mask) {
+// Depth of each match in cameras a and b, in metres, from the relative pose (R, t) recovered
+// from E (unit baseline) scaled by the initial poses' baseline; NaN where the rays do not meet
+// in front of both cameras.
+std::vector<std::pair<double, double>> two_view_depths_m(const std::vector<cv::Point2d>& pa,
+                                                         const std::vector<cv::Point2d>& pb,
+                                                         const cv::Mat& E, const cv::Mat& K,
+                                                         double baseline_m, cv::Mat& mask) {
   cv::Mat R, t, points_h;
   // distanceThresh in baselines: far enough to keep every finite depth; cheirality is the test.
   cv::recoverPose(E, pa, pb, K, R, t, 1e6, mask, points_h);
-  std::vector<double> depths(pa.size(), std::numeric_limits<double>::quiet_NaN());
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::pair<double, double>> depths(pa.size(), {kNaN, kNaN});
   points_h.convertTo(points_h, CV_64F);
+  R.convertTo(R, CV_64F);
+  t.convertTo(t, CV_64F);
   for (int i = 0; i < points_h.cols; ++i) {
     if (mask.at<uint8_t>(i) == 0) continue;
     const double w = points_h.at<double>(3, i);
     if (std::abs(w) < 1e-12) continue;
-    depths[i] = points_h.at<double>(2, i) / w * baseline_m;
+    double in_a[3], in_b_z = t.at<double>(2);  // camera b: R x_a + t (t of unit length)
+    for (int r = 0; r < 3; ++r) in_a[r] = points_h.at<double>(r, i) / w;
+    for (int c = 0; c < 3; ++c) in_b_z += R.at<double>(2, c) * in_a[c];
+    depths[i] = {in_a[2] * baseline_m, in_b_z * baseline_m};
   }
   return depths;
 }
@@ -192,14 +199,16 @@ std::vector<bool> verify_monocular_matches(const std::vector<Eigen::Vector2d>& p
   // Degenerate configurations return several stacked 3x3 solutions; keep none of them.
   if (E.rows != 3 || E.cols != 3 || mask.empty()) return inliers;
   const bool gate_depth = options.gate_two_view_depth && baseline_m > 0;
-  const std::vector<double> depths =
-      gate_depth ? two_view_depths_m(pa, pb, E, K, baseline_m, mask) : std::vector<double>();
+  const auto depths = gate_depth ? two_view_depths_m(pa, pb, E, K, baseline_m, mask)
+                                 : std::vector<std::pair<double, double>>();
+  const auto in_range = [&](double depth_m) {
+    return std::isfinite(depth_m) && depth_m >= options.min_depth_m &&
+           depth_m <= options.max_depth_m;
+  };
   for (size_t i = 0; i < inliers.size(); ++i) {
     inliers[i] = mask.at<uint8_t>(static_cast<int>(i)) != 0;
-    if (inliers[i] && gate_depth) {
-      inliers[i] = std::isfinite(depths[i]) && depths[i] >= options.min_depth_m &&
-                   depths[i] <= options.max_depth_m;
-    }
+    if (inliers[i] && gate_depth)  // in front of both cameras, within the range in each
+      inliers[i] = in_range(depths[i].first) && in_range(depths[i].second);
   }
   return inliers;
 }
