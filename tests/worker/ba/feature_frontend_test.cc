@@ -361,18 +361,34 @@ TEST(Triangulation, GateRemovesAnOutlierViewAndUncheckedTwoViewTracks) {
   EXPECT_TRUE(gate_landmark_observations(point, pair, cameras, stereo, 3.0, options));
 }
 
+// The pixel-noise tests: a 600 px camera (and its twin 0.1 m below for stereo), and
+// triangulation without gates (they measure the noise, not the geometry).
+BaRig sigma_test_rig(bool stereo) {
+  BaRig rig;
+  rig.camera_top = PinholeCamera{600, 600, 320, 240, 640, 480};
+  if (stereo) {
+    rig.camera_bottom = rig.camera_top;
+    rig.T_top_bottom.translation() = Eigen::Vector3d(0, 0.1, 0);
+  }
+  return rig;
+}
+
+TriangulationOptions without_gates() {
+  TriangulationOptions options;
+  options.max_reprojection_px = 1e9;
+  options.min_parallax_deg = 0;
+  return options;
+}
+
 // Points seen by 2-4 cameras with 0.5 px Gaussian noise and 2 % wrong observations, each fitted
 // by triangulation: the estimate must be the noise, not the (smaller) fitted residual.
 TEST(Triangulation, RobustPixelSigmaRecoversTheNoiseOfFittedTracks) {
-  BaRig rig;
-  rig.camera_top = PinholeCamera{600, 600, 320, 240, 640, 480};
+  const BaRig rig = sigma_test_rig(false);
   const std::vector<Pose3> cameras = camera_row(4);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
   std::normal_distribution<double> noise(0.0, 0.5);
-  TriangulationOptions loose;
-  loose.max_reprojection_px = 1e9;
-  loose.min_parallax_deg = 0;
+  const TriangulationOptions loose = without_gates();
   std::vector<FeatureTrack> tracks;
   std::vector<Eigen::Vector3d> points;
   double raw_sum_sq = 0;
@@ -405,17 +421,12 @@ TEST(Triangulation, RobustPixelSigmaRecoversTheNoiseOfFittedTracks) {
 // Stereo tracks: each camera's image counts once (the larger of the two errors per observation
 // would put the estimate ~33 % high).
 TEST(Triangulation, RobustPixelSigmaOfStereoTracks) {
-  BaRig rig;
-  rig.camera_top = PinholeCamera{600, 600, 320, 240, 640, 480};
-  rig.camera_bottom = rig.camera_top;
-  rig.T_top_bottom.translation() = Eigen::Vector3d(0, 0.1, 0);
+  const BaRig rig = sigma_test_rig(true);
   const std::vector<Pose3> cameras = camera_row(3);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1, 1);
   std::normal_distribution<double> noise(0.0, 0.5);
-  TriangulationOptions loose;
-  loose.max_reprojection_px = 1e9;
-  loose.min_parallax_deg = 0;
+  const TriangulationOptions loose = without_gates();
   std::vector<FeatureTrack> tracks;
   std::vector<Eigen::Vector3d> points;
   for (int k = 0; k < 600; ++k) {
