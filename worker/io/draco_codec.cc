@@ -7,6 +7,7 @@
 #include <draco/point_cloud/point_cloud.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -644,7 +645,9 @@ void write_draco_file(const std::filesystem::path& path, const std::string& byte
   temporary += ".partial";
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
+    if (!out)
+      throw std::runtime_error(path.string() + ": cannot open for writing (" +
+                               std::strerror(errno) + ")");
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.close();
     if (!out) {

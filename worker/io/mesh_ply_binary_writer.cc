@@ -1,5 +1,7 @@
 #include "worker/io/mesh_ply_binary_writer.h"
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 #include <system_error>
@@ -17,7 +19,9 @@ void PlyBinaryWriter::finish() {
   temporary += ".partial";
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path_.string() + ": cannot open for writing");
+    if (!out)
+      throw std::runtime_error(path_.string() + ": cannot open for writing (" +
+                               std::strerror(errno) + ")");
     out.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
     out.close();
     if (!out) {

@@ -1,5 +1,6 @@
 #include "worker/io/ply_cloud_writer.h"
 
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -35,7 +36,9 @@ class StreamedFile {
   explicit StreamedFile(std::filesystem::path path)
       : path_(std::move(path)), temporary_(path_.string() + ".partial") {
     out_.open(temporary_, std::ios::binary | std::ios::trunc);
-    if (!out_) throw std::runtime_error(path_.string() + ": cannot open for writing");
+    if (!out_)
+      throw std::runtime_error(path_.string() + ": cannot open for writing (" +
+                               std::strerror(errno) + ")");
   }
   ~StreamedFile() {
     if (committed_) return;

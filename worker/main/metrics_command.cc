@@ -9,7 +9,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -45,7 +47,8 @@ std::string lower_extension(const std::string& path) {
 void write_text_columns(const std::string& path, const std::vector<Eigen::Vector3f>& xyz,
                         const mapping::PointMetrics& m) {
   FILE* file = std::fopen(path.c_str(), "w");
-  if (!file) throw std::runtime_error(path + ": cannot open for writing");
+  if (!file)
+    throw std::runtime_error(path + ": cannot open for writing (" + std::strerror(errno) + ")");
   std::fprintf(file, "# x y z density roughness planarity\n");
   for (size_t q = 0; q < m.query_index.size(); ++q) {
     const Eigen::Vector3f& p = xyz[m.query_index[q]];
