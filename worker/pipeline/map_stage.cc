@@ -559,6 +559,15 @@ class MapRun {
   // overlap, so the source, the SLAM baseline and progress see scans one at a time, in order).
   void scan_sensor(const MappedSensor& sensor, io::ScanSource& source, size_t total_scans,
                    size_t& scans_done) {
+    try {
+      feed_sensor(sensor, source, total_scans, scans_done);
+    } catch (const std::invalid_argument& e) {  // e.g. a voxel index overflow: say whose
+      throw std::invalid_argument("map: sensor '" + sensor.name + "': " + e.what());
+    }
+  }
+
+  void feed_sensor(const MappedSensor& sensor, io::ScanSource& source, size_t total_scans,
+                   size_t& scans_done) {
     builders_.at(sensor.name)->add_scans([&](std::string& sensor_name, PointCloud& scan) {
       context_.check_canceled();
       if (!source.next(scan)) return false;
