@@ -7,7 +7,6 @@
 #include <draco/point_cloud/point_cloud.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,8 +14,9 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <system_error>
 #include <unordered_map>
+
+#include "worker/io/replaced_file.h"
 
 namespace keel::io {
 namespace {
@@ -641,27 +641,7 @@ DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what) {
 }
 
 void write_draco_file(const std::filesystem::path& path, const std::string& bytes) {
-  std::filesystem::path temporary = path;
-  temporary += ".partial";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw std::runtime_error(path.string() + ": cannot open for writing (" +
-                               std::strerror(errno) + ")");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw std::runtime_error(path.string() + ": write failed (disk full?)");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    throw std::runtime_error(path.string() +
-                             ": cannot move the written file into place: " + error.message());
-  }
+  write_file_replacing(path, bytes);
 }
 
 std::string read_draco_file(const std::filesystem::path& path) {

@@ -10,6 +10,7 @@ keel_library(keel_mesh_io
     ${CMAKE_CURRENT_LIST_DIR}/mesh_off_reader.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_check.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_scalar_field.cc
+    ${CMAKE_CURRENT_LIST_DIR}/replaced_file.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_ply_binary_writer.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_ply_writer.cc
     ${CMAKE_CURRENT_LIST_DIR}/ply_cloud_writer.cc

@@ -1,12 +1,11 @@
 #include "worker/io/ply_cloud_writer.h"
 
-#include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <vector>
+
+#include "worker/io/replaced_file.h"
 
 namespace keel::io {
 namespace {
@@ -28,48 +27,6 @@ void put(char*& at, T value) {
   std::memcpy(at, &value, sizeof(T));  // little endian, as are Keel's hosts
   at += sizeof(T);
 }
-
-// A file written through a temporary sibling renamed into place by commit(), so a failed
-// write never leaves a half-written PLY behind (as mesh_detail::PlyBinaryWriter, streamed).
-class StreamedFile {
- public:
-  explicit StreamedFile(std::filesystem::path path)
-      : path_(std::move(path)), temporary_(path_.string() + ".partial") {
-    out_.open(temporary_, std::ios::binary | std::ios::trunc);
-    if (!out_)
-      throw std::runtime_error(path_.string() + ": cannot open for writing (" +
-                               std::strerror(errno) + ")");
-  }
-  ~StreamedFile() {
-    if (committed_) return;
-    out_.close();
-    std::error_code ignored;
-    std::filesystem::remove(temporary_, ignored);
-  }
-  StreamedFile(const StreamedFile&) = delete;
-  StreamedFile& operator=(const StreamedFile&) = delete;
-
-  void append(const char* bytes, size_t size) {
-    out_.write(bytes, static_cast<std::streamsize>(size));
-    if (!out_) throw std::runtime_error(path_.string() + ": write failed (disk full?)");
-  }
-  void commit() {
-    out_.close();
-    if (!out_) throw std::runtime_error(path_.string() + ": write failed (disk full?)");
-    std::error_code error;
-    std::filesystem::rename(temporary_, path_, error);
-    if (error) {
-      throw std::runtime_error(path_.string() +
-                               ": cannot move the written file into place: " + error.message());
-    }
-    committed_ = true;
-  }
-
- private:
-  std::filesystem::path path_, temporary_;
-  std::ofstream out_;
-  bool committed_ = false;
-};
 
 // The optional properties the (concatenated) cloud carries: each one every non-empty part has.
 struct Properties {
@@ -110,7 +67,7 @@ void write_parts(const std::filesystem::path& path, const std::vector<const Poin
 
   const size_t point_bytes = 12 + (has.intensity ? 4 : 0) + (has.ring ? 2 : 0) +
                              (has.time ? 4 : 0) + 4 * point_fields.size();
-  StreamedFile file(path);
+  ReplacedFile file(path);
   header =
       "ply\nformat binary_little_endian 1.0\ncomment written by keel\n" + header + "end_header\n";
   file.append(header.data(), header.size());
