@@ -420,34 +420,24 @@ const MappedSensor* find_slam_sensor(const MapStageOptions& options,
 // One run of the stage, as the steps of the header comment; members hold what the steps pass
 // on. The output tasks capture members by reference, so `runner_`, which joins them on an
 // exception, is declared last (destroyed first).
-// Files a stage run has written so far (output tasks add from any thread). A failed run
-// removes them, so nothing it leaves behind can pass for a finished map.
-class WrittenFiles {
- public:
-  void add(const std::vector<std::string>& names) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    names_.insert(names_.end(), names.begin(), names.end());
-  }
-  void remove_from(const fs::path& dir) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    std::error_code ignored;  // best effort: the stage's own error is the one to report
-    for (const auto& name : names_) fs::remove(dir / name, ignored);
-  }
-
- private:
-  std::mutex mutex_;
-  std::vector<std::string> names_;
-};
-
 class MapRun {
  public:
-  MapRun(StageContext& context, WrittenFiles& written)
+  explicit MapRun(StageContext& context)
       : context_(context),
-        written_files_(written),
         stage_start_(std::chrono::steady_clock::now()),
         options_(MapStageOptions::from_json(context.options)) {}
 
   StageResult run() {
+    try {
+      return run_steps();
+    } catch (...) {
+      remove_written_maps();
+      throw;
+    }
+  }
+
+ private:
+  StageResult run_steps() {
     io::MissionReader reader(io::load_mission(context_.mission_dir));
     choose_sensors(reader);
     prepare_mapping(reader);
@@ -474,7 +464,6 @@ class MapRun {
     return out;
   }
 
- private:
   // Step 1: the sensors to map (the options were read by the constructor); every
   // sensor_filters entry must name one of them.
   void choose_sensors(const io::MissionReader& reader) {
@@ -707,12 +696,10 @@ class MapRun {
       drc_.at(name) =
           write_map_draco(io::encode_draco_point_cloud(map, {}, draco_options(options_)),
                           map.size(), start, 0.0, name, options_, context_.work_dir);
-      written_files_.add(drc_.at(name).artifacts);
     }));
     if (options_.write_ply)
       tasks.push_back(ply_task(name, map.size(), [this, name, &map] {
         ply_.at(name) = write_map_ply(map, name, context_.work_dir);
-        written_files_.add(ply_.at(name).artifacts);
       }));
     if (slam_ && name == slam_sensor_->name)
       tasks.push_back(metrics_task("inspection_" + name, map.size(), 0, [this, name, &map] {
@@ -748,7 +735,6 @@ class MapRun {
     if (options_.write_ply)
       tasks.push_back(ply_task(kCombinedMapName, combined_points_, [this] {
         combined_ply_ = write_map_ply(combined_parts_, kCombinedMapName, context_.work_dir);
-        written_files_.add(combined_ply_.artifacts);
       }));
     tasks.push_back(metrics_task(
         "inspection_combined", combined_points_, sizeof(Eigen::Vector3f) * combined_points_,
@@ -773,7 +759,6 @@ class MapRun {
               combined_output_ = write_map_draco(combined_encoded_, combined_points_, start,
                                                  combined_encode_seconds_, kCombinedMapName,
                                                  options_, context_.work_dir);
-              written_files_.add(combined_output_.artifacts);
               combined_encoded_ = io::DracoEncoded{};
             }};
   }
@@ -791,6 +776,19 @@ class MapRun {
     out.report["combined"] = combined_output_.report;
     out.artifacts.insert(out.artifacts.end(), combined_output_.artifacts.begin(),
                          combined_output_.artifacts.end());
+  }
+
+  // After a failure: the map files written so far go, so none can pass for a finished map
+  // (a sensor's outputs start while later sensors still scan). The output tasks are joined
+  // first; they record what they wrote in drc_, ply_ and the combined outputs.
+  void remove_written_maps() {
+    runner_.reset();
+    std::vector<const MapOutput*> outputs = {&combined_output_, &combined_ply_};
+    for (const auto* by_sensor : {&drc_, &ply_})
+      for (const auto& [name, output] : *by_sensor) outputs.push_back(&output);
+    std::error_code ignored;  // best effort: the stage's own error is the one to report
+    for (const MapOutput* output : outputs)
+      for (const auto& file : output->artifacts) fs::remove(context_.work_dir / file, ignored);
   }
 
   // Step 5's report: each map's metrics (Eqs. (23)-(26)) and Table V.
@@ -826,7 +824,6 @@ class MapRun {
   }
 
   StageContext& context_;
-  WrittenFiles& written_files_;
   const std::chrono::steady_clock::time_point stage_start_;
   const MapStageOptions options_;
   // Steps 1 and 2.
@@ -866,15 +863,7 @@ class MapRun {
 class MapStage : public Stage {
  public:
   std::string name() const override { return "map"; }
-  StageResult run(StageContext& context) override {
-    WrittenFiles written;
-    try {
-      return MapRun(context, written).run();  // the run's output tasks are joined by now
-    } catch (...) {
-      written.remove_from(context.work_dir);
-      throw;
-    }
-  }
+  StageResult run(StageContext& context) override { return MapRun(context).run(); }
 };
 
 }  // namespace
