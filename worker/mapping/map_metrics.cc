@@ -354,13 +354,13 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
       any_query = query_of(grid.input_index()[i], points.size(), queries) != kNotQueried;
     }
     if (!any_query) return;
+    if (options.check_canceled) options.check_canceled();
     finders[worker].block_around(c, &s->block);
     gather_block(grid, *s);
     for (uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
       const uint32_t input = grid.input_index()[i];
       const uint32_t q = query_of(input, points.size(), queries);
       if (q == kNotQueried) continue;
-      if (options.check_canceled) options.check_canceled();
       const size_t n = select_neighbours(grid.x()[i], grid.y()[i], grid.z()[i], squared_radius, *s);
       out.surface_density[q] = static_cast<float>(n / area);  // Eq. (23)
       const NeighbourhoodMetrics metrics = neighbourhood_metrics(*s, n);

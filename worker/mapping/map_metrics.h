@@ -33,8 +33,9 @@ struct MapMetricsOptions {
   // (neighbours always come from the whole map), to bound report time on huge maps.
   size_t max_query_points = 0;
   int histogram_bins = 20;
-  // Called once per query point from the metrics threads (so it must be thread-safe); it may
-  // throw to stop the computation, which rethrows it: the stage passes its cancel check.
+  // Called once per grid cell (side radius_m, at most kMaxMetricsRadiusM) holding query
+  // points, from the metrics threads (so it must be thread-safe); it may throw to stop the
+  // computation, which rethrows it: the stage passes its cancel check.
   std::function<void()> check_canceled;
 };
 // Largest radius accepted: Table V uses 0.25 m; a wider neighbourhood measures the structure's

@@ -248,6 +248,7 @@ TEST(MapMetrics, CancelCheckStopsTheComputation) {
   for (int i = 0; i < 100; ++i)
     for (int j = 0; j < 100; ++j) points.emplace_back(0.01f * i, 0.01f * j, 0.0f);
   MapMetricsOptions options;
+  options.radius_m = 0.05;  // 400 cells of 5 cm, one check each
   options.threads = 2;
   std::atomic<int> calls{0};
   options.check_canceled = [&calls] {
@@ -255,6 +256,7 @@ TEST(MapMetrics, CancelCheckStopsTheComputation) {
   };
   EXPECT_THROW(compute_point_metrics(points, options), std::runtime_error);
   EXPECT_LT(calls.load(), 10000);  // stopped long before every point was measured
+  EXPECT_LT(calls.load(), 200);    // and before half the cells
 }
 
 }  // namespace
