@@ -188,7 +188,8 @@ class BaGraph {
       const int i = initial_.beam_keyframe[b];
       ceres_problem_.AddResidualBlock(  // Eq. (14)
           make_dvl_raycast_factor(mesh_, mount_, initial_.beams[b], options_.dvl_sigma_m,
-                                  options_.dvl_max_range_m, options_.dvl_gate_m),
+                                  options_.dvl_max_range_m, options_.dvl_gate_m,
+                                  options_.dvl_range_normal),
           dvl_loss_.get(), poses_[i].data(), &servo_[i], model_.data());
     }
   }

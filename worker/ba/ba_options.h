@@ -18,6 +18,9 @@ BaMode ba_mode_from_string(const std::string& name);  // "naive" | "geva" | "pro
 
 constexpr double kDegToRad = 0.017453292519943295;
 
+// The normal that linearises a DVL beam's range (dvl_raycast_factor.h).
+enum class DvlRangeNormal { kInterpolated, kFacet };
+
 // Sec. 2.7 frontend. The paper gives only its structure (SIFT, nearest-neighbour matching,
 // RANSAC with an essential matrix scored by Sampson distance, or rigid alignment of
 // triangulated stereo points); the numbers are ours.
@@ -132,6 +135,9 @@ struct BaOptions {
   // measurement are left out (returns from foreign objects, Sec. 2.5, or off-model beams).
   double dvl_gate_m = 0.5;
   double dvl_max_range_m = 30.0;
+  // Which normal linearises a beam's range (dvl_raycast_factor.h): the smooth surface's
+  // (interpolated) or the hit facet's.
+  DvlRangeNormal dvl_range_normal = DvlRangeNormal::kInterpolated;
 
   // Ceres. SPARSE_SCHUR (landmarks eliminated first, SuiteSparse Cholesky on the reduced
   // camera system) is the paper's "sparse Cholesky" and the fastest at 1,000 keyframes.

@@ -23,17 +23,19 @@ void beam_in_model(const ServoMount& mount, const DvlBeam& beam, const T* pose, 
   direction_model = block_rotation(T_world_model).normalized().conjugate() * direction_world;
 }
 
-// Range to the hit triangle's plane, differentiable in origin and direction; nullopt on a miss.
+// Range along the ray to the plane through the hit point of the chosen normal: differentiable
+// in origin and direction; nullopt on a miss.
 template <typename T>
 std::optional<T> cast_range(const MeshQuery& mesh, const Vec3<T>& origin, const Vec3<T>& direction,
-                            double max_range_m) {
+                            double max_range_m, DvlRangeNormal normal) {
   Ray ray;
   ray.origin = jet_value(origin);
   ray.direction = jet_value(direction);
   ray.max_range_m = max_range_m;
   const std::optional<RayHit> hit = mesh.raycast(ray);
   if (!hit) return std::nullopt;
-  const Vec3<T> n = hit->face_normal.cast<T>();
+  const Vec3<T> n =
+      (normal == DvlRangeNormal::kFacet ? hit->face_normal : hit->interpolated_normal).cast<T>();
   const T n_dot_d = n.dot(direction);
   if (std::abs(jet_value(n_dot_d)) < 1e-12) return std::nullopt;  // grazing: no range
   return T(n.dot(hit->point.cast<T>() - origin) / n_dot_d);
@@ -44,12 +46,13 @@ struct DvlRaycast {
   ServoMount mount;
   DvlBeam beam;
   double sigma_m, max_range_m, gate_m;
+  DvlRangeNormal normal;
 
   template <typename T>
   bool operator()(const T* pose, const T* theta, const T* T_world_model, T* residual) const {
     Vec3<T> origin, direction;
     beam_in_model(mount, beam, pose, theta, T_world_model, origin, direction);
-    const std::optional<T> range = cast_range(*mesh, origin, direction, max_range_m);
+    const std::optional<T> range = cast_range(*mesh, origin, direction, max_range_m, normal);
     // Eq. (14): measured minus predicted, whitened.
     residual[0] = range ? (T(beam.range_m) - *range) / T(sigma_m) : T(gate_m / sigma_m);
     return true;
@@ -66,9 +69,10 @@ DvlBeam make_dvl_beam(const Pose3& T_servo_dvl, const Eigen::Vector3d& direction
 
 ceres::CostFunction* make_dvl_raycast_factor(const MeshQuery& mesh, const ServoMount& mount,
                                              const DvlBeam& beam, double sigma_m,
-                                             double max_range_m, double gate_m) {
+                                             double max_range_m, double gate_m,
+                                             DvlRangeNormal normal) {
   return new ceres::AutoDiffCostFunction<DvlRaycast, 1, kPoseBlockSize, 1, kPoseBlockSize>(
-      new DvlRaycast{&mesh, mount, beam, sigma_m, max_range_m, gate_m});
+      new DvlRaycast{&mesh, mount, beam, sigma_m, max_range_m, gate_m, normal});
 }
 
 std::optional<double> predict_dvl_range(const MeshQuery& mesh, const ServoMount& mount,
@@ -79,7 +83,7 @@ std::optional<double> predict_dvl_range(const MeshQuery& mesh, const ServoMount&
   const PoseBlock model = to_pose_block(T_world_model);
   Eigen::Vector3d origin, direction;
   beam_in_model(mount, beam, pose.data(), &servo_angle_rad, model.data(), origin, direction);
-  return cast_range(mesh, origin, direction, max_range_m);
+  return cast_range(mesh, origin, direction, max_range_m, DvlRangeNormal::kFacet);  // value only
 }
 
 }  // namespace keel::ba

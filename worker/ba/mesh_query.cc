@@ -19,6 +19,11 @@
 namespace keel::ba {
 namespace {
 
+// Faces meeting at a dihedral angle above this are a crease (a chine, a box edge), not a
+// tessellated curve: the smooth normals do not blend across it (30 degrees, as shading tools'
+// auto-smooth default).
+constexpr double kSmoothingCreaseAngle = 30.0 * M_PI / 180.0;
+
 // Filtered exact predicates: a ray through a shared edge still hits one of its triangles.
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using CgalPoint = Kernel::Point_3;
@@ -94,12 +99,17 @@ struct MeshQuery::Impl {
   std::vector<Eigen::Vector3d> face_normals;                   // unit; zero for degenerate faces
   std::vector<Eigen::Vector3d> vertex_normals;                 // angle-weighted pseudonormals, unit
   std::unordered_map<uint64_t, Eigen::Vector3d> edge_normals;  // sum of face normals, unit
+  // Per face corner (3 f + c): the angle-weighted normal of the faces around the corner's
+  // vertex within kSmoothingCreaseAngle of face f (smooth_normals()).
+  std::vector<Eigen::Vector3d> corner_normals;
   std::vector<CgalTriangle> triangles;  // the tree's primitives point into this vector
   std::vector<int> triangle_face;       // tree triangle -> index into `faces`
   Tree tree;
 
   explicit Impl(const TriangleMesh& mesh);
   void compute_pseudonormals();
+  void compute_corner_normals();
+  double corner_angle(int face, int vertex) const;
   Eigen::Vector3d feature_normal(int face, const TrianglePoint& on_triangle) const;
   TrianglePoint on_face(int face, const Eigen::Vector3d& query) const;
   ClosestPoint result_on(int face, const TrianglePoint& on_triangle,
@@ -114,6 +124,7 @@ struct MeshQuery::Impl {
                                 std::vector<double>* distances_m) const;
   class BallCollector;
   std::optional<RayHit> raycast(const Ray& ray) const;
+  Eigen::Vector3d interpolated_normal(int face, const Eigen::Vector3d& p) const;
 };
 
 MeshQuery::Impl::Impl(const TriangleMesh& mesh) : vertices(mesh.vertices), faces(mesh.faces) {
@@ -139,6 +150,7 @@ MeshQuery::Impl::Impl(const TriangleMesh& mesh) : vertices(mesh.vertices), faces
   }
   if (triangles.empty()) throw std::invalid_argument("MeshQuery: the mesh has no face with area");
   compute_pseudonormals();
+  compute_corner_normals();
   tree.insert(triangles.begin(), triangles.end());
   tree.build();
   tree.accelerate_distance_queries();
@@ -152,11 +164,7 @@ void MeshQuery::Impl::compute_pseudonormals() {
   for (const int f : triangle_face) {
     const Eigen::Vector3i& face = faces[f];
     for (int c = 0; c < 3; ++c) {
-      const Eigen::Vector3d& p = vertices[face[c]];
-      const Eigen::Vector3d e1 = vertices[face[(c + 1) % 3]] - p;
-      const Eigen::Vector3d e2 = vertices[face[(c + 2) % 3]] - p;
-      const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
-      vertex_normals[face[c]] += angle * face_normals[f];
+      vertex_normals[face[c]] += corner_angle(f, face[c]) * face_normals[f];
       // Eigen vectors are not zero-initialized: insert an explicit zero first.
       const uint64_t key = edge_key(face[c], face[(c + 1) % 3]);
       edge_normals.try_emplace(key, Eigen::Vector3d::Zero()).first->second += face_normals[f];
@@ -168,6 +176,37 @@ void MeshQuery::Impl::compute_pseudonormals() {
   for (auto& [key, n] : edge_normals) {
     if (n.norm() > 0) n.normalize();
   }
+}
+
+// Smoothing groups with a crease angle, as in shading: a corner's normal averages only the
+// faces around its vertex that turn by at most kSmoothingCreaseAngle from the face itself, so
+// a box's faces stay flat up to their corners while a finely tessellated hull is smoothed.
+void MeshQuery::Impl::compute_corner_normals() {
+  std::vector<std::vector<int>> faces_at(vertices.size());
+  for (const int f : triangle_face) {
+    for (int c = 0; c < 3; ++c) faces_at[faces[f][c]].push_back(f);
+  }
+  const double min_cos = std::cos(kSmoothingCreaseAngle);
+  corner_normals.assign(3 * faces.size(), Eigen::Vector3d::Zero());
+  for (const int f : triangle_face) {
+    for (int c = 0; c < 3; ++c) {
+      const int v = faces[f][c];
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (const int g : faces_at[v]) {
+        if (face_normals[g].dot(face_normals[f]) < min_cos) continue;
+        sum += corner_angle(g, v) * face_normals[g];
+      }
+      corner_normals[3 * static_cast<size_t>(f) + c] = sum.normalized();  // f is in the sum
+    }
+  }
+}
+
+double MeshQuery::Impl::corner_angle(int f, int v) const {
+  const Eigen::Vector3i& face = faces[f];
+  const int c = face[0] == v ? 0 : face[1] == v ? 1 : 2;
+  const Eigen::Vector3d e1 = vertices[face[(c + 1) % 3]] - vertices[v];
+  const Eigen::Vector3d e2 = vertices[face[(c + 2) % 3]] - vertices[v];
+  return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
 }
 
 Eigen::Vector3d MeshQuery::Impl::feature_normal(int f, const TrianglePoint& on_triangle) const {
@@ -306,6 +345,23 @@ std::vector<int> MeshQuery::Impl::faces_within(const Eigen::Vector3d& center, do
   return result;
 }
 
+// Phong normal at `p` on face `face`: its corner normals blended with p's barycentric
+// coordinates.
+Eigen::Vector3d MeshQuery::Impl::interpolated_normal(int face, const Eigen::Vector3d& p) const {
+  const Eigen::Vector3i& f = faces[face];
+  const Eigen::Vector3d &a = vertices[f[0]], &b = vertices[f[1]], &c = vertices[f[2]];
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double area2 = n.squaredNorm();
+  const double wa = (c - b).cross(p - b).dot(n) / area2;
+  const double wb = (a - c).cross(p - c).dot(n) / area2;
+  const double wc = 1.0 - wa - wb;
+  const size_t k = 3 * static_cast<size_t>(face);
+  const Eigen::Vector3d blended =
+      wa * corner_normals[k] + wb * corner_normals[k + 1] + wc * corner_normals[k + 2];
+  const double norm = blended.norm();
+  return norm > 1e-12 ? Eigen::Vector3d(blended / norm) : face_normals[face];
+}
+
 std::optional<RayHit> MeshQuery::Impl::raycast(const Ray& ray) const {
   const double length = ray.direction.norm();
   if (!(length > 0) || !ray.direction.allFinite() || !ray.origin.allFinite()) {
@@ -335,6 +391,7 @@ std::optional<RayHit> MeshQuery::Impl::raycast(const Ray& ray) const {
   result.point = hit;
   result.face = triangle_face[intersection->second - triangles.begin()];
   result.face_normal = face_normals[result.face];
+  result.interpolated_normal = interpolated_normal(result.face, hit);
   return result;
 }
 

@@ -45,6 +45,12 @@ struct RayHit {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   int face = -1;                                           // index into TriangleMesh::faces
   Eigen::Vector3d face_normal = Eigen::Vector3d::UnitZ();  // unit, from the face's winding
+  // Unit normal of the smooth surface the facets sample (Phong): the hit face's corner normals
+  // blended with the hit point's barycentric coordinates. A corner's normal is the
+  // angle-weighted mean of the faces around its vertex, leaving out faces that turn by more
+  // than 30 degrees from the hit face (a crease). So it varies continuously across the edges of
+  // a tessellated curve, and equals face_normal on flat faces and up to sharp edges.
+  Eigen::Vector3d interpolated_normal = Eigen::Vector3d::UnitZ();
 };
 
 class MeshQuery {

@@ -479,6 +479,9 @@ class BaStage : public Stage {
     ba_options.max_iterations = options.max_iterations;
     ba_options.num_threads = options.threads;
     ba_options.linear_solver = options.linear_solver;
+    ba_options.dvl_range_normal = options.dvl_range_normal == "facet"
+                                      ? ba::DvlRangeNormal::kFacet
+                                      : ba::DvlRangeNormal::kInterpolated;
     ba_options.triangulation.max_reprojection_px = options.triangulation_max_reprojection_px;
     const ba::BaResult result = ba::run_model_assisted_ba(problem, ba_options);
     context.progress(0.9);
@@ -561,6 +564,7 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
   o.max_iterations = r.optional<int>("max_iterations", o.max_iterations);
   o.threads = r.optional<int>("threads", o.threads);
   o.linear_solver = r.optional<std::string>("linear_solver", o.linear_solver);
+  o.dvl_range_normal = r.optional<std::string>("dvl_range_normal", o.dvl_range_normal);
   o.histogram_bin_m = r.optional<double>("histogram_bin_m", o.histogram_bin_m);
   o.histogram_range_m = r.optional<double>("histogram_range_m", o.histogram_range_m);
   r.finish();
@@ -582,6 +586,8 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
               o.linear_solver == "dense_schur",
           "linear_solver",
           "sparse_schur, iterative_schur or dense_schur, got '" + o.linear_solver + "'");
+  require(o.dvl_range_normal == "interpolated" || o.dvl_range_normal == "facet", "dvl_range_normal",
+          "interpolated or facet, got '" + o.dvl_range_normal + "'");
   require(std::isfinite(o.histogram_bin_m) && o.histogram_bin_m > 0, "histogram_bin_m",
           "a positive number");
   require(std::isfinite(o.histogram_range_m) && o.histogram_range_m >= o.histogram_bin_m &&

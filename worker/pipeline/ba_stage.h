@@ -52,6 +52,7 @@ struct BaStageOptions {
   int max_iterations = 100;
   int threads = 2;
   std::string linear_solver = "sparse_schur";
+  std::string dvl_range_normal = "interpolated";  // | "facet" (ba::DvlRangeNormal)
   // Fig. 18 histogram of DVL range residuals: bins of this width over [-range, +range].
   double histogram_bin_m = 0.005;
   double histogram_range_m = 0.05;

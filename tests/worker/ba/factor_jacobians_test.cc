@@ -11,6 +11,7 @@
 #include <random>
 
 #include "tests/worker/ba/ba_synthetic.h"
+#include "tests/worker/ba/mesh_fixtures.h"
 #include "worker/ba/ba_options.h"
 #include "worker/ba/dvl_raycast_factor.h"
 #include "worker/ba/odometry_factor.h"
@@ -192,12 +193,37 @@ TEST_F(FactorJacobians, DvlRaycastEq14) {
     const DvlBeam beam = make_dvl_beam(T_servo_dvl, direction, 1.6);
     ASSERT_TRUE(predict_dvl_range(mesh, mount, beam, from_pose_block(vehicle.data()), theta,
                                   T_world_model, 30.0));
-    expect_jacobians_match(make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5),
-                           {vehicle.data(), &theta, model.data()},
-                           {&pose_manifold_, nullptr, &pose_manifold_}, 1e-5);
+    // kFacet: the exact derivative of the facet range (the default linearises with the smooth
+    // surface's normal instead; dvl_raycast_test.cc checks that against a sphere).
+    expect_jacobians_match(
+        make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5, DvlRangeNormal::kFacet),
+        {vehicle.data(), &theta, model.data()}, {&pose_manifold_, nullptr, &pose_manifold_}, 1e-5);
     ++probed;
   }
   EXPECT_EQ(probed, 20);
+}
+
+// The default (interpolated) normal is the facet's on flat faces up to a crease: on a box the
+// smooth linearisation is the exact derivative, also for beams hitting next to an edge.
+TEST_F(FactorJacobians, DvlRaycastInterpolatedNormalIsExactOnABox) {
+  const MeshQuery mesh(testing::make_box({-1.0, -1.0, 1.0}, {1.0, 1.0, 2.0}));
+  const ServoMount mount{make_pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.4, 0, 0.2)),
+                         Eigen::Vector3d::UnitY()};
+  for (int trial = 0; trial < 20; ++trial) {
+    // Beams at the box's underside, hitting 2-4 cm from its y = 1 edge, x from 0.5 to 0.98.
+    PoseBlock vehicle = to_pose_block(make_pose(Eigen::Quaterniond::Identity(),
+                                                Eigen::Vector3d(0.025 * trial - 0.42, 0.52, -0.5)) *
+                                      random_pose(0.002, 0.01));
+    PoseBlock model = to_pose_block(Pose3::Identity());
+    double theta = 0.0;
+    const Eigen::Vector3d direction = Eigen::Vector3d(0.35, 0.3, 0.87).normalized();
+    const DvlBeam beam = make_dvl_beam(Pose3::Identity(), direction, 1.6);
+    ASSERT_TRUE(predict_dvl_range(mesh, mount, beam, from_pose_block(vehicle.data()), theta,
+                                  Pose3::Identity(), 30.0));
+    expect_jacobians_match(make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5),
+                           {vehicle.data(), &theta, model.data()},
+                           {&pose_manifold_, nullptr, &pose_manifold_}, 1e-5);
+  }
 }
 
 // Landmarks at `offset` along the normal from a face's centroid (face region) and from a

@@ -157,6 +157,9 @@ TEST_F(HullStagesTest, OptionErrorsNameTheOption) {
             std::string::npos);
   EXPECT_NE(error_of(*ba, {{"max_iterations", 0}}, work).find("options.ba.max_iterations"),
             std::string::npos);
+  EXPECT_NE(
+      error_of(*ba, {{"dvl_range_normal", "vertex"}}, work).find("options.ba.dvl_range_normal"),
+      std::string::npos);
   auto inspect = make_inspect_stage();
   EXPECT_NE(error_of(*inspect, {{"tau_m", -1.0}}, work).find("tau_m"), std::string::npos);
   EXPECT_NE(error_of(*inspect, {{"alpha", 0.1}}, work).find("options.inspect.alpha"),
