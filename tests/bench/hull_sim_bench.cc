@@ -5,7 +5,7 @@
 //   - solve time of `proposed` vs `naive` (target <= +25 %) and vs `geva` (target: less);
 // then a pass/fail line per target over the seeds.
 // Run: build/tests/bench/bench_hull_sim [seeds=3 | first-last] [duration_s=0 (full survey)]
-//                                       [tracks=frontend|ground_truth]
+//                                       [tracks=frontend|ground_truth] [ba option=value]...
 // Environment: KEEL_HULL_BENCH_DIR=<dir> keeps the missions and stage outputs there (a mission
 // already simulated there is reused); KEEL_HULL_BENCH_REUSE_BA=1 also reuses a kept `ba`
 // report (inspect-only iterations).
@@ -79,13 +79,25 @@ int main(int argc, char** argv) {
   const int seeds = last_seed - first_seed + 1;
   const double duration_s = argc > 2 ? std::atof(argv[2]) : 0.0;
   const std::string tracks = argc > 3 ? argv[3] : "frontend";
+  json ba_options = {{"tracks", tracks}};
+  for (int i = 4; i < argc; ++i) {  // further ba options, key=value (value: JSON or a string)
+    const std::string arg = argv[i];
+    const size_t eq = arg.find('=');
+    if (eq == std::string::npos) {
+      std::fprintf(stderr, "bench_hull_sim: expected key=value, got '%s'\n", argv[i]);
+      return 2;
+    }
+    const json value = json::parse(arg.substr(eq + 1), nullptr, /*allow_exceptions=*/false);
+    ba_options[arg.substr(0, eq)] = value.is_discarded() ? json(arg.substr(eq + 1)) : value;
+  }
   const char* keep = std::getenv("KEEL_HULL_BENCH_DIR");
   const bool reuse_ba = keep && std::getenv("KEEL_HULL_BENCH_REUSE_BA");
   const fs::path root =
       keep ? fs::path(keep)
            : fs::temp_directory_path() / ("keel_hull_bench_" + std::to_string(getpid()));
-  std::printf("hauv-hull, %d seeds, duration %s, tracks=%s\n", seeds,
-              duration_s > 0 ? std::to_string(duration_s).c_str() : "full", tracks.c_str());
+  std::printf("hauv-hull, %d seeds, duration %s, ba options %s\n", seeds,
+              duration_s > 0 ? std::to_string(duration_s).c_str() : "full",
+              ba_options.dump().c_str());
   Tally found_all, cylinder, clean, dvl, time_naive, time_geva;
   for (int seed = first_seed; seed <= last_seed; ++seed) {
     const fs::path mission =
@@ -104,7 +116,7 @@ int main(int argc, char** argv) {
     if (reuse_ba && fs::exists(ba_report)) {
       std::ifstream(ba_report) >> ba;
     } else {
-      ba = run(*pipeline::make_ba_stage(), mission, work, {{"tracks", tracks}});
+      ba = run(*pipeline::make_ba_stage(), mission, work, ba_options);
       if (keep) std::ofstream(ba_report) << ba.dump(1);
     }
     const json in = run(*pipeline::make_inspect_stage(), mission, work, json::object());
