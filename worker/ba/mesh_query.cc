@@ -100,7 +100,7 @@ struct MeshQuery::Impl {
   std::vector<Eigen::Vector3d> vertex_normals;                 // angle-weighted pseudonormals, unit
   std::unordered_map<uint64_t, Eigen::Vector3d> edge_normals;  // sum of face normals, unit
   // Per face corner (3 f + c): the angle-weighted normal of the faces around the corner's
-  // vertex within kSmoothingCreaseAngle of face f (smooth_normals()).
+  // vertex within kSmoothingCreaseAngle of face f (compute_corner_normals()).
   std::vector<Eigen::Vector3d> corner_normals;
   std::vector<CgalTriangle> triangles;  // the tree's primitives point into this vector
   std::vector<int> triangle_face;       // tree triangle -> index into `faces`
