@@ -1,7 +1,8 @@
 // Stage `map` on keel-sim usv-bridge (seed 000 Sec. VI): the inspection map against the SLAM
 // map (Table V: density x95, roughness -29 %, planarity +40 %; target: better on all three),
 // input points/s of the whole stage (target >= 2 M/s on 2 cores), metrics points/s (>= 1 M/s)
-// and the peak RSS of a 30-minute vs a 5-minute survey of the same bridge (target <= 1.5x).
+// and the peak RSS of ~30-minute vs 5-minute surveys of the same bridge (target <= 1.5x): one
+// lap at 1/6 the speed, and six laps at the same speed (memory_scaling).
 //
 // Each stage run is a fresh process (`bench_map_sim --stage MISSION WORK`), so its peak RSS is
 // its own. On a shared machine wall time includes waiting for a core: CPU seconds are printed
@@ -289,47 +290,80 @@ void print_growth_by_range(const fs::path& mission, const fs::path& short_work,
   }
 }
 
+// One survey of the bridge for the memory runs: `laps` laps at `speed_mps`.
+struct Survey {
+  std::string name;  // mission folder bridge_<name>, stage work folders work_<name>_<leaf>
+  double speed_mps = 0.0;
+  int laps = 1;
+  double duration_s = 0.0;
+  std::string label() const {
+    char text[96];
+    std::snprintf(text, sizeof(text), "%.0f-min, %s at %.2f m/s", duration_s / 60.0,
+                  laps == 1 ? "one lap" : (std::to_string(laps) + " laps").c_str(), speed_mps);
+    return text;
+  }
+};
+
+// The simulator's duration of `laps` laps of usv-bridge at `speed_mps` (ramps included).
+double bridge_duration_s(double speed_mps, int laps) {
+  keel::sim::ScenarioOptions options;
+  options.motion.cruise_speed_mps = speed_mps;
+  options.speed_overridden = true;
+  options.motion.laps = laps;
+  return keel::sim::make_scenario("usv-bridge", 1, options).default_duration_s;
+}
+
 void memory_scaling(const fs::path& root, bool keep, int points_per_ring) {
-  // The same survey of the bridge at two speeds, with the simulator's VLP-16 (1875 points per
-  // ring; ~4 GB on disk for the 30-minute mission) unless `points_per_ring` reduces it (450
-  // keeps the 30-minute mission ~1 GB, but leaves even the 30-minute map far from saturating
-  // the structure at a 2 cm leaf, so the ratio then mostly measures undersampling).
+  // The same bridge surveyed three ways, with the simulator's VLP-16 (1875 points per ring;
+  // ~4 GB on disk per 30-minute mission) unless `points_per_ring` reduces it (450 keeps a
+  // 30-minute mission ~1 GB, but leaves even the 30-minute map far from saturating the
+  // structure at a 2 cm leaf, so the ratio then mostly measures undersampling):
+  //  - one lap in 5 minutes (the reference);
+  //  - one lap in 30 minutes at 1/6 the speed: a longer mission that also samples the surfaces
+  //    6x more densely along the path;
+  //  - six laps in a row at the 5-minute speed (~32 minutes with the turn-arounds): a longer
+  //    mission that repeats the same sampling, e.g. repeated inspection passes.
   const double length = bridge_path_length_m();
   const std::vector<std::string> sensors = {"lidar_h", "sonar"};
-  std::vector<fs::path> missions;
-  std::vector<double> speeds;
-  for (const double minutes : {5.0, 30.0}) {
-    const double duration = minutes * 60.0;
-    speeds.push_back(length / (duration - 6.0));  // 2 s rest + 4 s ramp
-    missions.push_back(root / ("bridge_" + std::to_string(int(minutes)) + "min"));
-    std::vector<std::string> settings = {"motion.speed=" + std::to_string(speeds.back())};
+  const double fast_mps = length / (5 * 60.0 - 6.0), slow_mps = length / (30 * 60.0 - 6.0);
+  const std::vector<Survey> surveys = {{"5min", fast_mps, 1, 5 * 60.0},
+                                       {"30min", slow_mps, 1, 30 * 60.0},
+                                       {"6laps", fast_mps, 6, bridge_duration_s(fast_mps, 6)}};
+  for (const Survey& survey : surveys) {
+    std::vector<std::string> settings = {"motion.speed=" + std::to_string(survey.speed_mps)};
+    if (survey.laps != 1) settings.push_back("motion.laps=" + std::to_string(survey.laps));
     if (points_per_ring > 0)
       settings.push_back("lidar.points_per_ring=" + std::to_string(points_per_ring));
-    simulate(missions.back(), duration, sensors, settings);
+    simulate(root / ("bridge_" + survey.name), survey.duration_s, sensors, settings);
   }
   for (const double leaf : {0.02, 0.05}) {
-    json runs = json::array();
-    for (size_t k = 0; k < 2; ++k) {
-      const int minutes = k == 0 ? 5 : 30;
-      const json run = stage_in_child(
-          missions[k], root / ("work_" + std::to_string(minutes) + "_" + std::to_string(leaf)),
-          with_merge_option(lidar_options(leaf, points_per_ring)));
-      std::printf("%2d-minute survey (%.2f m/s), final voxel %.2f m: ", minutes, speeds[k], leaf);
-      print_stage_figures(run);
-      runs.push_back(run);
+    const auto work = [&](const Survey& survey) {
+      return root / ("work_" + survey.name + "_" + std::to_string(leaf));
+    };
+    std::vector<json> runs;
+    for (const Survey& survey : surveys) {
+      runs.push_back(stage_in_child(root / ("bridge_" + survey.name), work(survey),
+                                    with_merge_option(lidar_options(leaf, points_per_ring))));
+      std::printf("%s, final voxel %.2f m: ", survey.label().c_str(), leaf);
+      print_stage_figures(runs.back());
     }
-    print_growth_by_range(missions[0], root / ("work_5_" + std::to_string(leaf)),
-                          root / ("work_30_" + std::to_string(leaf)), sensors);
-    const double short_mib = runs[0]["peak_rss_mib"].get<double>();
-    const double long_mib = runs[1]["peak_rss_mib"].get<double>();
-    std::printf(
-        "peak RSS, final voxel %.2f m: 5 min %.0f MiB (%zu map points), 30 min %.0f MiB (%zu map "
-        "points): ratio %.2f (target <= 1.5)\n",
-        leaf, short_mib, runs[0]["report"]["combined"]["points"].get<size_t>(), long_mib,
-        runs[1]["report"]["combined"]["points"].get<size_t>(), long_mib / short_mib);
+    const double reference_mib = runs[0]["peak_rss_mib"].get<double>();
+    for (size_t k = 1; k < surveys.size(); ++k) {
+      std::printf("%s vs %s, final voxel %.2f m:\n", surveys[k].label().c_str(),
+                  surveys[0].label().c_str(), leaf);
+      print_growth_by_range(root / ("bridge_" + surveys[0].name), work(surveys[0]),
+                            work(surveys[k]), sensors);
+      const double mib = runs[k]["peak_rss_mib"].get<double>();
+      std::printf(
+          "peak RSS, final voxel %.2f m: %s %.0f MiB (%zu map points), %s %.0f MiB (%zu map "
+          "points): ratio %.2f (target <= 1.5)\n",
+          leaf, surveys[0].label().c_str(), reference_mib,
+          runs[0]["report"]["combined"]["points"].get<size_t>(), surveys[k].label().c_str(), mib,
+          runs[k]["report"]["combined"]["points"].get<size_t>(), mib / reference_mib);
+    }
   }
   if (!keep)
-    for (const auto& m : missions) fs::remove_all(m);
+    for (const Survey& survey : surveys) fs::remove_all(root / ("bridge_" + survey.name));
 }
 
 }  // namespace

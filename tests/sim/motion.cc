@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "tests/sim/rng.h"
 
@@ -19,6 +20,20 @@ Eigen::Quaterniond quaternion_from_euler(double roll, double pitch, double yaw) 
   return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
                             Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
                             Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()));
+}
+
+std::vector<Eigen::Vector3d> repeat_laps(const std::vector<Eigen::Vector3d>& lap,
+                                         const std::vector<Eigen::Vector3d>& connector, int laps) {
+  if (laps < 1 || laps > kMaxLaps)
+    throw std::invalid_argument("motion.laps: expected an integer in [1, " +
+                                std::to_string(kMaxLaps) + "], got " + std::to_string(laps));
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(lap.size() * laps + connector.size() * (laps - 1));
+  for (int k = 0; k < laps; ++k) {
+    if (k > 0) out.insert(out.end(), connector.begin(), connector.end());
+    out.insert(out.end(), lap.begin(), lap.end());
+  }
+  return out;
 }
 
 PathMotion::PathMotion(SmoothPath path, const MotionOptions& options, uint64_t seed)

@@ -31,7 +31,20 @@ struct MotionOptions {
   double roll_amplitude_rad = 0.02, roll_frequency_hz = 0.35;
   double pitch_amplitude_rad = 0.012, pitch_frequency_hz = 0.5;
   double heave_amplitude_m = 0.03, heave_frequency_hz = 0.45;
+  // Times the scenario's path is flown in a row at cruise speed (ramps only at the very start
+  // and end); the scenario joins each lap's end to the next lap's start (repeat_laps).
+  int laps = 1;
 };
+
+constexpr int kMaxLaps = 1000;
+
+// Waypoints of `laps` consecutive laps of `lap`, each lap's end joined to the next lap's start
+// by `connector` (waypoints strictly between the two), for one SmoothPath through all of them:
+// the path stays C2 across the joints and the vehicle does not stop between laps. laps = 1
+// returns `lap` unchanged. Throws std::invalid_argument naming motion.laps for laps outside
+// [1, kMaxLaps].
+std::vector<Eigen::Vector3d> repeat_laps(const std::vector<Eigen::Vector3d>& lap,
+                                         const std::vector<Eigen::Vector3d>& connector, int laps);
 
 class PathMotion {
  public:

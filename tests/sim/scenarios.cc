@@ -107,6 +107,24 @@ std::vector<Eigen::Vector3d> bridge_waypoints() {
   return out;
 }
 
+// Joins the bridge path's end (-90, 0), heading west, to its start (-90, 1.5), heading east,
+// for repeated laps (motion.laps): the vessel swings out south-west and loops clockwise round a
+// 4 m circle west of the start (x >= -100.5, inside the walls' extent), then bears east onto
+// the start line. Five waypoints 60 degrees apart; the path spline rounds the joints, so with
+// laps > 1 the path leaves the single lap's line by up to 0.9 m on the 12 m next to a joint;
+// from x = -54 round the bridge and back to x = -58 every lap is the single lap's path within
+// 2 cm (motion_test).
+std::vector<Eigen::Vector3d> bridge_turnaround() {
+  const Eigen::Vector3d center(-96.5, 0.75, 0.0);
+  const double radius_m = 4.0;
+  std::vector<Eigen::Vector3d> out;
+  for (const double deg : {-60.0, -120.0, 180.0, 120.0, 60.0}) {
+    const double a = deg * M_PI / 180.0;
+    out.push_back(center + radius_m * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
+  }
+  return out;
+}
+
 std::unique_ptr<AnalyticScene> corridor_scene() {
   auto scene = std::make_unique<AnalyticScene>();
   add_water(scene.get());
@@ -121,6 +139,14 @@ std::vector<Eigen::Vector3d> corridor_waypoints() {
   std::vector<Eigen::Vector3d> out;
   for (int i = 0; i <= 36; ++i) out.emplace_back(i, 1.0 * std::sin(2.0 * M_PI * i / 12.0), 0.0);
   return out;  // ~38 m winding path
+}
+
+void reject_laps(const std::string& scenario, int laps) {
+  if (laps != 1)
+    throw std::invalid_argument("motion.laps: " + scenario +
+                                " flies its path once (no turn-around joins its end to its "
+                                "start); expected 1, got " +
+                                std::to_string(laps));
 }
 
 void add_usv_rig(Scenario* s) {
@@ -154,8 +180,13 @@ Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions&
   s.world = std::move(scene);
   MotionOptions motion = options.motion;
   motion.yaw_follows_path = true;
+  // The corridor path ends 36 m from its start, facing away from it: a lap joint would need a
+  // return leg as long as the lap, which is not the same survey flown again.
+  if (!bridge) reject_laps(name, motion.laps);
   s.motion = std::make_unique<PathMotion>(
-      SmoothPath(bridge ? bridge_waypoints() : corridor_waypoints()), motion, seed);
+      SmoothPath(bridge ? repeat_laps(bridge_waypoints(), bridge_turnaround(), motion.laps)
+                        : corridor_waypoints()),
+      motion, seed);
   s.default_duration_s = std::ceil(s.motion->end_time());
   if (!bridge) s.degenerate_axis_world = Eigen::Vector3d::UnitX();
   add_usv_rig(&s);
@@ -187,6 +218,7 @@ bool place_on_real_hull(const MeshBvh& cad_bvh, const SurfacePoint& sp, const Po
 }
 
 Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
+  reject_laps("hauv-hull", options.motion.laps);  // it ends at the hull's far end, lanes below
   Scenario s;
   s.name = "hauv-hull";
   s.platform = "hauv";

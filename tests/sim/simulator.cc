@@ -87,6 +87,7 @@ std::string settings_help() {
   std::string out;
   for (const auto& [key, ptr] : setting_table(&s, &c)) out += key + " ";
   for (const char* key : kIntegerSettings) out += std::string(key) + " ";
+  out += "motion.laps ";
   for (const char* key : kSwitchSettings) out += std::string(key) + "(0/1) ";
   return out;
 }
@@ -111,8 +112,22 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
     if (auto it = table.find(key); it != table.end()) {
       if (value < 0.0 && key.find("gain") == std::string::npos)
         throw std::invalid_argument("--set " + key + ": must be >= 0, got " + text);
+      // A range sensor's sigma goes into mission.yaml, whose readers require it positive.
+      if (value <= 0.0 && key.size() > 11 && key.compare(key.size() - 11, 11, "range_sigma") == 0)
+        throw std::invalid_argument("--set " + key +
+                                    ": must be > 0 (the mission format requires a positive "
+                                    "sigma; 1e-4 is all but noise-free), got " +
+                                    text);
       *it->second = value;
       if (key == "motion.speed") c->speed_overridden = true;
+      continue;
+    }
+    if (key == "motion.laps") {
+      if (value < 1 || value > kMaxLaps || value != std::floor(value))
+        throw std::invalid_argument("--set motion.laps: expected an integer in [1, " +
+                                    std::to_string(kMaxLaps) +
+                                    "] (times the path is flown), got '" + text + "'");
+      c->motion.laps = int(value);
       continue;
     }
     const bool integer =

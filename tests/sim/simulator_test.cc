@@ -134,5 +134,20 @@ TEST_F(SimulatorTest, BadOptionsAreRejectedWithTheirName) {
   EXPECT_THROW(run_simulation(o), std::invalid_argument);
 }
 
+// A range sigma goes into mission.yaml, whose readers refuse 0: keel-sim refuses it first.
+TEST(SimulatorSettings, RangeSigmaMustBePositive) {
+  for (const char* key : {"lidar.range_sigma", "sonar.range_sigma", "dvl.range_sigma"}) {
+    SensorSettings sensors;
+    ScenarioOptions options;
+    try {
+      apply_settings({std::string(key) + "=0"}, &sensors, &options);
+      ADD_FAILURE() << key << "=0 was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(apply_settings({std::string(key) + "=0.0001"}, &sensors, &options)) << key;
+  }
+}
+
 }  // namespace
 }  // namespace keel::sim

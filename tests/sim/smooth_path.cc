@@ -82,6 +82,11 @@ SmoothPath::SmoothPath(const std::vector<Eigen::Vector3d>& waypoints,
   }
 }
 
+double SmoothPath::waypoint_arc_length(size_t i) const {
+  // The table holds kTablePerSegment steps per segment, so waypoint i is entry i * that.
+  return cumulative_.at(i * kTablePerSegment);
+}
+
 double SmoothPath::speed_u(double u) const {
   double v, dx, dy, dz, dd;
   x_.evaluate(u, &v, &dx, &dd);

@@ -29,6 +29,8 @@ class SmoothPath {
                       const std::vector<std::vector<double>>& extra = {});
 
   double length() const { return cumulative_.back(); }
+  // Arc length at waypoint i (e.g. where a lap starts on a path of repeated laps).
+  double waypoint_arc_length(size_t i) const;
 
   struct Point {
     Eigen::Vector3d p;        // position
