@@ -4,6 +4,7 @@ keel_library(keel_mesh_io
   SOURCES
     ${CMAKE_CURRENT_LIST_DIR}/mesh_parse_util.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_reader.cc
+    ${CMAKE_CURRENT_LIST_DIR}/ply_header.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_ply_reader.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_obj_reader.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_stl_reader.cc

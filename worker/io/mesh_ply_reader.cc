@@ -3,12 +3,13 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
+#include "worker/io/io_error.h"
 #include "worker/io/mesh_parse_util.h"
 #include "worker/io/mesh_reader.h"
+#include "worker/io/ply_header.h"
 
 namespace keel::io {
 namespace {
@@ -16,135 +17,13 @@ namespace {
 using mesh_detail::fail;
 using mesh_detail::quoted;
 
-enum class PlyType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
-enum class PlyFormat { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
-
-struct PlyProperty {
-  std::string name;
-  PlyType type = PlyType::kFloat32;  // item type for lists
-  bool is_list = false;
-  PlyType count_type = PlyType::kUint8;
-};
-
-struct PlyElement {
-  std::string name;
-  uint64_t count = 0;
-  std::vector<PlyProperty> properties;
-};
-
-struct PlyHeader {
-  PlyFormat format = PlyFormat::kAscii;
-  std::vector<PlyElement> elements;
-  size_t body_offset = 0;      // first byte after end_header
-  size_t body_first_line = 0;  // line number of the first body line (ascii)
-};
-
-std::optional<PlyType> parse_type(std::string_view name) {
-  if (name == "char" || name == "int8") return PlyType::kInt8;
-  if (name == "uchar" || name == "uint8") return PlyType::kUint8;
-  if (name == "short" || name == "int16") return PlyType::kInt16;
-  if (name == "ushort" || name == "uint16") return PlyType::kUint16;
-  if (name == "int" || name == "int32") return PlyType::kInt32;
-  if (name == "uint" || name == "uint32") return PlyType::kUint32;
-  if (name == "float" || name == "float32") return PlyType::kFloat32;
-  if (name == "double" || name == "float64") return PlyType::kFloat64;
-  return std::nullopt;
-}
-
-size_t type_size(PlyType type) {
-  switch (type) {
-    case PlyType::kInt8:
-    case PlyType::kUint8:
-      return 1;
-    case PlyType::kInt16:
-    case PlyType::kUint16:
-      return 2;
-    case PlyType::kInt32:
-    case PlyType::kUint32:
-    case PlyType::kFloat32:
-      return 4;
-    case PlyType::kFloat64:
-      return 8;
-  }
-  return 0;
-}
-
-PlyType parse_type_or_fail(const std::filesystem::path& path, size_t line, std::string_view name) {
-  const auto type = parse_type(name);
-  if (!type) {
-    fail(path, line,
-         "unknown PLY property type " + quoted(name) +
-             " (expected char, uchar, short, ushort, int, uint, float, double)");
-  }
-  return *type;
-}
-
+// The shared header parser throws IoError; this reader's callers expect MeshReadError.
 PlyHeader parse_header(const std::filesystem::path& path, std::string_view text) {
-  mesh_detail::LineCursor lines(text);
-  std::string_view line;
-  std::vector<std::string_view> tokens;
-  if (!lines.next(&line) || line != "ply") {
-    fail(path, 1, "not a PLY file (expected the first line to be 'ply')");
+  try {
+    return parse_ply_header(text, path.string());
+  } catch (const IoError& e) {
+    throw MeshReadError(e.what());
   }
-  PlyHeader header;
-  bool have_format = false;
-  while (true) {
-    if (!lines.next(&line)) fail(path, lines.line_number(), "PLY header has no 'end_header'");
-    const size_t n = lines.line_number();
-    mesh_detail::split_whitespace(line, &tokens);
-    if (lines.at_end() && (tokens.empty() || tokens[0] != "end_header")) {
-      fail(path, n, "PLY header has no 'end_header' (truncated file?)");
-    }
-    if (tokens.empty()) continue;
-    const std::string_view keyword = tokens[0];
-    if (keyword == "comment" || keyword == "obj_info") continue;
-    if (keyword == "end_header") break;
-    if (keyword == "format") {
-      if (tokens.size() != 3) fail(path, n, "expected 'format <type> 1.0'");
-      if (tokens[1] == "ascii") {
-        header.format = PlyFormat::kAscii;
-      } else if (tokens[1] == "binary_little_endian") {
-        header.format = PlyFormat::kBinaryLittleEndian;
-      } else if (tokens[1] == "binary_big_endian") {
-        header.format = PlyFormat::kBinaryBigEndian;
-      } else {
-        fail(path, n,
-             "unknown PLY format " + quoted(tokens[1]) +
-                 " (expected ascii, binary_little_endian or binary_big_endian)");
-      }
-      have_format = true;
-    } else if (keyword == "element") {
-      int64_t count = 0;
-      if (tokens.size() != 3 || !mesh_detail::parse_int64(tokens[2], &count) || count < 0) {
-        fail(path, n, "expected 'element <name> <count>' with a count >= 0");
-      }
-      header.elements.push_back({std::string(tokens[1]), static_cast<uint64_t>(count), {}});
-    } else if (keyword == "property") {
-      if (header.elements.empty()) fail(path, n, "'property' before any 'element'");
-      PlyProperty property;
-      if (tokens.size() == 5 && tokens[1] == "list") {
-        property.is_list = true;
-        property.count_type = parse_type_or_fail(path, n, tokens[2]);
-        property.type = parse_type_or_fail(path, n, tokens[3]);
-        property.name = std::string(tokens[4]);
-        if (property.count_type == PlyType::kFloat32 || property.count_type == PlyType::kFloat64) {
-          fail(path, n, "list count type must be an integer type");
-        }
-      } else if (tokens.size() == 3) {
-        property.type = parse_type_or_fail(path, n, tokens[1]);
-        property.name = std::string(tokens[2]);
-      } else {
-        fail(path, n, "expected 'property <type> <name>' or 'property list <type> <type> <name>'");
-      }
-      header.elements.back().properties.push_back(property);
-    } else {
-      fail(path, n, "unknown PLY header keyword " + quoted(keyword));
-    }
-  }
-  if (!have_format) fail(path, lines.line_number(), "PLY header has no 'format' line");
-  header.body_offset = lines.offset();
-  header.body_first_line = lines.line_number() + 1;
-  return header;
 }
 
 // Reads values of one element item at a time from an ascii body: one item per line.
@@ -211,7 +90,7 @@ class BinarySource {
     index_ = index;
   }
   double value(PlyType type, const std::string& property) {
-    const size_t size = type_size(type);
+    const size_t size = ply_type_size(type);
     if (offset_ + size > body_.size()) {
       fail(path_, 0,
            "truncated binary data: element '" + element_->name + "' item " +
@@ -327,8 +206,7 @@ std::string number(double value) {
 
 uint8_t to_color_byte(double value, PlyType type) {
   // Colours stored as floats are in [0, 1]; integer colours in [0, 255].
-  const double scaled =
-      (type == PlyType::kFloat32 || type == PlyType::kFloat64) ? value * 255.0 : value;
+  const double scaled = ply_type_is_integer(type) ? value : value * 255.0;
   return static_cast<uint8_t>(std::clamp(std::lround(scaled), 0L, 255L));
 }
 
@@ -435,7 +313,7 @@ TriangleMesh read_ply_mesh(const std::filesystem::path& path) {
   const std::string_view body = std::string_view(text).substr(header.body_offset);
   TriangleMesh mesh;
   if (header.format == PlyFormat::kAscii) {
-    AsciiSource source(path, body, header.body_first_line);
+    AsciiSource source(path, body, header.end_header_line + 1);
     read_body(path, header, source, body.size(), &mesh);
     source.finish();
   } else {
