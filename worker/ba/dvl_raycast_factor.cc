@@ -23,6 +23,20 @@ void beam_in_model(const ServoMount& mount, const DvlBeam& beam, const T* pose, 
   direction_model = block_rotation(T_world_model).normalized().conjugate() * direction_world;
 }
 
+// The smooth normal may turn up to 30 degrees from the facet's (a crease's limit), so a beam
+// hitting its facet at a steep but fine angle could be near-tangent to the smooth plane: a
+// derivative scaled by 1 / (n.d) without bound, or a "grazing" miss. Where the smooth plane
+// meets the beam at less than half the facet's n.d (or from the other side), the facet
+// normal linearises instead.
+Eigen::Vector3d linearising_normal(const RayHit& hit, const Eigen::Vector3d& direction,
+                                   DvlRangeNormal normal) {
+  if (normal == DvlRangeNormal::kFacet) return hit.face_normal;
+  const double facet = hit.face_normal.dot(direction);
+  const double smooth = hit.interpolated_normal.dot(direction);
+  return smooth * facet > 0 && std::abs(smooth) >= 0.5 * std::abs(facet) ? hit.interpolated_normal
+                                                                         : hit.face_normal;
+}
+
 // Range along the ray to the plane through the hit point of the chosen normal: differentiable
 // in origin and direction; nullopt on a miss.
 template <typename T>
@@ -34,8 +48,7 @@ std::optional<T> cast_range(const MeshQuery& mesh, const Vec3<T>& origin, const 
   ray.max_range_m = max_range_m;
   const std::optional<RayHit> hit = mesh.raycast(ray);
   if (!hit) return std::nullopt;
-  const Vec3<T> n =
-      (normal == DvlRangeNormal::kFacet ? hit->face_normal : hit->interpolated_normal).cast<T>();
+  const Vec3<T> n = linearising_normal(*hit, ray.direction, normal).cast<T>();
   const T n_dot_d = n.dot(direction);
   if (std::abs(jet_value(n_dot_d)) < 1e-12) return std::nullopt;  // grazing: no range
   return T(n.dot(hit->point.cast<T>() - origin) / n_dot_d);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -153,7 +154,14 @@ MeshQuery::Impl::Impl(const TriangleMesh& mesh) : vertices(mesh.vertices), faces
   compute_corner_normals();
   tree.insert(triangles.begin(), triangles.end());
   tree.build();
-  tree.accelerate_distance_queries();
+  // The distance queries' k-d tree is built on the triangles' centroids: CGAL's default, one
+  // vertex of each triangle, puts a fan's faces that list the shared vertex first on one
+  // point, and the k-d tree's recursion then overflowed the stack (10k such faces).
+  std::vector<Tree::Point_and_primitive_id> centroids;
+  centroids.reserve(triangles.size());
+  for (auto t = triangles.cbegin(); t != triangles.cend(); ++t)
+    centroids.emplace_back(CGAL::centroid(*t), t);
+  tree.accelerate_distance_queries(centroids.begin(), centroids.end());
 }
 
 // Angle-weighted pseudonormals (Baerentzen & Aanaes 2005): with them the sign of
@@ -178,25 +186,55 @@ void MeshQuery::Impl::compute_pseudonormals() {
   }
 }
 
-// Smoothing groups with a crease angle, as in shading: a corner's normal averages only the
-// faces around its vertex that turn by at most kSmoothingCreaseAngle from the face itself, so
-// a box's faces stay flat up to their corners while a finely tessellated hull is smoothed.
+// Smoothing groups with a crease angle, as in shading. Two faces sharing an edge are smooth
+// there when their normals differ by at most kSmoothingCreaseAngle; the corners of smooth
+// neighbours at the edge's two vertices join one group (union-find over the 3 F corners), and
+// a corner's normal is its group's angle-weighted normal. So both faces of a smooth edge blend
+// the same normals along it (continuous across it), a box's faces stay flat up to their
+// corners, and the work is linear in the faces (a fan of 40k faces around one vertex too).
 void MeshQuery::Impl::compute_corner_normals() {
-  std::vector<std::vector<int>> faces_at(vertices.size());
+  std::vector<size_t> parent(3 * faces.size());
+  std::iota(parent.begin(), parent.end(), size_t{0});
+  const auto root = [&parent](size_t c) {
+    while (parent[c] != c) c = parent[c] = parent[parent[c]];  // path halving
+    return c;
+  };
+  const auto corner = [this](int f, int v) {
+    const Eigen::Vector3i& face = faces[f];
+    return 3 * static_cast<size_t>(f) + (face[0] == v ? 0 : face[1] == v ? 1 : 2);
+  };
+  std::unordered_map<uint64_t, std::vector<int>> faces_at_edge;
   for (const int f : triangle_face) {
-    for (int c = 0; c < 3; ++c) faces_at[faces[f][c]].push_back(f);
+    for (int c = 0; c < 3; ++c)
+      faces_at_edge[edge_key(faces[f][c], faces[f][(c + 1) % 3])].push_back(f);
   }
   const double min_cos = std::cos(kSmoothingCreaseAngle);
+  for (const auto& [key, around] : faces_at_edge) {
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    for (size_t i = 0; i < around.size(); ++i) {
+      for (size_t j = i + 1; j < around.size(); ++j) {  // 2 faces, more where non-manifold
+        const int f = around[i], g = around[j];
+        if (face_normals[f].dot(face_normals[g]) < min_cos) continue;  // a crease
+        for (const int v : {a, b}) parent[root(corner(f, v))] = root(corner(g, v));
+      }
+    }
+  }
+  std::vector<Eigen::Vector3d> group_sum(parent.size(), Eigen::Vector3d::Zero());
+  for (const int f : triangle_face) {
+    for (int c = 0; c < 3; ++c)
+      group_sum[root(3 * static_cast<size_t>(f) + c)] +=
+          corner_angle(f, faces[f][c]) * face_normals[f];
+  }
   corner_normals.assign(3 * faces.size(), Eigen::Vector3d::Zero());
   for (const int f : triangle_face) {
     for (int c = 0; c < 3; ++c) {
-      const int v = faces[f][c];
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (const int g : faces_at[v]) {
-        if (face_normals[g].dot(face_normals[f]) < min_cos) continue;
-        sum += corner_angle(g, v) * face_normals[g];
-      }
-      corner_normals[3 * static_cast<size_t>(f) + c] = sum.normalized();  // f is in the sum
+      const Eigen::Vector3d& sum = group_sum[root(3 * static_cast<size_t>(f) + c)];
+      // A group can wrap round a vertex (a thin fin's rounded edge): keep the face's own
+      // normal where the group's turns by more than 60 degrees from it.
+      const double norm = sum.norm();
+      corner_normals[3 * static_cast<size_t>(f) + c] =
+          norm > 0 && sum.dot(face_normals[f]) > 0.5 * norm ? Eigen::Vector3d(sum / norm)
+                                                            : face_normals[f];
     }
   }
 }

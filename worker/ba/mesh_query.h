@@ -47,9 +47,10 @@ struct RayHit {
   Eigen::Vector3d face_normal = Eigen::Vector3d::UnitZ();  // unit, from the face's winding
   // Unit normal of the smooth surface the facets sample (Phong): the hit face's corner normals
   // blended with the hit point's barycentric coordinates. A corner's normal is the
-  // angle-weighted mean of the faces around its vertex, leaving out faces that turn by more
-  // than 30 degrees from the hit face (a crease). So it varies continuously across the edges of
-  // a tessellated curve, and equals face_normal on flat faces and up to sharp edges.
+  // angle-weighted mean of the faces around its vertex that are reached from the hit face
+  // across edges of at most 30 degrees (smoothing groups; a steeper edge is a crease). So it is
+  // continuous across every edge of at most 30 degrees, and equals face_normal on flat faces
+  // up to sharp edges.
   Eigen::Vector3d interpolated_normal = Eigen::Vector3d::UnitZ();
 };
 

@@ -234,6 +234,9 @@ void read_body(const std::filesystem::path& path, const PlyHeader& header, Sourc
     if (element.name == "face" && face_list < 0) {
       fail(path, 0, "PLY element 'face' has no 'vertex_indices' list");
     }
+    // A binary element without properties takes no bytes, however many items it declares:
+    // walking its count would only spin (2^63 items).
+    if (element.properties.empty() && header.format != PlyFormat::kAscii) continue;
     // Never trust a declared count for an allocation: cap it by the file size.
     const uint64_t reserve = std::min<uint64_t>(element.count, body_bytes / 2);
     if (is_vertex) {

@@ -24,6 +24,13 @@ constexpr TypeName kTypeNames[] = {
     {"float", PlyType::kFloat32},  {"float32", PlyType::kFloat32}, {"double", PlyType::kFloat64},
     {"float64", PlyType::kFloat64}};
 
+// "ply \t" -> "ply": writers that pad the magic line are accepted, as they always were by the
+// point-cloud reader.
+std::string_view trim_trailing_blanks(std::string_view line) {
+  while (!line.empty() && (line.back() == ' ' || line.back() == '\t')) line.remove_suffix(1);
+  return line;
+}
+
 // Walks the header line by line; every error names the file and the current line.
 class HeaderParser {
  public:
@@ -32,7 +39,7 @@ class HeaderParser {
 
   PlyHeader parse() {
     std::string_view line;
-    if (!lines_.next(&line) || line != "ply")
+    if (!lines_.next(&line) || trim_trailing_blanks(line) != "ply")
       fail(1, "not a PLY file (expected the first line to be 'ply')");
     bool have_format = false;
     while (true) {

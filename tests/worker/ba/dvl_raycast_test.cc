@@ -170,6 +170,46 @@ TEST(DvlRaycast, InterpolatedNormalLinearisesTheSmoothSurface) {
   EXPECT_LT(interpolated_error / beams, 0.01);
 }
 
+// A flat face A next to a face B tilted 25 degrees (a smooth edge): near the edge A's smooth
+// normal leans ~12 degrees towards B's, so a beam hitting A at ~77 degrees runs nearly
+// parallel to the smooth plane. The linearisation must then fall back to the facet normal:
+// never a "miss", and never more than twice the facet derivative (1 / |n.d|).
+TEST(DvlRaycast, SteepBeamsNearASmoothEdgeKeepABoundedDerivative) {
+  const double rise = 2.0 * std::tan(25.0 * M_PI / 180.0);
+  TriangleMesh roof;
+  roof.vertices = {{-2, 0, 1}, {2, 0, 1}, {0, -2, 1}, {0, 2, 1 + rise}};
+  roof.faces = {{0, 1, 2}, {1, 0, 3}};  // both facing down, to the beams
+  const MeshQuery mesh(roof);
+  const ServoMount mount{Pose3::Identity(), Eigen::Vector3d::UnitX()};
+  int beams = 0;
+  for (int k = 0; k <= 400; ++k) {
+    const double incidence = (60.0 + 25.0 * k / 400.0) * M_PI / 180.0;  // ranges up to 11.5 m
+    const Eigen::Vector3d direction(0, std::sin(incidence), std::cos(incidence));
+    const double y_hit = -0.05;  // on A, 5 cm from the edge
+    const Eigen::Vector3d origin(0.1, y_hit - std::tan(incidence), 0.0);
+    const DvlBeam beam = make_dvl_beam(Pose3::Identity(), direction, 1.0);
+    PoseBlock vehicle = to_pose_block(make_pose(Eigen::Quaterniond::Identity(), origin));
+    PoseBlock model = to_pose_block(Pose3::Identity());
+    double theta = 0;
+    double* blocks[3] = {vehicle.data(), &theta, model.data()};
+    double slope[2];
+    for (const DvlRangeNormal normal : {DvlRangeNormal::kFacet, DvlRangeNormal::kInterpolated}) {
+      std::unique_ptr<ceres::CostFunction> f(
+          make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5, normal));
+      double r = 0, J_vehicle[kPoseBlockSize], J_theta[1], J_model[kPoseBlockSize];
+      double* jacobians[3] = {J_vehicle, J_theta, J_model};
+      ASSERT_TRUE(f->Evaluate(blocks, &r, jacobians));
+      ASSERT_NE(r, 0.5 / 0.003) << "beam at " << incidence * 180 / M_PI << " deg missed";
+      slope[normal == DvlRangeNormal::kFacet ? 0 : 1] =
+          0.003 * Eigen::Vector3d(J_vehicle[4], J_vehicle[5], J_vehicle[6]).norm();
+    }
+    EXPECT_LE(slope[1], 2.0 * slope[0] * (1 + 1e-9))
+        << "at " << incidence * 180 / M_PI << " deg: facet " << slope[0] << ", smooth " << slope[1];
+    ++beams;
+  }
+  EXPECT_EQ(beams, 401);
+}
+
 TEST(DvlRaycast, MissGivesTheGateResidual) {
   const MeshQuery query(testing::make_box(Eigen::Vector3d(-1, -1, 5), Eigen::Vector3d(1, 1, 6)));
   const ServoMount mount;

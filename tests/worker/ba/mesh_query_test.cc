@@ -288,6 +288,61 @@ TEST(MeshQuery, InterpolatedNormalIsSmoothOnCurvesAndFlatOnCreases) {
   }
 }
 
+// On a level-1 icosphere every edge turns by ~20 degrees (a smooth edge) but faces two steps
+// round a vertex by ~40: the smoothing group, not a per-face angle test, decides what a
+// corner blends, so both faces of every edge blend the same normals along it.
+TEST(MeshQuery, InterpolatedNormalIsContinuousAcrossEverySmoothEdge) {
+  const TriangleMesh sphere = testing::make_icosphere(1, 2.0);
+  const MeshQuery query(sphere);
+  int edges = 0;
+  for (const auto& f : sphere.faces) {
+    for (int e = 0; e < 3; ++e) {
+      const Eigen::Vector3d a = sphere.vertices[f[e]], b = sphere.vertices[f[(e + 1) % 3]];
+      for (const double t : {0.1, 0.5, 0.9}) {
+        const Eigen::Vector3d on_edge = a + t * (b - a);
+        const Eigen::Vector3d across = (b - a).cross(on_edge).normalized();
+        std::optional<RayHit> side[2];
+        for (int k = 0; k < 2; ++k) {
+          Ray ray;
+          ray.direction = on_edge + (k == 0 ? 1e-7 : -1e-7) * across;
+          side[k] = query.raycast(ray);
+          ASSERT_TRUE(side[k]);
+        }
+        ASSERT_NE(side[0]->face, side[1]->face);
+        ASSERT_LT(std::acos(side[0]->face_normal.dot(side[1]->face_normal)), 30.0 * M_PI / 180);
+        EXPECT_LT((side[0]->interpolated_normal - side[1]->interpolated_normal).norm(), 1e-5)
+            << "edge " << f[e] << "-" << f[(e + 1) % 3] << " at " << t;
+        ++edges;
+      }
+    }
+  }
+  EXPECT_EQ(edges, 3 * 3 * 80);
+}
+
+// A fan of 10k faces that all list the shared vertex first: CGAL's distance-query k-d tree on
+// one vertex per triangle recursed until the stack overflowed. The fan is flat (z = 0).
+TEST(MeshQuery, LargeFanListingTheSharedVertexFirst) {
+  TriangleMesh fan;
+  const int n = 10000;
+  fan.vertices.emplace_back(0, 0, 0);
+  for (int i = 0; i < n; ++i) {
+    const double angle = 2 * M_PI * i / n;
+    fan.vertices.emplace_back(std::cos(angle), std::sin(angle), 0);
+  }
+  for (int i = 0; i < n; ++i) fan.faces.emplace_back(0, 1 + i, 1 + (i + 1) % n);
+  const MeshQuery query(fan);
+  EXPECT_EQ(query.num_faces(), static_cast<size_t>(n));
+  const ClosestPoint closest = query.closest_point({0.3, -0.2, 0.5});
+  EXPECT_NEAR(closest.distance_m, 0.5, 1e-12);
+  EXPECT_LT((closest.point - Eigen::Vector3d(0.3, -0.2, 0)).norm(), 1e-9);
+  Ray ray;
+  ray.origin = {0.2, 0.1, -1};
+  ray.direction = {0, 0, 1};
+  const auto hit = query.raycast(ray);
+  ASSERT_TRUE(hit);
+  EXPECT_LT((hit->interpolated_normal - Eigen::Vector3d::UnitZ()).norm(), 1e-12);  // flat
+}
+
 TEST(MeshQuery, BatchesEqualSingleQueries) {
   const TriangleMesh mesh = testing::make_icosphere(3);
   const MeshQuery query(mesh);

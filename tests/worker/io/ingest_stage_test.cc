@@ -81,8 +81,9 @@ TEST(IngestStage, BadBundleFailsNamingTheFileAndCancelStops) {
   EXPECT_THROW(make_ingest_stage()->run(context), Canceled);
   context.canceled = [] { return false; };
   context.options = {{"gap_factr", 3}};
-  io::testing::expect_error([&] { make_ingest_stage()->run(context); },
-                            {"options.ingest.gap_factr: unknown option (known: gap_factor, rate_tolerance)"});
+  io::testing::expect_error(
+      [&] { make_ingest_stage()->run(context); },
+      {"options.ingest.gap_factr: unknown option (known: gap_factor, rate_tolerance)"});
 }
 
 TEST(IngestStage, ImageSizeDifferentFromTheCameraModelIsAnError) {

@@ -321,6 +321,10 @@ TEST(MeshReaderErrors, PlyHostileCountsDoNotAllocate) {
   std::string huge =
       replace(ply_binary_cube(false), "element vertex 8", "element vertex 9000000000");
   expect_error(write_file(dir / "b.ply", huge), "too many");
+  // An element without properties takes no bytes, whatever its count (this used to spin).
+  std::string empty_element = replace(ply_binary_cube(false), "end_header",
+                                      "element marker 9223372036854775807\nend_header");
+  EXPECT_EQ(read_ply_mesh(write_file(dir / "d.ply", empty_element)).faces.size(), 12u);
   // A face list claiming 200 corners in a file that has fewer bytes left.
   std::string ascii = replace(ply_ascii_cube(false), "4 0 2 3 1", "200 0 2 3 1");
   expect_error(write_file(dir / "c.ply", ascii),

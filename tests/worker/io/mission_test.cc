@@ -187,9 +187,15 @@ namespace {
 
 // Seed 001's servo tray: a servo with an axis, and tray sensors naming it.
 TEST(Manifest, ServoTrayFieldsRoundTripAndAreChecked) {
-  const nlohmann::json servo = {{"name", "servo"}, {"type", "servo"}, {"file", "servo.csv"},
-                                {"rate_hz", 20}, {"axis", {0.0, -2.0, 0.0}}};
-  nlohmann::json dvl = {{"name", "dvl"}, {"type", "dvl"}, {"file", "dvl.csv"}, {"rate_hz", 20},
+  const nlohmann::json servo = {{"name", "servo"},
+                                {"type", "servo"},
+                                {"file", "servo.csv"},
+                                {"rate_hz", 20},
+                                {"axis", {0.0, -2.0, 0.0}}};
+  nlohmann::json dvl = {{"name", "dvl"},
+                        {"type", "dvl"},
+                        {"file", "dvl.csv"},
+                        {"rate_hz", 20},
                         {"mounted_on", "servo"}};
   nlohmann::json doc = {{"keel_mission", 1}, {"name", "tray"}, {"sensors", {servo, dvl}}};
   expect_error([&] { proto::MissionManifest::from_json(doc); }, {"sensors[0].axis", "unit vector"});

@@ -129,6 +129,8 @@ TEST(PlyHeader, BinaryFormatsEveryTypeNameAndCrLf) {
     EXPECT_EQ(h.elements[0].properties[16].count_type, PlyType::kUint16);
     EXPECT_EQ(h.elements[0].properties[16].type, PlyType::kUint32);
   }
+  // A magic line padded with blanks is still PLY.
+  EXPECT_EQ(parse_ply_header("ply \t\nformat ascii 1.0\nend_header\n", kFile).format_line, 2u);
   // CRLF line endings and a final end_header without a line ending (an empty body).
   const std::string crlf_text = "ply\r\nformat ascii 1.0\r\nelement vertex 0\r\nend_header";
   const PlyHeader crlf = parse_ply_header(crlf_text, kFile);
