@@ -113,6 +113,28 @@ TEST(DvlRaycast, MatchesBruteForceInsideSphere) {
   EXPECT_EQ(hits, 100);
 }
 
+// The factor at a beam from `origin` (vehicle at `origin`, identity mount and model): its
+// residual and d range / d origin (r = (measured - range) / sigma, and the vehicle block's
+// translation moves the beam origin).
+struct RangeSlope {
+  double residual;
+  Eigen::Vector3d gradient;
+};
+RangeSlope range_slope(const MeshQuery& mesh, const DvlBeam& beam, const Eigen::Vector3d& origin,
+                       DvlRangeNormal normal) {
+  const ServoMount mount{Pose3::Identity(), Eigen::Vector3d::UnitX()};
+  PoseBlock vehicle = to_pose_block(make_pose(Eigen::Quaterniond::Identity(), origin));
+  PoseBlock model = to_pose_block(Pose3::Identity());
+  double theta = 0;
+  double* blocks[3] = {vehicle.data(), &theta, model.data()};
+  std::unique_ptr<ceres::CostFunction> f(
+      make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5, normal));
+  double r = 0, J_vehicle[kPoseBlockSize], J_theta[1], J_model[kPoseBlockSize];
+  double* jacobians[3] = {J_vehicle, J_theta, J_model};
+  EXPECT_TRUE(f->Evaluate(blocks, &r, jacobians));
+  return {r, -0.003 * Eigen::Vector3d(J_vehicle[4], J_vehicle[5], J_vehicle[6])};
+}
+
 // Range from o along unit d to the sphere |x - c| = R (closed form), nullopt on a miss.
 std::optional<double> sphere_range(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double R) {
   const double b = d.dot(o), c = o.squaredNorm() - R * R;
@@ -127,7 +149,6 @@ std::optional<double> sphere_range(const Eigen::Vector3d& o, const Eigen::Vector
 TEST(DvlRaycast, InterpolatedNormalLinearisesTheSmoothSurface) {
   const double radius = 4.0;
   const MeshQuery mesh(testing::make_icosphere(4, radius));
-  const ServoMount mount{Pose3::Identity(), Eigen::Vector3d::UnitX()};
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   double facet_error = 0, interpolated_error = 0;
@@ -144,23 +165,10 @@ TEST(DvlRaycast, InterpolatedNormalLinearisesTheSmoothSurface) {
                  2e-6;
     }
     const DvlBeam beam = make_dvl_beam(Pose3::Identity(), direction, 1.5);
-    PoseBlock vehicle = to_pose_block(make_pose(Eigen::Quaterniond::Identity(), origin));
-    PoseBlock model = to_pose_block(Pose3::Identity());
-    double theta = 0;
-    double* blocks[3] = {vehicle.data(), &theta, model.data()};
-    Eigen::Vector3d gradient[2];
-    for (const DvlRangeNormal normal : {DvlRangeNormal::kFacet, DvlRangeNormal::kInterpolated}) {
-      std::unique_ptr<ceres::CostFunction> f(
-          make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5, normal));
-      double r = 0, J_vehicle[kPoseBlockSize], J_theta[1], J_model[kPoseBlockSize];
-      double* jacobians[3] = {J_vehicle, J_theta, J_model};
-      ASSERT_TRUE(f->Evaluate(blocks, &r, jacobians));
-      // r = (measured - range) / sigma; the block's translation moves the beam origin.
-      gradient[normal == DvlRangeNormal::kFacet ? 0 : 1] =
-          -0.003 * Eigen::Vector3d(J_vehicle[4], J_vehicle[5], J_vehicle[6]);
-    }
-    facet_error += (gradient[0] - truth).norm();
-    interpolated_error += (gradient[1] - truth).norm();
+    facet_error +=
+        (range_slope(mesh, beam, origin, DvlRangeNormal::kFacet).gradient - truth).norm();
+    interpolated_error +=
+        (range_slope(mesh, beam, origin, DvlRangeNormal::kInterpolated).gradient - truth).norm();
     ++beams;
   }
   ASSERT_GT(beams, 200);
@@ -180,7 +188,6 @@ TEST(DvlRaycast, SteepBeamsNearASmoothEdgeKeepABoundedDerivative) {
   roof.vertices = {{-2, 0, 1}, {2, 0, 1}, {0, -2, 1}, {0, 2, 1 + rise}};
   roof.faces = {{0, 1, 2}, {1, 0, 3}};  // both facing down, to the beams
   const MeshQuery mesh(roof);
-  const ServoMount mount{Pose3::Identity(), Eigen::Vector3d::UnitX()};
   int beams = 0;
   for (int k = 0; k <= 400; ++k) {
     const double incidence = (60.0 + 25.0 * k / 400.0) * M_PI / 180.0;  // ranges up to 11.5 m
@@ -188,20 +195,11 @@ TEST(DvlRaycast, SteepBeamsNearASmoothEdgeKeepABoundedDerivative) {
     const double y_hit = -0.05;  // on A, 5 cm from the edge
     const Eigen::Vector3d origin(0.1, y_hit - std::tan(incidence), 0.0);
     const DvlBeam beam = make_dvl_beam(Pose3::Identity(), direction, 1.0);
-    PoseBlock vehicle = to_pose_block(make_pose(Eigen::Quaterniond::Identity(), origin));
-    PoseBlock model = to_pose_block(Pose3::Identity());
-    double theta = 0;
-    double* blocks[3] = {vehicle.data(), &theta, model.data()};
     double slope[2];
     for (const DvlRangeNormal normal : {DvlRangeNormal::kFacet, DvlRangeNormal::kInterpolated}) {
-      std::unique_ptr<ceres::CostFunction> f(
-          make_dvl_raycast_factor(mesh, mount, beam, 0.003, 30.0, 0.5, normal));
-      double r = 0, J_vehicle[kPoseBlockSize], J_theta[1], J_model[kPoseBlockSize];
-      double* jacobians[3] = {J_vehicle, J_theta, J_model};
-      ASSERT_TRUE(f->Evaluate(blocks, &r, jacobians));
-      ASSERT_NE(r, 0.5 / 0.003) << "beam at " << incidence * 180 / M_PI << " deg missed";
-      slope[normal == DvlRangeNormal::kFacet ? 0 : 1] =
-          0.003 * Eigen::Vector3d(J_vehicle[4], J_vehicle[5], J_vehicle[6]).norm();
+      const RangeSlope at = range_slope(mesh, beam, origin, normal);
+      ASSERT_NE(at.residual, 0.5 / 0.003) << "beam at " << incidence * 180 / M_PI << " deg missed";
+      slope[normal == DvlRangeNormal::kFacet ? 0 : 1] = at.gradient.norm();
     }
     EXPECT_LE(slope[1], 2.0 * slope[0] * (1 + 1e-9))
         << "at " << incidence * 180 / M_PI << " deg: facet " << slope[0] << ", smooth " << slope[1];

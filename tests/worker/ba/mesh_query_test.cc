@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -243,6 +244,22 @@ TEST(MeshQuery, RaycastMatchesBruteForce) {
   }
 }
 
+// Hits of two rays from the origin through the point a + t (b - a) of edge (a, b), nudged
+// 1e-7 to either side of the edge: one on each face of the edge.
+std::array<std::optional<RayHit>, 2> hits_either_side(const MeshQuery& query,
+                                                      const Eigen::Vector3d& a,
+                                                      const Eigen::Vector3d& b, double t) {
+  const Eigen::Vector3d on_edge = a + t * (b - a);
+  const Eigen::Vector3d across = (b - a).cross(on_edge).normalized();
+  std::array<std::optional<RayHit>, 2> side;
+  for (int k = 0; k < 2; ++k) {
+    Ray ray;
+    ray.direction = on_edge + (k == 0 ? 1e-7 : -1e-7) * across;
+    side[k] = query.raycast(ray);
+  }
+  return side;
+}
+
 // RayHit::interpolated_normal: continuous across the edges of a tessellated sphere and closer
 // to the sphere's true normal than the facets'; equal to the face normal on a box, whose
 // edges are 90-degree creases.
@@ -257,14 +274,9 @@ TEST(MeshQuery, InterpolatedNormalIsSmoothOnCurvesAndFlatOnCreases) {
   for (int i = 0; i < 400; ++i) {
     // A ray from the centre through a point of edge (a, b), nudged to either side of it.
     const auto& f = sphere.faces[i % sphere.faces.size()];
-    const Eigen::Vector3d a = sphere.vertices[f[0]], b = sphere.vertices[f[1]];
-    const Eigen::Vector3d on_edge = a + (0.2 + 0.6 * (i % 7) / 6.0) * (b - a);
-    const Eigen::Vector3d across = (b - a).cross(on_edge).normalized();
-    std::optional<RayHit> side[2];
+    const auto side = hits_either_side(query, sphere.vertices[f[0]], sphere.vertices[f[1]],
+                                       0.2 + 0.6 * (i % 7) / 6.0);
     for (int k = 0; k < 2; ++k) {
-      Ray ray;
-      ray.direction = on_edge + (k == 0 ? 1e-7 : -1e-7) * across;
-      side[k] = query.raycast(ray);
       ASSERT_TRUE(side[k]);
       const Eigen::Vector3d truth = side[k]->point.normalized();
       facet_error += std::acos(std::min(1.0, side[k]->face_normal.dot(truth)));
@@ -297,17 +309,10 @@ TEST(MeshQuery, InterpolatedNormalIsContinuousAcrossEverySmoothEdge) {
   int edges = 0;
   for (const auto& f : sphere.faces) {
     for (int e = 0; e < 3; ++e) {
-      const Eigen::Vector3d a = sphere.vertices[f[e]], b = sphere.vertices[f[(e + 1) % 3]];
       for (const double t : {0.1, 0.5, 0.9}) {
-        const Eigen::Vector3d on_edge = a + t * (b - a);
-        const Eigen::Vector3d across = (b - a).cross(on_edge).normalized();
-        std::optional<RayHit> side[2];
-        for (int k = 0; k < 2; ++k) {
-          Ray ray;
-          ray.direction = on_edge + (k == 0 ? 1e-7 : -1e-7) * across;
-          side[k] = query.raycast(ray);
-          ASSERT_TRUE(side[k]);
-        }
+        const auto side =
+            hits_either_side(query, sphere.vertices[f[e]], sphere.vertices[f[(e + 1) % 3]], t);
+        ASSERT_TRUE(side[0] && side[1]);
         ASSERT_NE(side[0]->face, side[1]->face);
         ASSERT_LT(std::acos(side[0]->face_normal.dot(side[1]->face_normal)), 30.0 * M_PI / 180);
         EXPECT_LT((side[0]->interpolated_normal - side[1]->interpolated_normal).norm(), 1e-5)
@@ -444,7 +449,9 @@ TEST(LocalClosestPoint, EqualsBruteForceOnMovingPoints) {
       }
       // The cache did answer many calls, so the comparison above exercised it.
       EXPECT_GT(cached, max_candidates == 4 ? total / 4 : total / 2);
-      if (max_candidates == 4) EXPECT_GT(shrunk, 0);
+      if (max_candidates == 4) {
+        EXPECT_GT(shrunk, 0);
+      }
     }
   }
 }
