@@ -17,18 +17,31 @@ struct View {
   Eigen::Vector2d pixel;
 };
 
+// The top camera's view of `obs` and, for a stereo observation, the bottom camera's.
+void append_views(const FeatureObservation& obs, const std::vector<Pose3>& T_world_camera,
+                  const BaRig& rig, std::vector<View>* views) {
+  const Pose3& T_world_top = T_world_camera.at(obs.keyframe);
+  views->push_back({T_world_top.inverse(), &rig.camera_top, obs.pixel});
+  if (obs.pixel_bottom && rig.camera_bottom) {
+    views->push_back(
+        {(T_world_top * rig.T_top_bottom).inverse(), &*rig.camera_bottom, *obs.pixel_bottom});
+  }
+}
+
 std::vector<View> views_of(const FeatureTrack& track, const std::vector<Pose3>& T_world_camera,
                            const BaRig& rig) {
   std::vector<View> views;
-  for (const FeatureObservation& obs : track.observations) {
-    const Pose3& T_world_top = T_world_camera.at(obs.keyframe);
-    views.push_back({T_world_top.inverse(), &rig.camera_top, obs.pixel});
-    if (obs.pixel_bottom && rig.camera_bottom) {
-      views.push_back(
-          {(T_world_top * rig.T_top_bottom).inverse(), &*rig.camera_bottom, *obs.pixel_bottom});
-    }
-  }
+  for (const FeatureObservation& obs : track.observations)
+    append_views(obs, T_world_camera, rig, &views);
   return views;
+}
+
+double reprojection_error_px(const View& v, const Eigen::Vector3d& point) {
+  const Eigen::Vector3d p_c = v.T_camera_world * point;
+  if (!(p_c.z() > 0)) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d uv(v.camera->fx * p_c.x() / p_c.z() + v.camera->cx,
+                           v.camera->fy * p_c.y() / p_c.z() + v.camera->cy);
+  return (uv - v.pixel).norm();
 }
 
 // DLT: each view gives x (P3 . X) - (P1 . X) = 0 and y (P3 . X) - (P2 . X) = 0 with P = [R|t]
@@ -70,19 +83,9 @@ bool within_gates(const std::vector<View>& views, const Eigen::Vector3d& point,
   for (const View& v : views) {
     const Eigen::Vector3d p_c = v.T_camera_world * point;
     if (p_c.z() < options.min_depth_m || p_c.norm() > options.max_depth_m) return false;
-    const Eigen::Vector2d uv(v.camera->fx * p_c.x() / p_c.z() + v.camera->cx,
-                             v.camera->fy * p_c.y() / p_c.z() + v.camera->cy);
-    if ((uv - v.pixel).norm() > max_reprojection_px) return false;
+    if (reprojection_error_px(v, point) > max_reprojection_px) return false;
   }
   return true;
-}
-
-double reprojection_error_px(const View& v, const Eigen::Vector3d& point) {
-  const Eigen::Vector3d p_c = v.T_camera_world * point;
-  if (!(p_c.z() > 0)) return std::numeric_limits<double>::infinity();
-  const Eigen::Vector2d uv(v.camera->fx * p_c.x() / p_c.z() + v.camera->cx,
-                           v.camera->fy * p_c.y() / p_c.z() + v.camera->cy);
-  return (uv - v.pixel).norm();
 }
 
 }  // namespace
@@ -92,12 +95,12 @@ std::vector<double> observation_reprojection_errors_px(const Eigen::Vector3d& po
                                                        const std::vector<Pose3>& T_world_camera,
                                                        const BaRig& rig) {
   std::vector<double> errors;
+  std::vector<View> views;
   for (const FeatureObservation& obs : track.observations) {
-    FeatureTrack single;
-    single.observations = {obs};
+    views.clear();
+    append_views(obs, T_world_camera, rig, &views);
     double worst = 0;
-    for (const View& v : views_of(single, T_world_camera, rig))
-      worst = std::max(worst, reprojection_error_px(v, point));
+    for (const View& v : views) worst = std::max(worst, reprojection_error_px(v, point));
     errors.push_back(worst);
   }
   return errors;

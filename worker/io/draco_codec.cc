@@ -39,14 +39,19 @@ void check_options(const DracoOptions& options) {
 }
 
 template <typename Vector>
-void check_positions(const std::vector<Vector>& positions, const char* what) {
-  if (positions.empty()) throw std::invalid_argument(std::string(what) + ": no points to encode");
+void check_finite(const std::vector<Vector>& positions, const char* what, size_t first_index) {
   for (size_t i = 0; i < positions.size(); ++i) {
     if (!positions[i].allFinite()) {
-      throw std::invalid_argument(std::string(what) + ": position " + std::to_string(i) +
-                                  " is not finite (NaN or inf)");
+      throw std::invalid_argument(std::string(what) + ": position " +
+                                  std::to_string(first_index + i) + " is not finite (NaN or inf)");
     }
   }
+}
+
+template <typename Vector>
+void check_positions(const std::vector<Vector>& positions, const char* what) {
+  if (positions.empty()) throw std::invalid_argument(std::string(what) + ": no points to encode");
+  check_finite(positions, what, 0);
 }
 
 draco::Encoder make_encoder(const DracoOptions& options) {
@@ -64,20 +69,6 @@ void name_attribute(draco::PointCloud* geometry, int attribute_id, const std::st
   auto metadata = std::make_unique<draco::AttributeMetadata>();
   metadata->AddEntryString(kNameEntry, name);
   geometry->AddAttributeMetadata(attribute_id, std::move(metadata));
-}
-
-// Draco quantizes positions on a cube of side `range` = the largest extent of the float
-// positions (as AttributeQuantizationTransform computes it), in 2^bits - 1 steps.
-template <typename Vector>
-double quantization_range(const std::vector<Vector>& positions) {
-  Eigen::Vector3f lo = positions[0].template cast<float>();
-  Eigen::Vector3f hi = lo;
-  for (const auto& p : positions) {
-    lo = lo.cwiseMin(p.template cast<float>());
-    hi = hi.cwiseMax(p.template cast<float>());
-  }
-  const float range = (hi - lo).maxCoeff();
-  return range > 0.f ? range : 1.0;  // Draco uses 1 for a single point
 }
 
 // Largest distance from each original point to the decoded point it became. Quantization
@@ -140,24 +131,48 @@ double max_nearest_distance(const std::vector<Vector>& originals, const std::vec
   return max_error;
 }
 
+// One pass over the positions: per-axis extremes in float (as Draco's
+// AttributeQuantizationTransform computes them) and the largest |coordinate| (for the
+// float-rounding allowance of error_tolerance).
+struct PositionBounds {
+  Eigen::Vector3f min = Eigen::Vector3f::Zero(), max = Eigen::Vector3f::Zero();
+  double largest_abs = 0.0;
+  bool empty = true;
+
+  template <typename Vector>
+  void add(const Vector& p) {
+    const Eigen::Vector3f f = p.template cast<float>();
+    min = empty ? f : Eigen::Vector3f(min.cwiseMin(f));
+    max = empty ? f : Eigen::Vector3f(max.cwiseMax(f));
+    empty = false;
+    largest_abs = std::max(largest_abs, p.template cast<double>().cwiseAbs().maxCoeff());
+  }
+};
+
 template <typename Vector>
-double error_tolerance(const std::vector<Vector>& originals, const DracoOptions& options,
+PositionBounds bounds_of(const std::vector<Vector>& positions) {
+  PositionBounds bounds;
+  for (const Vector& p : positions) bounds.add(p);
+  return bounds;
+}
+
+// Draco quantizes positions on a cube of side `range` = the largest extent of the float
+// positions (1 when they all coincide), in 2^bits - 1 steps: records the range and half a
+// step's diagonal, and returns that plus an allowance for float rounding of large coordinates.
+double error_tolerance(const PositionBounds& bounds, const DracoOptions& options,
                        DracoEncoded* result) {
-  result->position_range_m = quantization_range(originals);
+  const float range = (bounds.max - bounds.min).maxCoeff();
+  result->position_range_m = range > 0.f ? range : 1.0;
   const double step = result->position_range_m / ((1u << options.position_bits) - 1);
   result->position_error_bound_m = 0.5 * std::sqrt(3.0) * step;
-  // Allow for float rounding of large coordinates on top of half a step.
-  double largest = 0.0;
-  for (const auto& p : originals)
-    largest = std::max(largest, p.template cast<double>().cwiseAbs().maxCoeff());
-  return result->position_error_bound_m + 8.0 * largest * 1.2e-7;
+  return result->position_error_bound_m + 8.0 * bounds.largest_abs * 1.2e-7;
 }
 
 template <typename Vector>
 void measure_error(const std::vector<Vector>& originals, const std::vector<bool>* used,
                    const std::vector<Eigen::Vector3f>& decoded, const DracoOptions& options,
                    DracoEncoded* result) {
-  const double tolerance = error_tolerance(originals, options, result);
+  const double tolerance = error_tolerance(bounds_of(originals), options, result);
   const double step = result->position_range_m / ((1u << options.position_bits) - 1);
   result->max_position_error_m = max_nearest_distance(originals, used, decoded, step, tolerance);
   result->error_method = "nearest_decoded";
@@ -167,38 +182,11 @@ void measure_error(const std::vector<Vector>& originals, const std::vector<bool>
 // measured as their concatenation, without building it.
 using PositionParts = std::vector<const std::vector<Eigen::Vector3f>*>;
 
-// One pass over the positions: per-axis extremes (float, as Draco computes them) and the
-// largest |coordinate| (for the float-rounding allowance of error_tolerance).
-struct PositionBounds {
-  Eigen::Vector3f min, max;
-  double largest_abs = 0.0;
-};
-
 PositionBounds position_bounds(const PositionParts& parts) {
-  PositionBounds b;
-  bool first = true;
-  for (const std::vector<Eigen::Vector3f>* part : parts) {
-    for (const Eigen::Vector3f& p : *part) {
-      if (first) {
-        b.min = b.max = p;
-        first = false;
-      }
-      b.min = b.min.cwiseMin(p);
-      b.max = b.max.cwiseMax(p);
-    }
-  }
-  b.largest_abs = std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff());
-  return b;
-}
-
-// error_tolerance for a point cloud, from its bounds (same figures, one pass fewer).
-double cloud_error_tolerance(const PositionBounds& bounds, const DracoOptions& options,
-                             DracoEncoded* result) {
-  const float range = (bounds.max - bounds.min).maxCoeff();
-  result->position_range_m = range > 0.f ? range : 1.0;
-  const double step = result->position_range_m / ((1u << options.position_bits) - 1);
-  result->position_error_bound_m = 0.5 * std::sqrt(3.0) * step;
-  return result->position_error_bound_m + 8.0 * bounds.largest_abs * 1.2e-7;
+  PositionBounds bounds;
+  for (const std::vector<Eigen::Vector3f>* part : parts)
+    for (const Eigen::Vector3f& p : *part) bounds.add(p);
+  return bounds;
 }
 
 // The position Draco's decoder returns for each input position, computed with Draco's own
@@ -418,12 +406,7 @@ DracoEncoded encode_cloud_bytes(const PositionParts& positions,
   if (n == 0) throw std::invalid_argument("encode_draco_point_cloud: no points to encode");
   size_t offset = 0;
   for (const std::vector<Eigen::Vector3f>* part : positions) {
-    for (size_t i = 0; i < part->size(); ++i) {
-      if (!(*part)[i].allFinite()) {
-        throw std::invalid_argument("encode_draco_point_cloud: position " +
-                                    std::to_string(offset + i) + " is not finite (NaN or inf)");
-      }
-    }
+    check_finite(*part, "encode_draco_point_cloud", offset);
     offset += part->size();
   }
 
@@ -464,7 +447,7 @@ void measure_cloud(const PositionParts& positions, const DracoOptions& options,
                              std::to_string(decoded_cloud.num_points()) + " decoded");
   }
   const PositionBounds bounds = position_bounds(positions);
-  const double tolerance = cloud_error_tolerance(bounds, options, &result);
+  const double tolerance = error_tolerance(bounds, options, &result);
   if (!measure_error_by_replica(positions, bounds, decoded_cloud, options, tolerance, &result)) {
     // Draco quantized differently from the replica (another Draco version, say): match each
     // input point to its nearest decoded point instead.

@@ -2,13 +2,13 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
 
-#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string_view>
 #include <vector>
 
 #include "worker/io/io_error.h"
+#include "worker/io/mesh_parse_util.h"
 #include "worker/io/scan_file.h"
 #include "worker/io/text_lines.h"
 
@@ -143,56 +143,32 @@ void check_body_size(const fs::path& path, const PcdHeader& h) {
   }
 }
 
-// The next line of `bytes` from `position` (without '\n'), advancing `position`.
-std::string_view next_line(const std::string& bytes, size_t& position) {
-  size_t end = bytes.find('\n', position);
-  if (end == std::string::npos) end = bytes.size();
-  const std::string_view line(bytes.data() + position, end - position);
-  position = std::min(bytes.size(), end + 1);
-  return line;
-}
-
-// Whitespace-separated tokens, split as PCL splits an ascii row (on ' ', '\t', '\r').
-void split_row(std::string_view line, std::vector<std::string_view>& tokens) {
-  tokens.clear();
-  size_t i = 0;
-  auto space = [&](size_t k) { return line[k] == ' ' || line[k] == '\t' || line[k] == '\r'; };
-  while (i < line.size()) {
-    while (i < line.size() && space(i)) ++i;
-    const size_t start = i;
-    while (i < line.size() && !space(i)) ++i;
-    if (i > start) tokens.push_back(line.substr(start, i - start));
-  }
-}
-
 // PCL reads a short or long ascii row as a point at the origin (with only a warning), a
 // non-number as 0, and ignores rows beyond POINTS: check every row before PCL reads them.
 // Rows hold the sum of COUNT over FIELDS values, padding fields ('_') included, as in PCL.
 void check_ascii_body(const fs::path& path, const PcdHeader& h) {
   const std::string file = path.string();
-  const std::string bytes = read_file_bytes(path);
+  TextLines lines(path);
   size_t values_per_row = 0;
   for (const auto& f : h.cloud.fields) values_per_row += f.count;
   const uint64_t points = static_cast<uint64_t>(h.cloud.width) * h.cloud.height;
-  size_t position = 0, line_number = 0;
+  std::string_view line;
   std::vector<std::string_view> tokens;
-  while (position < bytes.size()) {  // the header ends with its DATA line
-    ++line_number;
-    split_row(next_line(bytes, position), tokens);
+  while (lines.next(line)) {  // the header ends with its DATA line
+    mesh_detail::split_whitespace(line, &tokens);
     if (!tokens.empty() && tokens[0] == "DATA") break;
   }
   uint64_t rows = 0;
   size_t first_extra_line = 0;
-  while (position < bytes.size()) {
-    ++line_number;
-    split_row(next_line(bytes, position), tokens);
+  while (lines.next(line)) {
+    mesh_detail::split_whitespace(line, &tokens);
     if (tokens.empty()) continue;  // blank lines hold no point (PCL skips them too)
     if (++rows > points) {
-      if (first_extra_line == 0) first_extra_line = line_number;
+      if (first_extra_line == 0) first_extra_line = lines.line_number();
       continue;
     }
-    const std::string where =
-        file + ":" + std::to_string(line_number) + ": data row " + std::to_string(rows) + ": ";
+    const std::string where = file + ":" + std::to_string(lines.line_number()) + ": data row " +
+                              std::to_string(rows) + ": ";
     if (tokens.size() != values_per_row)
       throw IoError(where + "expected " + std::to_string(values_per_row) +
                     " values (the sum of COUNT over FIELDS), found " +

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "worker/io/io_error.h"
+#include "worker/io/mesh_parse_util.h"
 #include "worker/io/ply_header.h"
 #include "worker/io/scan_file.h"
 #include "worker/io/text_lines.h"
@@ -204,33 +205,22 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLa
   return data;
 }
 
-// The next line holding a value, advancing `position` and `line_number`; false at the end.
-bool next_content_line(const std::string& bytes, size_t& position, size_t& line_number) {
-  while (position < bytes.size()) {
-    size_t newline = bytes.find('\n', position);
-    if (newline == std::string::npos) newline = bytes.size();
-    const std::string_view line(bytes.data() + position, newline - position);
-    position = newline + 1;
-    ++line_number;
-    if (!words(line).empty()) return true;
-  }
-  return false;
-}
-
 // Skips the elements after the vertices (one line per item), then requires the rest of the
 // file to be blank: data the header does not declare means header and data disagree.
 void check_ascii_rest(const std::string& bytes, const PlyHeader& h, const std::string& file,
                       size_t position, size_t line_number) {
+  mesh_detail::LineCursor lines(std::string_view(bytes).substr(position), line_number + 1);
+  std::string_view line;
   for (size_t e = 1; e < h.elements.size(); ++e) {
     const PlyElement& element = h.elements[e];
     for (size_t i = 0; i < element.count; ++i)
-      if (!next_content_line(bytes, position, line_number))
+      if (!lines.next_content(&line, '\0'))
         throw IoError(file + ": truncated PLY: element '" + element.name + "' declares " +
                       std::to_string(element.count) + " items, found " + std::to_string(i));
   }
   size_t extra_lines = 0, first_extra_line = 0;
-  while (next_content_line(bytes, position, line_number))
-    if (extra_lines++ == 0) first_extra_line = line_number;
+  while (lines.next_content(&line, '\0'))
+    if (extra_lines++ == 0) first_extra_line = lines.line_number();
   if (extra_lines > 0)
     throw IoError(file + ":" + std::to_string(first_extra_line) + ": " +
                   std::to_string(extra_lines) +

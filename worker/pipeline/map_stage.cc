@@ -488,8 +488,7 @@ class MapRun {
     for (const auto& s : selection_.mapped) tree_->set_extrinsic(s.name, s.T_body_sensor);
     // One MapBuilder per sensor (a sensor's map depends on its own scans only, Fig. 5): a
     // sensor's outputs start once its last scan is in, while the next sensors scan.
-    for (const auto& s : selection_.mapped) {
-      if (builders_.count(s.name)) continue;
+    for (const auto& s : selection_.mapped) {  // names are unique (select_sensors)
       mapping::MapBuilderOptions one = builder_options_;
       one.sensors = {{s.name, builder_options_.sensors.at(s.name)}};
       builders_.emplace(s.name, std::make_unique<mapping::MapBuilder>(*tree_, std::move(one)));
