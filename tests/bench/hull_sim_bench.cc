@@ -6,6 +6,7 @@
 // then a pass/fail line per target over the seeds.
 // Run: build/tests/bench/bench_hull_sim [seeds=3 | first-last] [duration_s=0 (full survey)]
 //                                       [tracks=frontend|ground_truth] [ba option=value]...
+//                                       [sim.<keel-sim --set key>=value]...
 // Environment: KEEL_HULL_BENCH_DIR=<dir> keeps the missions and stage outputs there (a mission
 // already simulated there is reused); KEEL_HULL_BENCH_REUSE_BA=1 also reuses a kept `ba`
 // report (inspect-only iterations).
@@ -80,12 +81,19 @@ int main(int argc, char** argv) {
   const double duration_s = argc > 2 ? std::atof(argv[2]) : 0.0;
   const std::string tracks = argc > 3 ? argv[3] : "frontend";
   json ba_options = {{"tracks", tracks}};
+  std::vector<std::string> sim_settings;  // sim.<keel-sim --set key>=value
+  std::string mission_suffix;
   for (int i = 4; i < argc; ++i) {  // further ba options, key=value (value: JSON or a string)
     const std::string arg = argv[i];
     const size_t eq = arg.find('=');
     if (eq == std::string::npos) {
       std::fprintf(stderr, "bench_hull_sim: expected key=value, got '%s'\n", argv[i]);
       return 2;
+    }
+    if (arg.rfind("sim.", 0) == 0) {
+      sim_settings.push_back(arg.substr(4));
+      mission_suffix += "_" + arg.substr(4);
+      continue;
     }
     const json value = json::parse(arg.substr(eq + 1), nullptr, /*allow_exceptions=*/false);
     ba_options[arg.substr(0, eq)] = value.is_discarded() ? json(arg.substr(eq + 1)) : value;
@@ -95,20 +103,22 @@ int main(int argc, char** argv) {
   const fs::path root =
       keep ? fs::path(keep)
            : fs::temp_directory_path() / ("keel_hull_bench_" + std::to_string(getpid()));
-  std::printf("hauv-hull, %d seeds, duration %s, ba options %s\n", seeds,
+  std::printf("hauv-hull, %d seeds, duration %s, ba options %s, keel-sim settings '%s'\n", seeds,
               duration_s > 0 ? std::to_string(duration_s).c_str() : "full",
-              ba_options.dump().c_str());
+              ba_options.dump().c_str(), mission_suffix.c_str());
   Tally found_all, cylinder, clean, dvl, time_naive, time_geva;
   for (int seed = first_seed; seed <= last_seed; ++seed) {
     const fs::path mission =
         root / ("seed" + std::to_string(seed) + "_" +
-                (duration_s > 0 ? std::to_string(int(duration_s)) + "s" : std::string("full")));
+                (duration_s > 0 ? std::to_string(int(duration_s)) + "s" : std::string("full")) +
+                mission_suffix);
     const fs::path work = mission / ("work_" + tracks);
     sim::SimOptions o;
     o.scenario = "hauv-hull";
     o.seed = seed;
     o.out_dir = mission.string();
     o.duration_s = duration_s;
+    o.settings = sim_settings;
     if (!keep || !fs::exists(mission / "mission.yaml")) sim::run_simulation(o);
     fs::create_directories(work);
     const fs::path ba_report = work / "ba_report.json";

@@ -52,38 +52,92 @@ TEST(Hull, CadMeshIsClosedOutwardAndShipSized) {
   EXPECT_LT(volume, box);
 }
 
+// The object's base centre is on the real hull and its top stands `height` above it: the CAD
+// surface does not have the object, the real hull as the sensors see it does.
+void expect_on_real_hull_only(const Scenario& s, const ForeignObject& o) {
+  const TriangleMesh real_hull = transform_mesh(s.cad_mesh, s.T_world_cad);
+  MeshHit hit;
+  ASSERT_TRUE(raycast_brute_force(real_hull, o.center + 0.05 * o.axis, -o.axis, 0.0, 1.0, &hit));
+  EXPECT_NEAR(hit.t, 0.05, 0.003);
+  const Eigen::Vector3d top = o.center + o.height_m * o.axis;
+  ASSERT_TRUE(raycast_brute_force(real_hull, top, -o.axis, 0.0, 1.0, &hit));
+  EXPECT_NEAR(hit.t, o.height_m, 0.003);
+  ASSERT_TRUE(raycast_brute_force(s.real_mesh_world, top + 0.5 * o.axis, -o.axis, 0.0, 1.0, &hit));
+  EXPECT_NEAR(hit.t, 0.5, 0.01) << o.kind_name();
+  if (o.kind == ForeignObject::Kind::kCylinder) {
+    EXPECT_DOUBLE_EQ(o.height_m, 0.11);
+  }
+  if (o.kind == ForeignObject::Kind::kPatch) {
+    EXPECT_GE(o.height_m, 0.06);
+    EXPECT_LE(o.height_m, 0.18);
+  }
+}
+
 TEST(Hull, ForeignObjectsStandOnTheRealHullNotOnTheCad) {
   const Scenario s = make_scenario("hauv-hull", 21);
   ASSERT_EQ(s.foreign_objects.size(), 4u);
-  const TriangleMesh real_hull = transform_mesh(s.cad_mesh, s.T_world_cad);
-  const TriangleMesh cad_at_identity = s.cad_mesh;
-  for (const auto& o : s.foreign_objects) {
-    MeshHit hit;
-    // The base centre is on the real hull ...
-    ASSERT_TRUE(raycast_brute_force(real_hull, o.center + 0.05 * o.axis, -o.axis, 0.0, 1.0, &hit));
-    EXPECT_NEAR(hit.t, 0.05, 0.003);
-    // ... and the top stands `height` above it: the CAD surface does not have the object.
-    const Eigen::Vector3d top = o.center + o.height_m * o.axis;
-    ASSERT_TRUE(raycast_brute_force(real_hull, top, -o.axis, 0.0, 1.0, &hit));
-    EXPECT_NEAR(hit.t, o.height_m, 0.003);
-    // In world, the object is detected against the real hull only: the real hull as seen by
-    // the sensors (with objects) is hit at the top.
-    ASSERT_TRUE(
-        raycast_brute_force(s.real_mesh_world, top + 0.5 * o.axis, -o.axis, 0.0, 1.0, &hit));
-    EXPECT_NEAR(hit.t, 0.5, 0.01) << o.kind_name();
-    if (o.kind == ForeignObject::Kind::kCylinder) {
-      EXPECT_DOUBLE_EQ(o.height_m, 0.11);
-    }
-    if (o.kind == ForeignObject::Kind::kPatch) {
-      EXPECT_GE(o.height_m, 0.06);
-      EXPECT_LE(o.height_m, 0.18);
-    }
-  }
+  for (const auto& o : s.foreign_objects) expect_on_real_hull_only(s, o);
   // The misalignment is a few cm and ~1 degree.
   EXPECT_LT(s.T_world_cad.translation().norm(), 0.2);
   const double angle = Eigen::AngleAxisd(s.T_world_cad.linear()).angle() * 180.0 / M_PI;
   EXPECT_GT(angle, 0.6);
   EXPECT_LT(angle, 1.4);
+}
+
+size_t landmarks_off_cad(const Scenario& s) {
+  size_t n = 0;
+  for (const Landmark& l : s.hull_world->landmarks()) n += !l.on_cad;
+  return n;
+}
+
+TEST(Hull, FoulingPatchesAreAddedOnTheSurveyedHullApartAndLeaveTheRestAlone) {
+  const Scenario clean = make_scenario("hauv-hull", 21);
+  ScenarioOptions options;
+  options.fouling_patches = 20;
+  const Scenario fouled = make_scenario("hauv-hull", 21, options);
+  ASSERT_EQ(fouled.foreign_objects.size(), 24u);
+  // The clean mission's objects, landmarks and misalignment stay as they were.
+  EXPECT_TRUE(fouled.T_world_cad.isApprox(clean.T_world_cad, 0.0));
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(fouled.foreign_objects[k].center, clean.foreign_objects[k].center);
+    EXPECT_EQ(fouled.foreign_objects[k].height_m, clean.foreign_objects[k].height_m);
+  }
+  const size_t clean_on_cad = clean.hull_world->landmarks().size() - landmarks_off_cad(clean);
+  EXPECT_EQ(fouled.hull_world->landmarks().size() - landmarks_off_cad(fouled), clean_on_cad);
+  EXPECT_GT(landmarks_off_cad(fouled), 4 * landmarks_off_cad(clean));
+  // Every patch stands on the real hull, inside the surveyed band (|x| <= 5 m from midship in
+  // the CAD frame, below the waterline) and 0.3 m clear of every other object.
+  const Pose3 T_cad_world = fouled.T_world_cad.inverse();
+  for (size_t k = 4; k < fouled.foreign_objects.size(); ++k) {
+    const ForeignObject& o = fouled.foreign_objects[k];
+    EXPECT_EQ(o.kind, ForeignObject::Kind::kPatch);
+    expect_on_real_hull_only(fouled, o);
+    const Eigen::Vector3d c = T_cad_world * o.center;
+    EXPECT_LE(std::abs(c.x()), 5.01);
+    EXPECT_LT(c.z(), 0.0);
+    for (size_t j = 0; j < k; ++j) {
+      const ForeignObject& other = fouled.foreign_objects[j];
+      EXPECT_GT((other.center - o.center).norm(), other.radius_m + o.radius_m + 0.3) << k << j;
+    }
+  }
+}
+
+TEST(Hull, FoulingPatchesSettingTakesACountAndRefusesTheRest) {
+  SensorSettings sensors;
+  ScenarioOptions options;
+  apply_settings({"hull.fouling_patches=30"}, &sensors, &options);
+  EXPECT_EQ(options.fouling_patches, 30);
+  apply_settings({"hull.fouling_patches=0"}, &sensors, &options);
+  EXPECT_EQ(options.fouling_patches, 0);
+  for (const char* text :
+       {"hull.fouling_patches=-1", "hull.fouling_patches=2.5", "hull.fouling_patches=101"}) {
+    try {
+      apply_settings({text}, &sensors, &options);
+      ADD_FAILURE() << text << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("hull.fouling_patches"), std::string::npos) << e.what();
+    }
+  }
 }
 
 class HullMission : public ::testing::Test {

@@ -269,6 +269,15 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   const auto hull_landmarks =
       scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
   std::vector<Landmark> landmarks = hull_landmarks;
+  auto add_object = [&](const ForeignObject& object) {
+    const TriangleMesh object_mesh = foreign_object_mesh(object);
+    const auto on_object = scatter_landmarks(object_mesh, 150.0, 2.0, false,
+                                             1000000 + 10000 * int64_t(s.foreign_objects.size()),
+                                             seed, 1 + s.foreign_objects.size());
+    landmarks.insert(landmarks.end(), on_object.begin(), on_object.end());
+    append_mesh(&real, object_mesh);
+    s.foreign_objects.push_back(object);
+  };
   for (const auto& place : placements) {
     ForeignObject object;
     object.kind = place.kind;
@@ -282,13 +291,30 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     } else {
       object.radius_m = rng.uniform(0.1, 0.25), object.height_m = rng.uniform(0.06, 0.18);
     }
-    const TriangleMesh object_mesh = foreign_object_mesh(object);
-    const auto on_object = scatter_landmarks(object_mesh, 150.0, 2.0, false,
-                                             1000000 + 10000 * int64_t(s.foreign_objects.size()),
-                                             seed, 1 + s.foreign_objects.size());
-    landmarks.insert(landmarks.end(), on_object.begin(), on_object.end());
-    append_mesh(&real, object_mesh);
-    s.foreign_objects.push_back(object);
+    add_object(object);
+  }
+  // Fouling patches: uniform over the surveyed band (the lanes' x span and girth), clear of
+  // every object placed before by 0.3 m so each stays a shape of its own. Its own random
+  // stream, so the default mission does not change.
+  Rng fouling_rng(seed, Stream::kHull, 1);
+  for (int tries = 0; int(s.foreign_objects.size()) < 4 + options.fouling_patches; ++tries) {
+    if (tries > 1000 * (options.fouling_patches + 1))
+      throw std::invalid_argument("hauv-hull: no room for " +
+                                  std::to_string(options.fouling_patches) + " fouling patches");
+    ForeignObject object;
+    object.kind = ForeignObject::Kind::kPatch;
+    const double x = fouling_rng.uniform(-half_span_m, half_span_m);
+    const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m,
+                                          fouling_rng.uniform(lanes[4] - 0.03, lanes[0] + 0.03));
+    object.radius_m = fouling_rng.uniform(0.1, 0.25),
+    object.height_m = fouling_rng.uniform(0.06, 0.18);
+    if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object.center, &object.axis)) continue;
+    const bool clear = std::all_of(
+        s.foreign_objects.begin(), s.foreign_objects.end(), [&](const ForeignObject& o) {
+          return (o.center - object.center).norm() > o.radius_m + object.radius_m + 0.3;
+        });
+    if (!clear) continue;
+    add_object(object);
   }
   s.real_mesh_world = real;
   auto world = std::make_unique<HullWorld>(real, std::move(landmarks));

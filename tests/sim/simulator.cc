@@ -87,7 +87,7 @@ std::string settings_help() {
   std::string out;
   for (const auto& [key, ptr] : setting_table(&s, &c)) out += key + " ";
   for (const char* key : kIntegerSettings) out += std::string(key) + " ";
-  out += "motion.laps ";
+  out += "motion.laps hull.fouling_patches ";
   for (const char* key : kSwitchSettings) out += std::string(key) + "(0/1) ";
   return out;
 }
@@ -128,6 +128,13 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
                                     std::to_string(kMaxLaps) +
                                     "] (times the path is flown), got '" + text + "'");
       c->motion.laps = int(value);
+      continue;
+    }
+    if (key == "hull.fouling_patches") {
+      if (value < 0 || value > kMaxFoulingPatches || value != std::floor(value))
+        throw std::invalid_argument("--set hull.fouling_patches: expected an integer in [0, " +
+                                    std::to_string(kMaxFoulingPatches) + "], got '" + text + "'");
+      c->fouling_patches = int(value);
       continue;
     }
     const bool integer =
