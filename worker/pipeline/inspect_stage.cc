@@ -186,6 +186,7 @@ class InspectStage : public Stage {
     r["options"] = options.inspect.to_json();
     r["tau_m"] = result.threshold.tau_m;  // line 6 of Algorithm 1, after the noise floor
     r["deviation_noise_sigma_m"] = result.threshold.noise_sigma_m;
+    r["deviation_bias_m"] = result.threshold.bias_m;
     r["views"] = result.stats.num_views;
     r["views_with_shapes"] = result.stats.num_views_with_shapes;
     r["detections"] = result.stats.num_detections;
