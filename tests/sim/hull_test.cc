@@ -138,6 +138,15 @@ TEST(Hull, FoulingPatchesSettingTakesACountAndRefusesTheRest) {
       EXPECT_NE(std::string(e.what()).find("hull.fouling_patches"), std::string::npos) << e.what();
     }
   }
+  options.fouling_patches = 3;  // only the hull has a hull to foul
+  for (const char* name : {"usv-bridge", "usv-corridor"}) {
+    try {
+      make_scenario(name, 1, options);
+      ADD_FAILURE() << name << " accepted fouling patches";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("hull.fouling_patches"), std::string::npos) << e.what();
+    }
+  }
 }
 
 class HullMission : public ::testing::Test {

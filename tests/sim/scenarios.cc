@@ -363,7 +363,13 @@ Pose3 Scenario::T_body_sensor_at(const std::string& sensor, double t_s) const {
 std::vector<std::string> scenario_names() { return {"usv-bridge", "usv-corridor", "hauv-hull"}; }
 
 Scenario make_scenario(const std::string& name, uint64_t seed, const ScenarioOptions& options) {
-  if (name == "usv-bridge" || name == "usv-corridor") return make_usv(name, seed, options);
+  if (name == "usv-bridge" || name == "usv-corridor") {
+    if (options.fouling_patches != 0)
+      throw std::invalid_argument("hull.fouling_patches: " + name +
+                                  " has no hull; expected 0, got " +
+                                  std::to_string(options.fouling_patches));
+    return make_usv(name, seed, options);
+  }
   if (name == "hauv-hull") return make_hauv(seed, options);
   throw std::invalid_argument("unknown scenario '" + name +
                               "' (expected usv-bridge, usv-corridor or hauv-hull)");
