@@ -306,7 +306,7 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     const double x = fouling_rng.uniform(-half_span_m, half_span_m);
     const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m,
                                           fouling_rng.uniform(lanes[4] - 0.03, lanes[0] + 0.03));
-    object.radius_m = fouling_rng.uniform(0.1, 0.25),
+    object.radius_m = fouling_rng.uniform(0.1, 0.25);
     object.height_m = fouling_rng.uniform(0.06, 0.18);
     if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object.center, &object.axis)) continue;
     const bool clear = std::all_of(
