@@ -108,6 +108,20 @@ TEST_F(HullStagesTest, BaThenInspectOnSimulatedHull) {
   for (const auto& c : h["counts"]) counted += c.get<int>();
   EXPECT_EQ(counted, proposed["dvl_residuals_final"]["count"].get<int>());
 
+  // x_gM's error against truth.yaml's T_world_cad, along the axes of the true model frame.
+  const json truth_yaml = io::load_yaml_file(mission / "ground_truth" / "truth.yaml");
+  const Pose3 truth_model = pose_from_json(truth_yaml["T_world_cad"], "T_world_cad");
+  for (const json* solved : {&proposed, &r["gicp"]}) {
+    const Pose3 estimate = pose_from_json((*solved)["T_world_model"], "T_world_model");
+    const json* e = &(*solved)["T_world_model_vs_truth"];
+    const Eigen::Vector3d expected =
+        truth_model.linear().transpose() * (estimate.translation() - truth_model.translation());
+    ASSERT_EQ((*e)["translation_error_model_axes_m"].size(), 3u);
+    for (int a = 0; a < 3; ++a)
+      EXPECT_NEAR((*e)["translation_error_model_axes_m"][a].get<double>(), expected[a], 1e-9);
+    EXPECT_NEAR((*e)["translation_error_m"].get<double>(), expected.norm(), 1e-9);
+  }
+
   // Artifacts: one refined pose per keyframe; the solution reads back.
   const Trajectory refined = io::read_tum(work / kBaTrajectoryFile);
   EXPECT_EQ(refined.size(), r["input"]["keyframes"].get<size_t>());
