@@ -180,6 +180,11 @@ int main(int argc, char** argv) {
       // Translation error along the hull (model x) and across it (model y, z): x is nearly
       // unobservable on the prismatic mid-body the lanes survey.
       auto print_error = [](const char* name, const json& e) {
+        if (!e.contains("translation_error_model_axes_m")) {  // a report kept from before
+          std::printf("%s %.3f m, %.2f deg", name, e.at("translation_error_m").get<double>(),
+                      e.at("rotation_error_deg").get<double>());
+          return;
+        }
         const json& axes = e["translation_error_model_axes_m"];
         std::printf("%s %.3f m along, %.3f m across, %.2f deg", name, axes[0].get<double>(),
                     std::hypot(axes[1].get<double>(), axes[2].get<double>()),

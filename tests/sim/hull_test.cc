@@ -130,7 +130,7 @@ TEST(Hull, FoulingPatchesSettingTakesACountAndRefusesTheRest) {
   apply_settings({"hull.fouling_patches=0"}, &sensors, &options);
   EXPECT_EQ(options.fouling_patches, 0);
   for (const char* text :
-       {"hull.fouling_patches=-1", "hull.fouling_patches=2.5", "hull.fouling_patches=101"}) {
+       {"hull.fouling_patches=-1", "hull.fouling_patches=2.5", "hull.fouling_patches=61"}) {
     try {
       apply_settings({text}, &sensors, &options);
       ADD_FAILURE() << text << " accepted";
@@ -138,6 +138,18 @@ TEST(Hull, FoulingPatchesSettingTakesACountAndRefusesTheRest) {
       EXPECT_NE(std::string(e.what()).find("hull.fouling_patches"), std::string::npos) << e.what();
     }
   }
+  for (int count : {-1, kMaxFoulingPatches + 1}) {  // options set directly are checked too
+    options.fouling_patches = count;
+    try {
+      make_scenario("hauv-hull", 1, options);
+      ADD_FAILURE() << count << " patches accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("hull.fouling_patches"), std::string::npos) << e.what();
+    }
+  }
+  options.fouling_patches = kMaxFoulingPatches;  // the largest count fits
+  EXPECT_EQ(make_scenario("hauv-hull", 10, options).foreign_objects.size(),
+            size_t(4 + kMaxFoulingPatches));
   options.fouling_patches = 3;  // only the hull has a hull to foul
   for (const char* name : {"usv-bridge", "usv-corridor"}) {
     try {

@@ -296,6 +296,10 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   // Fouling patches: uniform over the surveyed band (the lanes' x span and girth), clear of
   // every object placed before by 0.3 m so each stays a shape of its own. Its own random
   // stream, so the default mission does not change.
+  if (options.fouling_patches < 0 || options.fouling_patches > kMaxFoulingPatches)
+    throw std::invalid_argument("hull.fouling_patches: expected an integer in [0, " +
+                                std::to_string(kMaxFoulingPatches) + "], got " +
+                                std::to_string(options.fouling_patches));
   Rng fouling_rng(seed, Stream::kHull, 1);
   for (int tries = 0; int(s.foreign_objects.size()) < 4 + options.fouling_patches; ++tries) {
     if (tries > 1000 * (options.fouling_patches + 1))

@@ -7,10 +7,11 @@ namespace keel::inspect {
 
 struct InspectOptions {
   // Line 6 of Algorithm 1: a feature is clustered when its structural deviation |h| > tau, with
-  // tau = max(tau_m, tau_noise_sigmas * robust sigma of h over on-model features), see
-  // deviation_threshold.h. tau_m = 0 is the paper's preferred setting (Section 4.2.2,
-  // Fig. 21(b)); 0.06 m its setting where false positives matter (Fig. 21(c)), which misses
-  // bumps whose features mostly stand 1-3 cm off the hull.
+  // tau = max(tau_m, |median h| + tau_noise_sigmas * robust sigma of h about that median, over
+  // on-model features; tau_m alone when tau_noise_sigmas is 0), see deviation_threshold.h. tau_m =
+  // 0 is the paper's preferred setting (Section 4.2.2, Fig. 21(b)); 0.06 m its setting where false
+  // positives matter (Fig. 21(c)), which misses bumps whose features mostly stand 1-3 cm off the
+  // hull.
   double tau_m = 0.0;
   // Not in the paper: how many noise sigmas of h tau must clear, so that clean hull (whose h is
   // reconstruction noise) yields no shape. The noise is heavier-tailed than a Gaussian: features

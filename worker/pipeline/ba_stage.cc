@@ -399,18 +399,6 @@ std::optional<Pose3> truth_T_world_cad(const io::Mission& mission) {
   return pose_from_json(truth["T_world_cad"], mission.ground_truth_path.string() + ": T_world_cad");
 }
 
-json model_error(const Pose3& estimate, const Pose3& truth) {
-  const double angle =
-      Eigen::AngleAxisd(truth.linear().transpose() * estimate.linear()).angle() * 180.0 / M_PI;
-  // Also per axis of the true model frame: along a ship hull's length (x) the mid-body is
-  // nearly prismatic, so neither the DVL ranges nor the surface factors fix x_gM there.
-  const Eigen::Vector3d in_model =
-      truth.linear().transpose() * (estimate.translation() - truth.translation());
-  return {{"translation_error_m", in_model.norm()},
-          {"translation_error_model_axes_m", {in_model.x(), in_model.y(), in_model.z()}},
-          {"rotation_error_deg", angle}};
-}
-
 json mode_report(const ba::BaModeResult& m, const std::optional<Pose3>& truth,
                  const BaStageOptions& options) {
   int on_model = 0;
@@ -700,6 +688,18 @@ BaSolution ba_solution_from_json(const json& document, const std::string& source
     s.landmarks.push_back(std::move(l));
   }
   return s;
+}
+
+nlohmann::json model_error(const Pose3& estimate, const Pose3& truth) {
+  const double angle =
+      Eigen::AngleAxisd(truth.linear().transpose() * estimate.linear()).angle() * 180.0 / M_PI;
+  // Also per axis of the true model frame: along a ship hull's length (x) the mid-body is
+  // nearly prismatic, so neither the DVL ranges nor the surface factors fix x_gM there.
+  const Eigen::Vector3d in_model =
+      truth.linear().transpose() * (estimate.translation() - truth.translation());
+  return {{"translation_error_m", in_model.norm()},
+          {"translation_error_model_axes_m", {in_model.x(), in_model.y(), in_model.z()}},
+          {"rotation_error_deg", angle}};
 }
 
 std::unique_ptr<Stage> make_ba_stage() { return std::make_unique<BaStage>(); }

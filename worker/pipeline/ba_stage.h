@@ -84,6 +84,11 @@ BaSolution ba_solution_from_json(const nlohmann::json& document, const std::stri
 nlohmann::json pose_to_json(const Pose3& T);
 Pose3 pose_from_json(const nlohmann::json& value, const std::string& path);
 
+// An estimated model pose against the truth (the report's `T_world_model_vs_truth`): the
+// translation error's norm and its components along the true model frame's axes, m, and the
+// rotation angle between them, degrees.
+nlohmann::json model_error(const Pose3& estimate, const Pose3& truth);
+
 std::unique_ptr<Stage> make_ba_stage();
 
 }  // namespace keel::pipeline
