@@ -8,7 +8,10 @@ out="$(mkdir -p "${1:-$here/demo-out}" && cd "${1:-$here/demo-out}" && pwd)"
 build="${KEEL_BUILD_DIR:-$here/build}"
 scenario="${KEEL_DEMO_SCENARIO:-usv-bridge}"
 duration="${KEEL_DEMO_DURATION:-60}"
-stages="${KEEL_DEMO_STAGES:-ingest,refine,map}"
+# A hull mission has no lidar or sonar to map: its products are the BA and the inspection.
+default_stages="ingest,refine,map"
+[ "$scenario" = hauv-hull ] && default_stages="ingest,refine,ba,inspect"
+stages="${KEEL_DEMO_STAGES:-$default_stages}"
 
 bash "$here/deploy/setup.sh"
 # Paths relative to the checkout, so a fresh clone elsewhere hits the same ccache entries.
@@ -36,7 +39,11 @@ export KEEL_URL="$(cat "$data/server.url")"
 export KEEL_TOKEN_FILE="$data/token"
 echo "   listening on $KEEL_URL"
 
-echo "== simulating a $scenario mission ($duration s)"
+if [ "$scenario" = hauv-hull ] && [ "$duration" != 0 ]; then
+  echo "   (a $duration s hull mission surveys part of the first lane; KEEL_DEMO_DURATION=0 flies"
+  echo "    the whole survey, ~240 s of mission, past every foreign object)"
+fi
+echo "== simulating a $scenario mission ($duration s; 0 = the whole path)"
 "$sim_bin" --scenario "$scenario" --seed 1 --duration "$duration" --out "$out/mission"
 
 echo "== submitting with keel (stages: $stages)"

@@ -27,6 +27,7 @@
 #include "worker/mapping/odometry_correction.h"
 #include "worker/mapping/stamped_transforms.h"
 #include "worker/pipeline/report.h"
+#include "worker/pipeline/servo_tray.h"
 
 namespace keel::pipeline {
 
@@ -131,27 +132,6 @@ std::optional<double> interpolate_series(const Series& series, TimeNs t_ns, Valu
   const auto& b = *it;
   const double s = double(t_ns - a.t_ns) / double(b.t_ns - a.t_ns);
   return (1.0 - s) * value(a) + s * value(b);
-}
-
-// The servo angle at t_ns: a least-squares line through the samples within +-half_window_ns,
-// evaluated at t_ns. The instrumented angle carries 5 deg noise per sample (Eq. 10), too much
-// for triangulating the initial landmarks; the tray turns slowly, so a local line through
-// ~20 samples keeps the motion and divides the noise by ~sqrt(20). Linear interpolation when
-// fewer than 3 samples fall in the window.
-std::optional<double> servo_angle_at(const io::ServoSeries& servo, TimeNs t_ns,
-                                     TimeNs half_window_ns) {
-  if (servo.empty() || t_ns < servo.front().t_ns || t_ns > servo.back().t_ns) return std::nullopt;
-  auto lo = std::lower_bound(servo.begin(), servo.end(), t_ns - half_window_ns,
-                             [](const io::ServoSample& x, TimeNs t) { return x.t_ns < t; });
-  double n = 0, st = 0, sa = 0, stt = 0, sta = 0;
-  for (auto it = lo; it != servo.end() && it->t_ns <= t_ns + half_window_ns; ++it) {
-    const double dt = 1e-9 * double(it->t_ns - t_ns);
-    n += 1, st += dt, sa += it->angle_rad, stt += dt * dt, sta += dt * it->angle_rad;
-  }
-  const double det = n * stt - st * st;
-  if (n < 3 || det <= 0)
-    return interpolate_series(servo, t_ns, [](const io::ServoSample& x) { return x.angle_rad; });
-  return (stt * sa - st * sta) / det;  // intercept of the fit at t_ns
 }
 
 ba::GrayImage to_gray(const io::ImageFrame& frame, const std::string& source) {

@@ -21,6 +21,7 @@
 #include "worker/io/mission_reader.h"
 #include "worker/io/tum.h"
 #include "worker/io/yaml_json.h"
+#include "worker/pipeline/servo_tray.h"
 #include "worker/slam/gicp_odometry.h"
 #include "worker/slam/so3.h"
 #include "worker/slam/trajectory_metrics.h"
@@ -136,6 +137,35 @@ struct Inputs {
   std::string dvl_sensor;
   Pose3 T_body_dvl_manifest = Pose3::Identity();
 };
+
+// A DVL riding a servo tray (seed 001's HAUV) measures in a frame that turns with the tray:
+// its samples go into the frame of its manifest extrinsic (angle 0), which the solver holds
+// fixed. Without this the solver read tray-turned velocities as body motion (keel-sim
+// hauv-hull, whole survey: ATE 0.54 m with the DVL against 0.02 m without).
+json undo_tray_rotation(const io::MissionReader& reader, const proto::SensorSpec& dvl,
+                        const Pose3& T_body_dvl0, const RefineStageOptions& options, Inputs& in) {
+  const proto::SensorSpec* servo = reader.manifest().find_sensor(dvl.mounted_on);
+  if (!servo || servo->type != SensorType::kServo)
+    throw std::runtime_error("sensor '" + dvl.name + "': mounted_on '" + dvl.mounted_on +
+                             "' is not a servo sensor of the mission");
+  const std::optional<Pose3> T_body_servo = reader.extrinsic(servo->name);
+  if (!T_body_servo)
+    throw std::runtime_error("sensor '" + servo->name +
+                             "': no T_body_sensor; the DVL on its tray needs the tray's pivot");
+  const auto axis = servo->axis.value_or(std::array<double, 3>{0, 0, 1});
+  try {
+    const TrayDvlStats stats =
+        rotate_tray_dvl(in.solver.dvl, reader.read_servo(servo->name), *T_body_servo,
+                        Eigen::Vector3d(axis[0], axis[1], axis[2]), T_body_dvl0,
+                        TimeNs(0.5e9 * options.servo_window_s));
+    return {{"servo", servo->name},
+            {"samples_turned", stats.rotated},
+            {"samples_without_angle", stats.without_angle},
+            {"max_angle_deg", stats.max_angle_rad * 180.0 / M_PI}};
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error("sensor '" + dvl.name + "' on '" + servo->name + "': " + e.what());
+  }
+}
 
 // Keeps the keyframes for which keep[k] is true.
 Trajectory select(const Trajectory& keyframes, const std::vector<bool>& keep) {
@@ -397,6 +427,8 @@ void inertial_inputs(const io::MissionReader& reader, const RefineStageOptions& 
   in.report["dvl"] = span_json(in.solver.dvl.front().t_ns, in.solver.dvl.back().t_ns);
   in.report["dvl"]["sensor"] = dvl->name;
   in.report["dvl"]["samples"] = in.solver.dvl.size();
+  if (!dvl->mounted_on.empty())
+    in.report["dvl"]["servo_tray"] = undo_tray_rotation(reader, *dvl, *T_body_dvl, options, in);
 }
 
 Inputs gather_inputs(const io::MissionReader& reader, const RefineStageOptions& options,
@@ -710,6 +742,7 @@ class RefineStage : public Stage {
             {"map_sigma_translation_m", o.map_sigma_translation_m},
             {"map_sigma_rotation_rad", o.map_sigma_rotation_rad},
             {"max_dvl_gap_s", o.max_dvl_gap_s},
+            {"servo_window_s", o.servo_window_s},
             {"rpe_delta_m", o.rpe_delta_m}};
   }
 };
@@ -731,6 +764,7 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   o.dvl_rotation_prior_sigma_deg =
       r.optional<double>("dvl_rotation_prior_sigma_deg", o.dvl_rotation_prior_sigma_deg);
   o.max_dvl_gap_s = r.optional<double>("max_dvl_gap_s", o.max_dvl_gap_s);
+  o.servo_window_s = r.optional<double>("servo_window_s", o.servo_window_s);
   o.odometry = r.optional<std::string>("odometry", o.odometry);
   o.loop_closures = r.optional<bool>("loop_closures", o.loop_closures);
   o.odometry_sigma_translation_m =
@@ -768,6 +802,7 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   require(o.dvl_scale_prior_sigma > 0.0, "dvl_scale_prior_sigma", "> 0");
   require(o.dvl_rotation_prior_sigma_deg > 0.0, "dvl_rotation_prior_sigma_deg", "> 0");
   require(o.max_dvl_gap_s > 0.0, "max_dvl_gap_s", "> 0");
+  require(std::isfinite(o.servo_window_s) && o.servo_window_s >= 0.0, "servo_window_s", ">= 0");
   require(o.odometry == "auto" || o.odometry == "recorded" || o.odometry == "gicp", "odometry",
           "auto, recorded or gicp, got '" + o.odometry + "'");
   require(o.odometry_sigma_translation_m > 0.0, "odometry_sigma_translation_m", "> 0");

@@ -33,6 +33,9 @@ struct RefineStageOptions {
   bool estimate_dvl_rotation = true;            // DVL-IMU extrinsic rotation as a state (Sec. VII)
   double dvl_rotation_prior_sigma_deg = 2.865;  // 0.05 rad
   double max_dvl_gap_s = 0.5;                   // Algorithm 1: dropouts longer are not bridged
+  // A DVL on a servo tray: its velocities are turned into its angle-0 frame with the tray angle
+  // of a line fitted to the servo samples within this window, s (as ba's servo_window_s).
+  double servo_window_s = 1.0;
 
   std::string odometry = "auto";  // auto (recorded, else gicp) | recorded | gicp
   bool loop_closures = true;
