@@ -194,6 +194,9 @@ int main(int argc, char** argv) {
       for (const char* mode : {"naive", "geva", "proposed"}) {
         std::printf("; ");
         print_error(mode, modes[mode]["T_world_model_vs_truth"]);
+        const json& sigma =
+            modes[mode].value("T_world_model_translation_sigma_model_axes_m", json());
+        if (sigma.is_array()) std::printf(" (sigma along %.3f m)", sigma[0].get<double>());
       }
       std::printf("\n");
     }

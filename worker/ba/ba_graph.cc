@@ -1,9 +1,12 @@
 #include "worker/ba/ba_graph.h"
 
 #include <ceres/ceres.h>
+#include <ceres/covariance.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <memory>
 #include <stdexcept>
@@ -88,7 +91,10 @@ class BaGraph {
     result.converged = summary.termination_type == ceres::CONVERGENCE;
     result.termination = summary.message;
     read_back(result);
-    if (!model_free_) result.dvl_residuals_final_m = residuals_now();
+    if (!model_free_) {
+      result.dvl_residuals_final_m = residuals_now();
+      result.model_translation_sigma_m = model_translation_sigma(result.T_world_model);
+    }
     return result;
   }
 
@@ -238,6 +244,22 @@ class BaGraph {
     ordering->AddElementToGroup(extrinsic_.data(), 1);
     s.linear_solver_ordering = ordering;
     return s;
+  }
+
+  // x_gM's translation standard deviations along the model frame's axes.
+  std::vector<double> model_translation_sigma(const Pose3& T_world_model) {
+    ceres::Covariance::Options o;
+    o.algorithm_type = ceres::SPARSE_QR;
+    o.num_threads = options_.num_threads;
+    ceres::Covariance covariance(o);
+    const std::vector<std::pair<const double*, const double*>> block = {
+        {model_.data(), model_.data()}};
+    if (!covariance.Compute(block, &ceres_problem_)) return {};
+    Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
+    if (!covariance.GetCovarianceBlockInTangentSpace(model_.data(), model_.data(), tangent.data()))
+      return {};
+    const Eigen::Vector3d sigma = translation_sigma_in_own_axes(tangent, T_world_model.linear());
+    return {sigma.x(), sigma.y(), sigma.z()};
   }
 
   std::vector<Pose3> current_poses() const {

@@ -57,10 +57,15 @@ struct BaModeResult {
   std::vector<double> dvl_residuals_initial_m;
   std::vector<double> dvl_residuals_final_m;
 
-  std::vector<Pose3> T_world_vehicle;        // per keyframe, x_gv_i
-  std::vector<double> servo_angle_rad;       // per keyframe, theta_v_i_s_i
-  std::vector<Pose3> T_world_camera;         // per keyframe, top camera
-  Pose3 T_world_model = Pose3::Identity();   // x_gM
+  std::vector<Pose3> T_world_vehicle;       // per keyframe, x_gv_i
+  std::vector<double> servo_angle_rad;      // per keyframe, theta_v_i_s_i
+  std::vector<Pose3> T_world_camera;        // per keyframe, top camera
+  Pose3 T_world_model = Pose3::Identity();  // x_gM
+  // Marginal standard deviation of x_gM's translation along the axes of its own (model) frame
+  // at the solution, m, from the Gauss-Newton covariance (Ceres Covariance, sparse QR): along a
+  // hull's length it shows how little the survey fixes the model there. Empty when the
+  // covariance could not be computed (rank-deficient) or was not asked for.
+  std::vector<double> model_translation_sigma_m;
   Pose3 T_servo_camera = Pose3::Identity();  // x_sc_T
   std::vector<BaLandmark> landmarks;
 };

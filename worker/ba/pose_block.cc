@@ -19,4 +19,11 @@ std::unique_ptr<ceres::Manifold> make_pose_manifold() {
       ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>>();
 }
 
+Eigen::Vector3d translation_sigma_in_own_axes(const Eigen::Matrix<double, 6, 6>& tangent_covariance,
+                                              const Eigen::Matrix3d& R_parent_pose) {
+  const Eigen::Matrix3d in_own =
+      R_parent_pose.transpose() * tangent_covariance.block<3, 3>(3, 3) * R_parent_pose;
+  return in_own.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
 }  // namespace keel::ba

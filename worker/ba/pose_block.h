@@ -23,6 +23,12 @@ PoseBlock to_pose_block(const Pose3& T);
 Pose3 from_pose_block(const double* block);
 std::unique_ptr<ceres::Manifold> make_pose_manifold();
 
+// Standard deviations of a pose block's translation along the axes of the pose's own frame,
+// from its 6x6 covariance in the manifold's tangent space: [rotation (3), translation in the
+// parent frame (3)], so the translation part turns by R_parent_pose^T.
+Eigen::Vector3d translation_sigma_in_own_axes(const Eigen::Matrix<double, 6, 6>& tangent_covariance,
+                                              const Eigen::Matrix3d& R_parent_pose);
+
 template <typename T>
 using Vec3 = Eigen::Matrix<T, 3, 1>;
 

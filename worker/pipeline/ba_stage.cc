@@ -400,6 +400,8 @@ json mode_report(const ba::BaModeResult& m, const std::optional<Pose3>& truth,
             {"T_world_model", pose_to_json(m.T_world_model)},
             {"T_servo_camera", pose_to_json(m.T_servo_camera)}};
   if (truth) r["T_world_model_vs_truth"] = model_error(m.T_world_model, *truth);
+  r["T_world_model_translation_sigma_model_axes_m"] =
+      m.model_translation_sigma_m.empty() ? json(nullptr) : json(m.model_translation_sigma_m);
   return r;
 }
 

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -121,6 +122,13 @@ TEST_F(HullStagesTest, BaThenInspectOnSimulatedHull) {
     // short mission over the prismatic mid-body leaves it to the 1 m prior (1.4 m off here).
     EXPECT_LT(std::hypot(axes.y(), axes.z()), 0.15);
   }
+  // The covariance says so too: x_gM's translation sigma along the hull is many times the
+  // sigma across it, and no more than its 1 m prior's.
+  const json& sigma = proposed["T_world_model_translation_sigma_model_axes_m"];
+  ASSERT_EQ(sigma.size(), 3u) << sigma.dump();
+  const double along = sigma[0].get<double>();
+  EXPECT_GT(along, 5.0 * std::max(sigma[1].get<double>(), sigma[2].get<double>()));  // 0.82 m
+  EXPECT_LE(along, 1.0 + 1e-9);  // a posterior sigma never exceeds the prior's
 
   // Artifacts: one refined pose per keyframe; the solution reads back.
   const Trajectory refined = io::read_tum(work / kBaTrajectoryFile);
