@@ -9,14 +9,17 @@
 //                                       [sim.<keel-sim --set key>=value]...
 // Environment: KEEL_HULL_BENCH_DIR=<dir> keeps the missions and stage outputs there (a mission
 // already simulated there is reused); KEEL_HULL_BENCH_REUSE_BA=1 also reuses a kept `ba`
-// report (inspect-only iterations).
+// report (inspect-only iterations); KEEL_HULL_BENCH_RUNS=N (default 2) runs the `ba` stage N
+// times per seed and compares each mode's fastest solve.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -101,6 +104,8 @@ int main(int argc, char** argv) {
   }
   const char* keep = std::getenv("KEEL_HULL_BENCH_DIR");
   const bool reuse_ba = keep && std::getenv("KEEL_HULL_BENCH_REUSE_BA");
+  const char* runs_env = std::getenv("KEEL_HULL_BENCH_RUNS");
+  const int runs = std::max(1, runs_env ? std::atoi(runs_env) : 2);
   const fs::path root =
       keep ? fs::path(keep)
            : fs::temp_directory_path() / ("keel_hull_bench_" + std::to_string(getpid()));
@@ -124,10 +129,21 @@ int main(int argc, char** argv) {
     fs::create_directories(work);
     const fs::path ba_report = work / "ba_report.json";
     json ba;
+    // The fastest solve of each mode over `runs` stage runs: per-iteration times on this
+    // shared machine vary by a third from run to run, the iteration counts do not.
+    std::map<std::string, double> fastest;
     if (reuse_ba && fs::exists(ba_report)) {
       std::ifstream(ba_report) >> ba;
     } else {
-      ba = run(*pipeline::make_ba_stage(), mission, work, ba_options);
+      for (int r = 0; r < runs; ++r) {
+        const json again = run(*pipeline::make_ba_stage(), mission, work, ba_options);
+        if (r == 0) ba = again;
+        for (const auto& [mode, m] : again["modes"].items()) {
+          const double t = m["solve_time_s"].get<double>();
+          fastest[mode] = fastest.count(mode) ? std::min(fastest[mode], t) : t;
+        }
+      }
+      for (auto& [mode, t] : fastest) ba["modes"][mode]["solve_time_s"] = t;
       if (keep) std::ofstream(ba_report) << ba.dump(1);
     }
     const json in = run(*pipeline::make_inspect_stage(), mission, work, json::object());
@@ -156,9 +172,9 @@ int main(int argc, char** argv) {
         "  DVL residual sigma: GICP %.4f m, proposed %.4f m (%.1fx smaller; target >= 3x)\n",
         s_gicp, s_prop, s_gicp / s_prop);
     std::printf(
-        "  solve time: naive %.2f s, geva %.2f s, proposed %.2f s (%+.0f %% vs naive; "
-        "target <= +25 %%)\n",
-        t_naive, t_geva, t_prop, 100.0 * (t_prop / t_naive - 1.0));
+        "  solve time (fastest of %d stage runs): naive %.2f s, geva %.2f s, proposed %.2f s "
+        "(%+.0f %% vs naive; target <= +25 %%)\n",
+        reuse_ba ? 1 : runs, t_naive, t_geva, t_prop, 100.0 * (t_prop / t_naive - 1.0));
     // Time follows the iteration count; a solve's last iterations are mostly steps Levenberg-
     // Marquardt rejects (labels, closest triangles and DVL ray hits switch) while the cost
     // changes by 1e-4 of itself, so the count varies between seeds and runs.
