@@ -4,7 +4,9 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
+#include <optional>
 #include <vector>
 
 #include "worker/core/time.h"
@@ -51,6 +53,21 @@ std::vector<TimeNs> stamps_of(const Series& series) {
   stamps.reserve(series.size());
   for (const auto& sample : series) stamps.push_back(sample.t_ns);
   return stamps;
+}
+
+// value(sample) linearly interpolated at t_ns (stamps strictly increasing); nullopt outside
+// the series.
+template <typename Series, typename Value>
+std::optional<double> interpolate_series(const Series& series, TimeNs t_ns, Value value) {
+  if (series.empty() || t_ns < series.front().t_ns || t_ns > series.back().t_ns)
+    return std::nullopt;
+  auto it = std::lower_bound(series.begin(), series.end(), t_ns,
+                             [](const auto& sample, TimeNs t) { return sample.t_ns < t; });
+  if (it->t_ns == t_ns || it == series.begin()) return value(*it);
+  const auto& a = *(it - 1);
+  const auto& b = *it;
+  const double s = double(t_ns - a.t_ns) / double(b.t_ns - a.t_ns);
+  return (1.0 - s) * value(a) + s * value(b);
 }
 
 }  // namespace keel::io

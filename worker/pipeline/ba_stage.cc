@@ -112,27 +112,13 @@ ba::BaRig build_rig(const io::MissionReader& reader, const Sensors& s) {
   rig.camera_top = {cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height};
   const Pose3 T_body_servo = require_extrinsic(reader, s.servo->name);
   rig.T_vehicle_servo_zero = T_body_servo;
-  const auto axis = s.servo->axis.value_or(std::array<double, 3>{0, 0, 1});
-  rig.servo_axis = Eigen::Vector3d(axis[0], axis[1], axis[2]).normalized();
+  rig.servo_axis = tray_axis(*s.servo);
   rig.T_servo_camera = T_body_servo.inverse() * require_extrinsic(reader, s.camera->name);
   rig.T_servo_dvl = T_body_servo.inverse() * require_extrinsic(reader, s.dvl->name);
   return rig;
 }
 
 // ---- step 2: keyframes ----------------------------------------------------------------------
-
-template <typename Series, typename Value>
-std::optional<double> interpolate_series(const Series& series, TimeNs t_ns, Value value) {
-  if (series.empty() || t_ns < series.front().t_ns || t_ns > series.back().t_ns)
-    return std::nullopt;
-  auto it = std::lower_bound(series.begin(), series.end(), t_ns,
-                             [](const auto& sample, TimeNs t) { return sample.t_ns < t; });
-  if (it->t_ns == t_ns || it == series.begin()) return value(*it);
-  const auto& a = *(it - 1);
-  const auto& b = *it;
-  const double s = double(t_ns - a.t_ns) / double(b.t_ns - a.t_ns);
-  return (1.0 - s) * value(a) + s * value(b);
-}
 
 ba::GrayImage to_gray(const io::ImageFrame& frame, const std::string& source) {
   if (frame.bit_depth != 8)
@@ -204,8 +190,8 @@ Keyframes build_keyframes(const io::MissionReader& reader, const Sensors& s,
     k.T_world_vehicle = poses.at(frame.t_ns);
     k.servo_angle_rad = *angle;
     if (s.depth) {
-      const auto d =
-          interpolate_series(depth, frame.t_ns, [](const io::DepthSample& x) { return x.depth_m; });
+      const auto d = io::interpolate_series(depth, frame.t_ns,
+                                            [](const io::DepthSample& x) { return x.depth_m; });
       if (d) {
         // World z is up (docs/mission-format.md: depth positive down); roll and pitch as the
         // SLAM estimated them (Z-Y-X Euler of R_world_vehicle).

@@ -152,12 +152,10 @@ json undo_tray_rotation(const io::MissionReader& reader, const proto::SensorSpec
   if (!T_body_servo)
     throw std::runtime_error("sensor '" + servo->name +
                              "': no T_body_sensor; the DVL on its tray needs the tray's pivot");
-  const auto axis = servo->axis.value_or(std::array<double, 3>{0, 0, 1});
   try {
     const TrayDvlStats stats =
         rotate_tray_dvl(in.solver.dvl, reader.read_servo(servo->name), *T_body_servo,
-                        Eigen::Vector3d(axis[0], axis[1], axis[2]), T_body_dvl0,
-                        TimeNs(0.5e9 * options.servo_window_s));
+                        tray_axis(*servo), T_body_dvl0, TimeNs(0.5e9 * options.servo_window_s));
     return {{"servo", servo->name},
             {"samples_turned", stats.rotated},
             {"samples_without_angle", stats.without_angle},

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -13,16 +14,12 @@ namespace {
 // Largest distance of the DVL origin from the tray's axis that counts as on it, m.
 constexpr double kOnAxisM = 1e-3;
 
-std::optional<double> interpolate_angle(const io::ServoSeries& servo, TimeNs t_ns) {
-  auto it = std::lower_bound(servo.begin(), servo.end(), t_ns,
-                             [](const io::ServoSample& s, TimeNs t) { return s.t_ns < t; });
-  if (it->t_ns == t_ns || it == servo.begin()) return it->angle_rad;
-  const io::ServoSample& a = *(it - 1);
-  const double s = double(t_ns - a.t_ns) / double(it->t_ns - a.t_ns);
-  return (1.0 - s) * a.angle_rad + s * it->angle_rad;
-}
-
 }  // namespace
+
+Eigen::Vector3d tray_axis(const proto::SensorSpec& servo) {
+  const auto axis = servo.axis.value_or(std::array<double, 3>{0, 0, 1});
+  return Eigen::Vector3d(axis[0], axis[1], axis[2]).normalized();
+}
 
 std::optional<double> servo_angle_at(const io::ServoSeries& servo, TimeNs t_ns,
                                      TimeNs half_window_ns) {
@@ -35,7 +32,9 @@ std::optional<double> servo_angle_at(const io::ServoSeries& servo, TimeNs t_ns,
     n += 1, st += dt, sa += it->angle_rad, stt += dt * dt, sta += dt * it->angle_rad;
   }
   const double det = n * stt - st * st;
-  if (n < 3 || det <= 0) return interpolate_angle(servo, t_ns);
+  if (n < 3 || det <= 0)
+    return io::interpolate_series(servo, t_ns,
+                                  [](const io::ServoSample& x) { return x.angle_rad; });
   return (stt * sa - st * sta) / det;  // intercept of the fit at t_ns
 }
 

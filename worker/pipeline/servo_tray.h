@@ -9,12 +9,17 @@
 #include <optional>
 #include <vector>
 
+#include "proto/mission_manifest.h"
 #include "worker/core/pose.h"
 #include "worker/core/time.h"
 #include "worker/io/stream_samples.h"
 #include "worker/slam/sensor_samples.h"
 
 namespace keel::pipeline {
+
+// The servo's rotation axis in its own frame, unit length: the manifest's `axis`, [0, 0, 1]
+// when it gives none.
+Eigen::Vector3d tray_axis(const proto::SensorSpec& servo);
 
 // The servo angle at t_ns: a least-squares line through the samples within +-half_window_ns,
 // evaluated at t_ns. The instrumented angle carries 5 deg noise per sample (seed 001 Eq. 10);
