@@ -319,43 +319,12 @@ std::vector<ba::DvlRange> dvl_ranges_at_keyframes(const io::MissionReader& reade
 
 // ---- step 6: report ---------------------------------------------------------------------------
 
-json residual_stats(std::vector<double> r, const BaStageOptions& options) {
-  json out = {{"count", r.size()}};
-  if (r.empty()) return out;
-  double sum = 0, sum2 = 0;
-  for (double x : r) sum += x;
-  const double mean = sum / r.size();
-  for (double x : r) sum2 += (x - mean) * (x - mean);
-  std::sort(r.begin(), r.end());
-  auto percentile = [&](double p) {
-    const double pos = p / 100.0 * (r.size() - 1);
-    const size_t lo = size_t(std::floor(pos));
-    const size_t hi = std::min(lo + 1, r.size() - 1);
-    return r[lo] + (pos - lo) * (r[hi] - r[lo]);
-  };
-  out["mean_m"] = mean;
-  out["sigma_m"] = std::sqrt(sum2 / r.size());
-  json pct = json::object();
-  for (double p : {5.0, 25.0, 50.0, 75.0, 95.0}) pct["p" + std::to_string(int(p))] = percentile(p);
-  out["percentiles_m"] = pct;
-  const int bins = int(std::lround(2.0 * options.histogram_range_m / options.histogram_bin_m));
-  std::vector<int> counts(bins, 0);
-  int below = 0, above = 0;
-  for (double x : r) {
-    const int b = int(std::floor((x + options.histogram_range_m) / options.histogram_bin_m));
-    if (b < 0)
-      ++below;
-    else if (b >= bins)
-      ++above;
-    else
-      ++counts[b];
-  }
-  out["histogram"] = {{"first_edge_m", -options.histogram_range_m},
-                      {"bin_m", options.histogram_bin_m},
-                      {"counts", counts},
-                      {"below", below},
-                      {"above", above}};
-  return out;
+// p-th percentile (0-100) of ascending `sorted`, linear between ranks.
+double percentile_of(const std::vector<double>& sorted, double p) {
+  const double pos = p / 100.0 * (sorted.size() - 1);
+  const size_t lo = size_t(std::floor(pos));
+  const size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (pos - lo) * (sorted[hi] - sorted[lo]);
 }
 
 std::optional<Pose3> truth_T_world_cad(const io::Mission& mission) {
@@ -555,6 +524,47 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
               o.histogram_range_m / o.histogram_bin_m <= 10000,
           "histogram_range_m", "a number in [histogram_bin_m, 10000 * histogram_bin_m]");
   return o;
+}
+
+json residual_stats(std::vector<double> r, const BaStageOptions& options) {
+  json out = {{"count", r.size()}};
+  if (r.empty()) return out;
+  double sum = 0, sum2 = 0;
+  for (double x : r) sum += x;
+  const double mean = sum / r.size();
+  for (double x : r) sum2 += (x - mean) * (x - mean);
+  std::sort(r.begin(), r.end());
+  out["mean_m"] = mean;
+  out["sigma_m"] = std::sqrt(sum2 / r.size());
+  // The spread of the bulk, blind to the few beams that see structure the model lacks (a
+  // fouling patch 5-18 cm proud): 1.4826 median |r - median r|, sigma for Gaussian residuals.
+  const double median = percentile_of(r, 50.0);
+  std::vector<double> deviation;
+  for (double x : r) deviation.push_back(std::abs(x - median));
+  std::sort(deviation.begin(), deviation.end());
+  out["robust_sigma_m"] = 1.4826 * percentile_of(deviation, 50.0);
+  json pct = json::object();
+  for (double p : {5.0, 25.0, 50.0, 75.0, 95.0})
+    pct["p" + std::to_string(int(p))] = percentile_of(r, p);
+  out["percentiles_m"] = pct;
+  const int bins = int(std::lround(2.0 * options.histogram_range_m / options.histogram_bin_m));
+  std::vector<int> counts(bins, 0);
+  int below = 0, above = 0;
+  for (double x : r) {
+    const int b = int(std::floor((x + options.histogram_range_m) / options.histogram_bin_m));
+    if (b < 0)
+      ++below;
+    else if (b >= bins)
+      ++above;
+    else
+      ++counts[b];
+  }
+  out["histogram"] = {{"first_edge_m", -options.histogram_range_m},
+                      {"bin_m", options.histogram_bin_m},
+                      {"counts", counts},
+                      {"below", below},
+                      {"above", above}};
+  return out;
 }
 
 std::vector<ba::BaMode> BaStageOptions::modes() const {

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 
 #include "tests/sim/simulator.h"
@@ -238,6 +239,30 @@ TEST(BaSolutionJson, RoundTripsAndRejectsBadViews) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("doc.landmarks[0].views"), std::string::npos) << e.what();
   }
+}
+
+TEST(ResidualStats, RobustSigmaIgnoresTheFewBeamsOnUnmodelledStructure) {
+  // 0.001 m * {-3, -1, 0, 1, 3} and one beam on a patch 0.15 m proud (observed range shorter).
+  const std::vector<double> r = {-0.003, -0.001, 0.0, 0.001, 0.003, -0.15};
+  const json s = residual_stats(r, BaStageOptions{});
+  // Median -0.0005; |r - median| sorted = {0.0005, 0.0005, 0.0015, 0.0025, 0.0035, 0.1495},
+  // whose median is 0.002.
+  EXPECT_NEAR(s["robust_sigma_m"].get<double>(), 1.4826 * 0.002, 1e-12);
+  EXPECT_NEAR(s["percentiles_m"]["p50"].get<double>(), -0.0005, 1e-15);
+  double mean = 0, var = 0;
+  for (double x : r) mean += x / r.size();
+  for (double x : r) var += (x - mean) * (x - mean) / r.size();
+  EXPECT_NEAR(s["sigma_m"].get<double>(), std::sqrt(var), 1e-15);  // 0.056 m: the one beam
+  EXPECT_EQ(s["histogram"]["below"].get<int>(), 1);
+}
+
+TEST(ResidualStats, RobustSigmaOfAGaussianIsItsSigma) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  std::vector<double> r(20001);
+  for (double& x : r) x = noise(rng);
+  // The sample MAD's relative standard error is ~1.17 / sqrt(n) (~0.8 %).
+  EXPECT_NEAR(residual_stats(r, BaStageOptions{})["robust_sigma_m"].get<double>(), 0.004, 1e-4);
 }
 
 }  // namespace
