@@ -27,8 +27,11 @@ if ba:
     for name in ("naive", "geva", "proposed"):
         if name in ba:
             m = ba[name]
+            r = m['dvl_residuals_final']
             print(f"  {name:9s} {m['solve_time_s']:6.2f} s {m['iterations']:3d} iterations, "
-                  f"DVL range residual sigma {m['dvl_residuals_final']['sigma_m']:.4f} m")
+                  f"DVL range residual sigma {r['sigma_m']:.4f} m "
+                  f"(robust {r['robust_sigma_m']:.4f} m; GICP alone "
+                  f"{m['dvl_residuals_gicp']['sigma_m']:.4f} m)")
 
 inspect = stages.get("inspect", {})
 if "shapes" in inspect:
