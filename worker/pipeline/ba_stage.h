@@ -82,12 +82,12 @@ nlohmann::json ba_solution_to_json(const BaSolution& solution);
 BaSolution ba_solution_from_json(const nlohmann::json& document, const std::string& source);
 
 nlohmann::json pose_to_json(const Pose3& T);
+Pose3 pose_from_json(const nlohmann::json& value, const std::string& path);
 
 // A residual distribution as the report gives it (Fig. 18): count, mean, sigma (the standard
 // deviation), robust_sigma (1.4826 x the median absolute deviation from the median), the 5/25/
 // 50/75/95 percentiles and a histogram over +-histogram_range_m in histogram_bin_m bins.
 nlohmann::json residual_stats(std::vector<double> residuals_m, const BaStageOptions& options);
-Pose3 pose_from_json(const nlohmann::json& value, const std::string& path);
 
 // An estimated model pose against the truth (the report's `T_world_model_vs_truth`): the
 // translation error's norm and its components along the true model frame's axes, m, and the
