@@ -407,6 +407,7 @@ class BaStage : public Stage {
     ba::BaOptions ba_options;
     ba_options.modes = options.modes();
     ba_options.max_iterations = options.max_iterations;
+    ba_options.function_tolerance = options.function_tolerance;
     ba_options.num_threads = options.threads;
     ba_options.linear_solver = options.linear_solver;
     ba_options.dvl_range_normal = options.dvl_range_normal == "facet"
@@ -492,6 +493,7 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
       r.optional<double>("triangulation_max_reprojection_px", o.triangulation_max_reprojection_px);
   o.max_keyframes = r.optional<int>("max_keyframes", o.max_keyframes);
   o.max_iterations = r.optional<int>("max_iterations", o.max_iterations);
+  o.function_tolerance = r.optional<double>("function_tolerance", o.function_tolerance);
   o.threads = r.optional<int>("threads", o.threads);
   o.linear_solver = r.optional<std::string>("linear_solver", o.linear_solver);
   o.dvl_range_normal = r.optional<std::string>("dvl_range_normal", o.dvl_range_normal);
@@ -511,6 +513,9 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
           "a number >= 0");
   require(o.max_keyframes >= 0, "max_keyframes", ">= 0");
   require(o.max_iterations > 0, "max_iterations", "> 0");
+  require(
+      std::isfinite(o.function_tolerance) && o.function_tolerance > 0 && o.function_tolerance < 1,
+      "function_tolerance", "a number in (0, 1)");
   require(o.threads > 0, "threads", "> 0");
   require(o.linear_solver == "sparse_schur" || o.linear_solver == "iterative_schur" ||
               o.linear_solver == "dense_schur",

@@ -191,6 +191,23 @@ TEST(ModelError, IsAlongTheTrueModelAxes) {
   EXPECT_NEAR(e["rotation_error_deg"].get<double>(), 2.0, 1e-9);
 }
 
+TEST_F(HullStagesTest, FunctionToleranceReachesTheSolver) {
+  // Ceres stops once an iteration gains less than function_tolerance of the cost: a loose
+  // tolerance must stop `naive` sooner than the default 1e-6, and say why it stopped.
+  const fs::path mission = simulated_mission();
+  auto naive_solve = [&](double tolerance, const std::string& dir) {
+    const json options = {
+        {"tracks", "ground_truth"}, {"mode", "naive"}, {"function_tolerance", tolerance}};
+    return run_stage(*make_ba_stage(), mission, options, temp_root() / dir)
+        .report["modes"]["naive"];
+  };
+  const json strict = naive_solve(1e-6, "tolerance_strict");
+  const json loose = naive_solve(0.1, "tolerance_loose");
+  EXPECT_LT(loose["iterations"].get<int>(), strict["iterations"].get<int>());
+  EXPECT_NE(loose["termination"].get<std::string>().find("Function tolerance"), std::string::npos)
+      << loose["termination"];
+}
+
 TEST_F(HullStagesTest, OptionErrorsNameTheOption) {
   const fs::path work = temp_root() / "work_errors";
   auto ba = make_ba_stage();
@@ -201,6 +218,11 @@ TEST_F(HullStagesTest, OptionErrorsNameTheOption) {
             std::string::npos);
   EXPECT_NE(error_of(*ba, {{"max_iterations", 0}}, work).find("options.ba.max_iterations"),
             std::string::npos);
+  for (const double bad : {0.0, 1.0, -1e-6})
+    EXPECT_NE(
+        error_of(*ba, {{"function_tolerance", bad}}, work).find("options.ba.function_tolerance"),
+        std::string::npos)
+        << bad;
   EXPECT_NE(
       error_of(*ba, {{"dvl_range_normal", "vertex"}}, work).find("options.ba.dvl_range_normal"),
       std::string::npos);
