@@ -68,7 +68,7 @@ class BaGraph {
   BaModeResult solve() {
     BaModeResult result;
     result.mode = mode_;
-    if (!model_free_) result.dvl_residuals_initial_m = residuals_now();
+    if (!model_free_) result.dvl_residuals_initial = residuals_now();
     ceres::Solver::Options solver = solver_options();
     LabelFractionCallback callback(labels_, result.lambda1_fraction_per_iteration);
     if (!labels_.empty()) solver.callbacks.push_back(&callback);
@@ -92,7 +92,7 @@ class BaGraph {
     result.termination = summary.message;
     read_back(result);
     if (!model_free_) {
-      result.dvl_residuals_final_m = residuals_now();
+      result.dvl_residuals_final = residuals_now();
       result.model_translation_sigma_m = model_translation_sigma(result.T_world_model);
     }
     return result;
@@ -268,7 +268,7 @@ class BaGraph {
     return out;
   }
 
-  std::vector<double> residuals_now() const {
+  std::vector<DvlBeamResidual> residuals_now() const {
     return dvl_range_residuals(mesh_, mount_, initial_.beams, initial_.beam_keyframe,
                                current_poses(), servo_, from_pose_block(model_.data()),
                                options_.dvl_max_range_m);
@@ -347,18 +347,18 @@ BaInitialisation refine_initial_state(const BaProblem& problem, const MeshQuery&
   return {true, r.iterations, r.solve_time_s, r.initial_cost, r.final_cost};
 }
 
-std::vector<double> dvl_range_residuals(const MeshQuery& mesh, const ServoMount& mount,
-                                        const std::vector<DvlBeam>& beams,
-                                        const std::vector<int>& beam_keyframe,
-                                        const std::vector<Pose3>& T_world_vehicle,
-                                        const std::vector<double>& servo_angle_rad,
-                                        const Pose3& T_world_model, double max_range_m) {
-  std::vector<double> residuals;
+std::vector<DvlBeamResidual> dvl_range_residuals(const MeshQuery& mesh, const ServoMount& mount,
+                                                 const std::vector<DvlBeam>& beams,
+                                                 const std::vector<int>& beam_keyframe,
+                                                 const std::vector<Pose3>& T_world_vehicle,
+                                                 const std::vector<double>& servo_angle_rad,
+                                                 const Pose3& T_world_model, double max_range_m) {
+  std::vector<DvlBeamResidual> residuals;
   for (size_t b = 0; b < beams.size(); ++b) {
     const int i = beam_keyframe[b];
-    const auto range = predict_dvl_range(mesh, mount, beams[b], T_world_vehicle[i],
-                                         servo_angle_rad[i], T_world_model, max_range_m);
-    if (range) residuals.push_back(beams[b].range_m - *range);
+    const auto hit = predict_dvl_hit(mesh, mount, beams[b], T_world_vehicle[i], servo_angle_rad[i],
+                                     T_world_model, max_range_m);
+    if (hit) residuals.push_back({i, hit->point_model, beams[b].range_m - hit->range_m});
   }
   return residuals;
 }

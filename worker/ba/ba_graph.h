@@ -45,12 +45,12 @@ BaInitialisation refine_initial_state(const BaProblem& problem, const MeshQuery&
 BaModeResult solve_ba_mode(const BaProblem& problem, const MeshQuery& mesh,
                            const BaInitialState& initial, BaMode mode, const BaOptions& options);
 
-// Measured minus predicted range of every beam that hits the mesh (Fig. 18).
-std::vector<double> dvl_range_residuals(const MeshQuery& mesh, const ServoMount& mount,
-                                        const std::vector<DvlBeam>& beams,
-                                        const std::vector<int>& beam_keyframe,
-                                        const std::vector<Pose3>& T_world_vehicle,
-                                        const std::vector<double>& servo_angle_rad,
-                                        const Pose3& T_world_model, double max_range_m);
+// Measured minus predicted range, and the hit point, of every beam that hits the mesh (Fig. 18).
+std::vector<DvlBeamResidual> dvl_range_residuals(const MeshQuery& mesh, const ServoMount& mount,
+                                                 const std::vector<DvlBeam>& beams,
+                                                 const std::vector<int>& beam_keyframe,
+                                                 const std::vector<Pose3>& T_world_vehicle,
+                                                 const std::vector<double>& servo_angle_rad,
+                                                 const Pose3& T_world_model, double max_range_m);
 
 }  // namespace keel::ba

@@ -4,6 +4,13 @@
 
 namespace keel::ba {
 
+std::vector<double> residual_values(const std::vector<DvlBeamResidual>& beams) {
+  std::vector<double> out;
+  out.reserve(beams.size());
+  for (const DvlBeamResidual& b : beams) out.push_back(b.residual_m);
+  return out;
+}
+
 const BaModeResult* BaResult::find(BaMode mode) const {
   const auto it = std::find_if(modes.begin(), modes.end(),
                                [mode](const BaModeResult& r) { return r.mode == mode; });

@@ -34,6 +34,17 @@ struct CameraFramePoint {
   int lambda = 0;
 };
 
+// Eq. (14)'s residual of one DVL beam: measured minus predicted range, and where the predicted
+// ray meets M_prior, in the model (CAD) frame. Fig. 18(a)-(b) paint these on the hull.
+struct DvlBeamResidual {
+  int keyframe = 0;
+  Eigen::Vector3d hit_model = Eigen::Vector3d::Zero();
+  double residual_m = 0;
+};
+
+// The residuals alone, in order.
+std::vector<double> residual_values(const std::vector<DvlBeamResidual>& beams);
+
 struct BaModeResult {
   BaMode mode = BaMode::kProposed;
   // Ceres iterations, successful and unsuccessful (Ceres counts iteration 0, the initial
@@ -52,10 +63,9 @@ struct BaModeResult {
   // Fig. 17: Ceres cost per iteration, iteration 0 being the initial state (a rejected step
   // keeps the cost).
   std::vector<double> cost_per_iteration;
-  // Fig. 18: measured minus predicted range (m) of every DVL beam used, at the start (after
-  // GICP) and at the end.
-  std::vector<double> dvl_residuals_initial_m;
-  std::vector<double> dvl_residuals_final_m;
+  // Fig. 18: every DVL beam used that hits the mesh, at the start (after GICP) and at the end.
+  std::vector<DvlBeamResidual> dvl_residuals_initial;
+  std::vector<DvlBeamResidual> dvl_residuals_final;
 
   std::vector<Pose3> T_world_vehicle;       // per keyframe, x_gv_i
   std::vector<double> servo_angle_rad;      // per keyframe, theta_v_i_s_i

@@ -88,15 +88,27 @@ ceres::CostFunction* make_dvl_raycast_factor(const MeshQuery& mesh, const ServoM
       new DvlRaycast{&mesh, mount, beam, sigma_m, max_range_m, gate_m, normal});
 }
 
-std::optional<double> predict_dvl_range(const MeshQuery& mesh, const ServoMount& mount,
-                                        const DvlBeam& beam, const Pose3& T_world_vehicle,
-                                        double servo_angle_rad, const Pose3& T_world_model,
-                                        double max_range_m) {
+std::optional<DvlHit> predict_dvl_hit(const MeshQuery& mesh, const ServoMount& mount,
+                                      const DvlBeam& beam, const Pose3& T_world_vehicle,
+                                      double servo_angle_rad, const Pose3& T_world_model,
+                                      double max_range_m) {
   const PoseBlock pose = to_pose_block(T_world_vehicle);
   const PoseBlock model = to_pose_block(T_world_model);
   Eigen::Vector3d origin, direction;
   beam_in_model(mount, beam, pose.data(), &servo_angle_rad, model.data(), origin, direction);
-  return cast_range(mesh, origin, direction, max_range_m, DvlRangeNormal::kFacet);  // value only
+  const std::optional<double> range =  // value only: the normal does not matter
+      cast_range(mesh, origin, direction, max_range_m, DvlRangeNormal::kFacet);
+  if (!range) return std::nullopt;
+  return DvlHit{*range, origin + *range * direction};
+}
+
+std::optional<double> predict_dvl_range(const MeshQuery& mesh, const ServoMount& mount,
+                                        const DvlBeam& beam, const Pose3& T_world_vehicle,
+                                        double servo_angle_rad, const Pose3& T_world_model,
+                                        double max_range_m) {
+  const auto hit = predict_dvl_hit(mesh, mount, beam, T_world_vehicle, servo_angle_rad,
+                                   T_world_model, max_range_m);
+  return hit ? std::optional<double>(hit->range_m) : std::nullopt;
 }
 
 }  // namespace keel::ba

@@ -50,6 +50,17 @@ ceres::CostFunction* make_dvl_raycast_factor(const MeshQuery& mesh, const ServoM
                                              double max_range_m, double gate_m,
                                              DvlRangeNormal normal = DvlRangeNormal::kInterpolated);
 
+// Where a beam meets the prior mesh at given values: h_rn of Eq. (14) and the hit point.
+struct DvlHit {
+  double range_m = 0;
+  Eigen::Vector3d point_model = Eigen::Vector3d::Zero();  // on M_prior, model frame
+};
+// nullopt when the beam misses within max_range_m.
+std::optional<DvlHit> predict_dvl_hit(const MeshQuery& mesh, const ServoMount& mount,
+                                      const DvlBeam& beam, const Pose3& T_world_vehicle,
+                                      double servo_angle_rad, const Pose3& T_world_model,
+                                      double max_range_m);
+
 // h_rn of Eq. (14) at given values: the predicted range, nullopt when the beam misses.
 std::optional<double> predict_dvl_range(const MeshQuery& mesh, const ServoMount& mount,
                                         const DvlBeam& beam, const Pose3& T_world_vehicle,

@@ -22,6 +22,7 @@
 #include "worker/ba/model_assisted_ba.h"
 #include "worker/io/mesh_reader.h"
 #include "worker/io/mission_reader.h"
+#include "worker/io/text_writer.h"
 #include "worker/io/tum.h"
 #include "worker/io/yaml_json.h"
 #include "worker/mapping/odometry_correction.h"
@@ -338,26 +339,45 @@ json mode_report(const ba::BaModeResult& m, const std::optional<Pose3>& truth,
                  const BaStageOptions& options) {
   int on_model = 0;
   for (const auto& l : m.landmarks) on_model += l.lambda;
-  json r = {{"iterations", m.iterations},
-            {"unsuccessful_steps", m.unsuccessful_steps},
-            {"solve_time_s", m.solve_time_s},
-            {"solve_cpu_s", m.solve_cpu_s},
-            {"cost_per_iteration", m.cost_per_iteration},
-            {"initial_cost", m.initial_cost},
-            {"final_cost", m.final_cost},
-            {"converged", m.converged},
-            {"termination", m.termination},
-            {"landmarks", m.landmarks.size()},
-            {"landmarks_lambda1", on_model},
-            {"lambda1_fraction_per_iteration", m.lambda1_fraction_per_iteration},
-            {"dvl_residuals_gicp", residual_stats(m.dvl_residuals_initial_m, options)},
-            {"dvl_residuals_final", residual_stats(m.dvl_residuals_final_m, options)},
-            {"T_world_model", pose_to_json(m.T_world_model)},
-            {"T_servo_camera", pose_to_json(m.T_servo_camera)}};
+  json r = {
+      {"iterations", m.iterations},
+      {"unsuccessful_steps", m.unsuccessful_steps},
+      {"solve_time_s", m.solve_time_s},
+      {"solve_cpu_s", m.solve_cpu_s},
+      {"cost_per_iteration", m.cost_per_iteration},
+      {"initial_cost", m.initial_cost},
+      {"final_cost", m.final_cost},
+      {"converged", m.converged},
+      {"termination", m.termination},
+      {"landmarks", m.landmarks.size()},
+      {"landmarks_lambda1", on_model},
+      {"lambda1_fraction_per_iteration", m.lambda1_fraction_per_iteration},
+      {"dvl_residuals_gicp", residual_stats(ba::residual_values(m.dvl_residuals_initial), options)},
+      {"dvl_residuals_final", residual_stats(ba::residual_values(m.dvl_residuals_final), options)},
+      {"T_world_model", pose_to_json(m.T_world_model)},
+      {"T_servo_camera", pose_to_json(m.T_servo_camera)}};
   if (truth) r["T_world_model_vs_truth"] = model_error(m.T_world_model, *truth);
   r["T_world_model_translation_sigma_model_axes_m"] =
       m.model_translation_sigma_m.empty() ? json(nullptr) : json(m.model_translation_sigma_m);
   return r;
+}
+
+// Fig. 18(a)-(b) as a table: state (gicp | ba), keyframe time, hit point in the CAD frame,
+// measured minus predicted range.
+void write_dvl_residuals(const fs::path& path, const ba::BaModeResult& m,
+                         const std::vector<ba::BaKeyframe>& keyframes) {
+  io::TextWriter w(path);
+  w.text("state,t,x_model_m,y_model_m,z_model_m,residual_m\n");
+  for (const auto& [state, beams] :
+       {std::pair{"gicp", &m.dvl_residuals_initial}, std::pair{"ba", &m.dvl_residuals_final}}) {
+    for (const ba::DvlBeamResidual& b : *beams) {
+      w.text(state).text(",").seconds(keyframes[b.keyframe].t_ns);
+      for (double x : {b.hit_model.x(), b.hit_model.y(), b.hit_model.z(), b.residual_m})
+        w.text(",").number(x);
+      w.text("\n");
+    }
+  }
+  w.close();
 }
 
 BaSolution solution_of(const ba::BaModeResult& m, const std::vector<ba::BaKeyframe>& keyframes) {
@@ -428,9 +448,11 @@ class BaStage : public Stage {
         context.work_dir / kBaSolutionFile,
         nlohmann::ordered_json(ba_solution_to_json(solution_of(*chosen, problem.keyframes))));
 
+    write_dvl_residuals(context.work_dir / kBaDvlResidualsFile, *chosen, problem.keyframes);
+
     const std::optional<Pose3> truth = truth_T_world_cad(mission);
     StageResult out;
-    out.artifacts = {kBaTrajectoryFile, kBaSolutionFile};
+    out.artifacts = {kBaTrajectoryFile, kBaSolutionFile, kBaDvlResidualsFile};
     json& r = out.report;
     r["input"] = keyframes.report;
     r["input"]["tracks_source"] = frontend ? "frontend (SIFT on the images, Sec. 2.7)"

@@ -29,6 +29,9 @@ namespace keel::pipeline {
 
 inline constexpr const char* kBaTrajectoryFile = "trajectory_ba.tum";
 inline constexpr const char* kBaSolutionFile = "ba_solution.json";
+// Fig. 18(a)-(b): each DVL beam's residual where it meets the CAD mesh, after GICP and after the
+// BA (the artifacts' mode): `state,t,x_model_m,y_model_m,z_model_m,residual_m`.
+inline constexpr const char* kBaDvlResidualsFile = "dvl_residuals.csv";
 
 // `--set ba.<name>=<value>`.
 struct BaStageOptions {

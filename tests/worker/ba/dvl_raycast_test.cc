@@ -85,6 +85,14 @@ void expect_factor_matches_brute_force(const TriangleMesh& mesh,
     if (!expected) continue;
     ++*hits;
     EXPECT_NEAR(*predicted, *expected, 1e-9) << "trial " << trial;
+    // Fig. 18(a)-(b)'s hit point: along the beam, at the brute-force range, in the model frame.
+    const auto hit =
+        predict_dvl_hit(query, mount, beam, T_world_vehicle, theta, T_world_model, 30.0);
+    ASSERT_TRUE(hit.has_value()) << "trial " << trial;
+    const Eigen::Vector3d expected_point =
+        T_model_dvl.translation() + *expected * (T_model_dvl.linear() * direction_dvl);
+    EXPECT_LT((hit->point_model - expected_point).norm(), 1e-9) << "trial " << trial;
+    EXPECT_EQ(hit->range_m, *predicted);
     // The Ceres factor's residual is (measured - predicted) / sigma.
     std::unique_ptr<ceres::CostFunction> f(
         make_dvl_raycast_factor(query, mount, beam, 0.003, 30.0, 0.5));

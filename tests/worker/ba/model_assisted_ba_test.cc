@@ -105,8 +105,9 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
       "landmarks %d/%d, dvl %d/%d, gicp %d fitness %.4g, dvl |r| median initial %.4f "
       "final %.4f, servo rms error %.3f deg (measured %.3f deg)\n",
       result.landmarks_triangulated, result.tracks_in, result.dvl_ranges_used, result.dvl_ranges_in,
-      result.gicp_converged, result.gicp_fitness, median_abs(proposed.dvl_residuals_initial_m),
-      median_abs(proposed.dvl_residuals_final_m), servo_rms / kDegToRad,
+      result.gicp_converged, result.gicp_fitness,
+      median_abs(residual_values(proposed.dvl_residuals_initial)),
+      median_abs(residual_values(proposed.dvl_residuals_final)), servo_rms / kDegToRad,
       servo_rms_measured / kDegToRad);
 
   ASSERT_GE(mp.bump_count, 30);
@@ -157,9 +158,9 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
   }
   // Fig. 18: BA tightens the DVL residuals to about their 3 mm noise; the servo slop (1 deg)
   // is estimated.
-  EXPECT_LT(median_abs(proposed.dvl_residuals_final_m),
-            0.5 * median_abs(proposed.dvl_residuals_initial_m));
-  EXPECT_LT(median_abs(proposed.dvl_residuals_final_m), 0.004);
+  EXPECT_LT(median_abs(residual_values(proposed.dvl_residuals_final)),
+            0.5 * median_abs(residual_values(proposed.dvl_residuals_initial)));
+  EXPECT_LT(median_abs(residual_values(proposed.dvl_residuals_final)), 0.004);
   EXPECT_LT(servo_rms, 0.5 * servo_rms_measured);
 }
 

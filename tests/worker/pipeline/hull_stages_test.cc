@@ -13,11 +13,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "tests/sim/simulator.h"
 #include "tests/worker/pipeline/stage_run.h"
+#include "worker/ba/mesh_query.h"
 #include "worker/io/draco_codec.h"
 #include "worker/io/mesh_reader.h"
 #include "worker/io/tum.h"
@@ -69,6 +72,31 @@ json read_json(const fs::path& path) {
   return json::parse(in);
 }
 
+// The table's rows per state match the report's counts, and every hit point lies on the CAD
+// mesh (in its own frame) within 1e-6 m.
+void expect_dvl_residual_table(const fs::path& table, const fs::path& cad, const json& mode) {
+  std::ifstream in(table);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line)) << table;
+  EXPECT_EQ(line, "state,t,x_model_m,y_model_m,z_model_m,residual_m");
+  const ba::MeshQuery query(io::read_mesh(cad));
+  std::map<std::string, int> rows;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string state, t;
+    double x, y, z, residual;
+    char comma;
+    std::getline(fields, state, ','), std::getline(fields, t, ',');
+    fields >> x >> comma >> y >> comma >> z >> comma >> residual;
+    ASSERT_TRUE(fields && std::isfinite(residual)) << line;
+    ++rows[state];
+    EXPECT_LT(std::abs(query.signed_distance({x, y, z})), 1e-6) << line;
+  }
+  EXPECT_EQ(rows["gicp"], mode["dvl_residuals_gicp"]["count"].get<int>());
+  EXPECT_EQ(rows["ba"], mode["dvl_residuals_final"]["count"].get<int>());
+  EXPECT_EQ(rows.size(), 2u);
+}
+
 class HullStagesTest : public ::testing::Test {
  protected:
   static void TearDownTestSuite() { fs::remove_all(temp_root()); }
@@ -109,6 +137,8 @@ TEST_F(HullStagesTest, BaThenInspectOnSimulatedHull) {
   int counted = h["below"].get<int>() + h["above"].get<int>();
   for (const auto& c : h["counts"]) counted += c.get<int>();
   EXPECT_EQ(counted, proposed["dvl_residuals_final"]["count"].get<int>());
+  // dvl_residuals.csv (Fig. 18(a)-(b)): a row per beam and state, each hit on the CAD mesh.
+  expect_dvl_residual_table(work / kBaDvlResidualsFile, mission / "cad" / "hull.ply", proposed);
 
   // x_gM's error against truth.yaml's T_world_cad is reported per model axis too (the
   // formula: ModelError.IsAlongTheTrueModelAxes).
