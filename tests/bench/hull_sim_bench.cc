@@ -25,6 +25,7 @@
 
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
+#include "worker/core/robust_spread.h"
 #include "worker/io/yaml_json.h"
 #include "worker/pipeline/ba_stage.h"
 #include "worker/pipeline/inspect_stage.h"
@@ -192,7 +193,7 @@ int main(int argc, char** argv) {
       std::printf("  solve time over the %d runs, fastest-median-slowest:", runs);
       for (const char* mode : {"naive", "geva", "proposed"}) {
         const std::vector<double>& t = times[mode];
-        std::printf(" %s %.2f-%.2f-%.2f s;", mode, t.front(), t[t.size() / 2], t.back());
+        std::printf(" %s %.2f-%.2f-%.2f s;", mode, t.front(), robust_spread(t).median, t.back());
       }
       std::printf("\n");
     }

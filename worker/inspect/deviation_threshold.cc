@@ -2,33 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include "worker/core/robust_spread.h"
 
 namespace keel::inspect {
-namespace {
-
-// Exact median (mean of the two middle values for an even count); values is reordered.
-double median_of(std::vector<double>& values) {
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  double median = values[mid];
-  if (values.size() % 2 == 0)
-    median = 0.5 * (median + *std::max_element(values.begin(), values.begin() + mid));
-  return median;
-}
-
-}  // namespace
 
 DeviationNoise robust_deviation_noise(const std::vector<Landmark>& landmarks) {
   std::vector<double> h;
   for (const Landmark& l : landmarks)
     if (l.lambda == 1) h.push_back(l.h_m);
-  if (h.empty()) return {};
-  DeviationNoise out;
-  out.bias_m = median_of(h);
-  for (double& x : h) x = std::abs(x - out.bias_m);
-  // 1.4826 = 1 / Phi^-1(3/4): the median of |x - mu| for x ~ N(mu, sigma^2) is sigma / 1.4826.
-  out.sigma_m = 1.4826 * median_of(h);
-  return out;
+  const RobustSpread spread = robust_spread(std::move(h));
+  return {spread.median, spread.sigma};
 }
 
 DeviationThreshold deviation_threshold(const std::vector<Landmark>& landmarks,

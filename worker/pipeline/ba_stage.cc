@@ -20,6 +20,7 @@
 
 #include "proto/contract_error.h"
 #include "worker/ba/model_assisted_ba.h"
+#include "worker/core/robust_spread.h"
 #include "worker/io/mesh_reader.h"
 #include "worker/io/mission_reader.h"
 #include "worker/io/text_writer.h"
@@ -564,12 +565,8 @@ json residual_stats(std::vector<double> r, const BaStageOptions& options) {
   out["mean_m"] = mean;
   out["sigma_m"] = std::sqrt(sum2 / r.size());
   // The spread of the bulk, blind to the few beams that see structure the model lacks (a
-  // fouling patch 5-18 cm proud): 1.4826 median |r - median r|, sigma for Gaussian residuals.
-  const double median = percentile_of(r, 50.0);
-  std::vector<double> deviation;
-  for (double x : r) deviation.push_back(std::abs(x - median));
-  std::sort(deviation.begin(), deviation.end());
-  out["robust_sigma_m"] = 1.4826 * percentile_of(deviation, 50.0);
+  // fouling patch 5-18 cm proud).
+  out["robust_sigma_m"] = robust_spread(r).sigma;
   json pct = json::object();
   for (double p : {5.0, 25.0, 50.0, 75.0, 95.0})
     pct["p" + std::to_string(int(p))] = percentile_of(r, p);
