@@ -19,6 +19,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs
   python3-tf2-msgs python3-numpy curl
+  # reference tool for the C2C distance test (compare/cloudcompare_c2c)
+  cloudcompare
 )
 
 missing=()

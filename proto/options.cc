@@ -7,7 +7,7 @@
 namespace keel::proto {
 
 const std::vector<std::string>& known_stages() {
-  static const std::vector<std::string> stages = {"ingest", "refine", "map", "ba", "inspect"};
+  static const std::vector<std::string> stages = {"ingest", "refine", "map", "ba", "inspect", "compare"};
   return stages;
 }
 

@@ -109,6 +109,70 @@ class Box : public Primitive {
   Eigen::Vector3d half_;
 };
 
+// Where a ray inside [lo, hi] leaves it: the exit t and the outward normal of the exit face.
+bool slab_exit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
+               const Eigen::Vector3d& hi, double* t_exit, Eigen::Vector3d* outward) {
+  double t_far = kInf;
+  int far_axis = -1;
+  double far_sign = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) < 1e-15) continue;
+    const double t = ((d[i] > 0.0 ? hi[i] : lo[i]) - o[i]) / d[i];
+    if (t < t_far) t_far = t, far_axis = i, far_sign = d[i] > 0.0 ? 1.0 : -1.0;
+  }
+  if (far_axis < 0) return false;
+  *t_exit = t_far;
+  *outward = Eigen::Vector3d::Zero();
+  (*outward)[far_axis] = far_sign;
+  return true;
+}
+
+class CavityBox : public Primitive {
+ public:
+  CavityBox(const Eigen::Vector3d& center, const Eigen::Matrix3d& R, const Eigen::Vector3d& half,
+            std::vector<Eigen::AlignedBox3d> cavities)
+      : center_(center), R_(R), half_(half), cavities_(std::move(cavities)) {
+    bounds = world_bounds(center, R, -half, half);
+  }
+  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min, double t_max,
+                 double* t, Eigen::Vector3d* n) const override {
+    const Eigen::Vector3d ol = R_.transpose() * (o - center_), dl = R_.transpose() * d;
+    int axis;
+    double sign, th;
+    if (!slab(ol, dl, -half_, half_, t_min, kInf, &th, &axis, &sign)) return false;
+    const Eigen::Vector3d p = ol + th * dl;
+    for (const auto& cavity : cavities_) {
+      if (!cavity.contains(p)) continue;
+      // Inside the mouth: the ray runs on through the cavity to its floor or a wall.
+      double t_exit;
+      Eigen::Vector3d outward;
+      if (!slab_exit(ol, dl, cavity.min(), cavity.max(), &t_exit, &outward)) return false;
+      if (t_exit > t_max) return false;
+      *t = t_exit;
+      *n = -(R_ * outward);
+      return true;
+    }
+    if (th > t_max) return false;
+    *t = th;
+    Eigen::Vector3d local = Eigen::Vector3d::Zero();
+    local[axis] = sign;
+    *n = R_ * local;
+    return true;
+  }
+  double signed_distance(const Eigen::Vector3d& p) const override {
+    const Eigen::Vector3d pl = R_.transpose() * (p - center_);
+    double d = box_sdf(pl, -half_, half_);
+    for (const auto& cavity : cavities_) d = std::max(d, -box_sdf(pl, cavity.min(), cavity.max()));
+    return d;
+  }
+
+ private:
+  Eigen::Vector3d center_;
+  Eigen::Matrix3d R_;
+  Eigen::Vector3d half_;
+  std::vector<Eigen::AlignedBox3d> cavities_;
+};
+
 class Cylinder : public Primitive {
  public:
   Cylinder(const Eigen::Vector3d& center, const Eigen::Matrix3d& R, double radius,
@@ -329,6 +393,18 @@ std::unique_ptr<Primitive> make_box(const Eigen::Vector3d& center, const Eigen::
                                     const Eigen::Vector3d& half_extents, const Material& material,
                                     const std::string& name) {
   auto p = std::make_unique<Box>(center, R, half_extents);
+  p->material = material;
+  p->name = name;
+  return p;
+}
+
+std::unique_ptr<Primitive> make_box_with_cavities(const Eigen::Vector3d& center,
+                                                  const Eigen::Matrix3d& R,
+                                                  const Eigen::Vector3d& half_extents,
+                                                  const std::vector<Eigen::AlignedBox3d>& cavities,
+                                                  const Material& material,
+                                                  const std::string& name) {
+  auto p = std::make_unique<CavityBox>(center, R, half_extents, cavities);
   p->material = material;
   p->name = name;
   return p;

@@ -46,6 +46,16 @@ std::unique_ptr<Primitive> make_box(const Eigen::Vector3d& center,
                                     const Eigen::Matrix3d& R_world_box,
                                     const Eigen::Vector3d& half_extents, const Material& material,
                                     const std::string& name);
+// Box as make_box, with box-shaped cavities cut out of it (spalled concrete): each cavity is
+// an axis-aligned box [lo, hi] in the box's local frame that opens through one of its faces
+// (it reaches past that face and stays inside the others). A ray entering the box through a
+// cavity's mouth meets the cavity's floor or walls instead.
+std::unique_ptr<Primitive> make_box_with_cavities(const Eigen::Vector3d& center,
+                                                  const Eigen::Matrix3d& R_world_box,
+                                                  const Eigen::Vector3d& half_extents,
+                                                  const std::vector<Eigen::AlignedBox3d>& cavities,
+                                                  const Material& material,
+                                                  const std::string& name);
 // Capped cylinder along the local z axis of R_world_cylinder.
 std::unique_ptr<Primitive> make_cylinder(const Eigen::Vector3d& center,
                                          const Eigen::Matrix3d& R_world_cylinder, double radius,

@@ -1,7 +1,7 @@
 // keel-sim: writes a synthetic mission bundle with ground truth (DESIGN.md, issue 3).
 //   keel-sim --scenario usv-bridge|usv-corridor|hauv-hull --seed N --out DIR [--duration S]
 //            [--sensors imu,dvl,lidar_h,lidar_v,sonar,camera,depth] [--dvl-scale 1.02]
-//            [--dvl-dropout-rate R] [--bag] [--set key=value ...]
+//            [--dvl-dropout-rate R] [--bag] [--survey N] [--set key=value ...]
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -16,6 +16,10 @@ int main(int argc, char** argv) {
   app.add_option("--scenario", options.scenario, "usv-bridge | usv-corridor | hauv-hull")
       ->check(CLI::IsMember({"usv-bridge", "usv-corridor", "hauv-hull"}));
   app.add_option("--seed", options.seed, "random seed (same seed, same bytes)");
+  app.add_option("--survey", options.survey,
+                 "1 = first survey; 2, 3, ... = the same scene again with known changes "
+                 "(truth.yaml `changes`; usv-bridge, hauv-hull)")
+      ->check(CLI::Range(1, 100));
   app.add_option("--out", options.out_dir, "output mission folder")->required();
   app.add_option("--duration", options.duration_s, "seconds (default: the scenario's whole path)");
   app.add_option("--sensors", options.sensors,

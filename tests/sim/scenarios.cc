@@ -47,20 +47,87 @@ void add_water(AnalyticScene* scene) {
   scene->add(make_plane({0, 0, -6}, {0, 0, 1}, kSeabed, "seabed"));
 }
 
-void add_stadium_pier(AnalyticScene* scene, const Eigen::Vector3d& center,
-                      const std::string& name) {
+// Pier geometry (pier-local x across the flat faces, y along the pier).
+constexpr double kPierHalfLength = 2.5, kPierRadius = 1.2, kPierZ0 = -6.0, kPierZ1 = 6.0;
+
+void add_stadium_pier(AnalyticScene* scene, const Eigen::Vector3d& center, const std::string& name,
+                      const std::vector<SceneChange>& changes) {
   // Rounded-end concrete pier from the seabed to the deck (Welland Canal Bridge 13 style).
-  const double half_length = 2.5, radius = 1.2, z0 = -6.0, z1 = 6.0;
+  const double half_length = kPierHalfLength, radius = kPierRadius, z0 = kPierZ0, z1 = kPierZ1;
   const Eigen::Vector3d c(center.x(), center.y(), 0.5 * (z0 + z1));
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  scene->add(make_box(c, I, {radius, half_length, 0.5 * (z1 - z0)}, kConcrete, name));
+  // Spalls of a later survey: cavities opening through the flat faces x = +-radius.
+  std::vector<Eigen::AlignedBox3d> cavities;
+  for (const SceneChange& change : changes) {
+    if (change.structure != name || change.kind != "spall") continue;
+    const Eigen::Vector3d at = change.center - c;  // on the face, box-local (axes = world)
+    const double side = change.normal.x() > 0 ? 1.0 : -1.0;
+    const Eigen::Vector3d half_size(0.0, 0.5 * change.width_m, 0.5 * change.footprint_height_m);
+    Eigen::Vector3d lo = at - half_size, hi = at + half_size;
+    // From depth_m inside the face to 5 cm outside it (the mouth).
+    lo.x() = side > 0 ? radius - change.depth_m : -radius - 0.05;
+    hi.x() = side > 0 ? radius + 0.05 : -radius + change.depth_m;
+    cavities.emplace_back(lo, hi);
+  }
+  scene->add(make_box_with_cavities(c, I, {radius, half_length, 0.5 * (z1 - z0)}, cavities,
+                                    kConcrete, name));
+  for (const SceneChange& change : changes) {
+    if (change.structure != name || change.kind != "new_object") continue;
+    // A box (a junction box, a bracket) standing height_m out of the face.
+    const Eigen::Vector3d box_center = change.center + 0.5 * change.height_m * change.normal;
+    scene->add(
+        make_box(box_center, I,
+                 {0.5 * change.height_m, 0.5 * change.width_m, 0.5 * change.footprint_height_m},
+                 kConcrete, name + "_attachment"));
+  }
   scene->add(make_cylinder(c + Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0),
                            kConcrete, name + "_north"));
   scene->add(make_cylinder(c - Eigen::Vector3d(0, half_length, 0), I, radius, 0.5 * (z1 - z0),
                            kConcrete, name + "_south"));
 }
 
-std::unique_ptr<AnalyticScene> bridge_scene() {
+// The changes of a later survey of the bridge: a spall on each flat face of both piers, 3 to
+// 10 cm deep, and a box attached to the north pier's east face, above the water where the
+// lidars see them. Sizes and places are jittered by the scene seed, the same for every later
+// survey of that seed.
+std::vector<SceneChange> bridge_changes(uint64_t seed) {
+  Rng rng(seed, Stream::kScene, 16);
+  const double depths[] = {0.03, 0.05, 0.07, 0.10};
+  struct Face {
+    const char* pier;
+    double pier_y, side;
+  };
+  const Face faces[] = {{"pier_north", 7.0, 1.0},
+                        {"pier_north", 7.0, -1.0},
+                        {"pier_south", -7.0, 1.0},
+                        {"pier_south", -7.0, -1.0}};
+  std::vector<SceneChange> out;
+  for (int k = 0; k < 4; ++k) {
+    SceneChange spall;
+    spall.kind = "spall";
+    spall.structure = faces[k].pier;
+    spall.width_m = rng.uniform(0.4, 0.7);
+    spall.footprint_height_m = rng.uniform(0.3, 0.5);
+    spall.depth_m = depths[k];
+    // The north pier's east face also holds the new object: the spall keeps to y < 0 there.
+    const double y = k == 0 ? rng.uniform(-1.4, -0.7) : rng.uniform(-1.0, 1.0);
+    spall.center = {faces[k].side * kPierRadius, faces[k].pier_y + y, rng.uniform(0.8, 2.2)};
+    spall.normal = {faces[k].side, 0.0, 0.0};
+    out.push_back(spall);
+  }
+  SceneChange box;
+  box.kind = "new_object";
+  box.structure = "pier_north";
+  box.width_m = rng.uniform(0.4, 0.6);
+  box.footprint_height_m = rng.uniform(0.5, 0.7);
+  box.height_m = rng.uniform(0.15, 0.25);
+  box.center = {kPierRadius, 7.0 + rng.uniform(0.7, 1.4), rng.uniform(1.0, 2.0)};
+  box.normal = {1.0, 0.0, 0.0};
+  out.push_back(box);
+  return out;
+}
+
+std::unique_ptr<AnalyticScene> bridge_scene(const std::vector<SceneChange>& changes) {
   auto scene = std::make_unique<AnalyticScene>();
   add_water(scene.get());
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
@@ -80,8 +147,8 @@ std::unique_ptr<AnalyticScene> bridge_scene() {
   for (double x : south_x)
     scene->add(make_box({x, -19.6, -1.75}, I, {0.35, 0.4, 4.25}, kConcrete, "pilaster"));
   // The bridge: two piers, deck and girders.
-  add_stadium_pier(scene.get(), {0, 7, 0}, "pier_north");
-  add_stadium_pier(scene.get(), {0, -7, 0}, "pier_south");
+  add_stadium_pier(scene.get(), {0, 7, 0}, "pier_north", changes);
+  add_stadium_pier(scene.get(), {0, -7, 0}, "pier_south", changes);
   scene->add(make_box({0, 0, 6.75}, I, {3.5, 21.0, 0.75}, kConcrete, "deck"));
   scene->add(make_box({2.6, 0, 5.75}, I, {0.2, 21.0, 0.25}, kConcrete, "girder_east"));
   scene->add(make_box({-2.6, 0, 5.75}, I, {0.2, 21.0, 0.25}, kConcrete, "girder_west"));
@@ -175,7 +242,16 @@ Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions&
   s.name = name;
   s.platform = "usv";
   const bool bridge = name == "usv-bridge";
-  auto scene = bridge ? bridge_scene() : corridor_scene();
+  s.survey = options.survey;
+  if (options.survey > 1) {
+    if (!bridge)
+      throw std::invalid_argument("survey: " + name +
+                                  " has no repeated survey with known changes (usv-bridge and "
+                                  "hauv-hull have); expected 1, got " +
+                                  std::to_string(options.survey));
+    s.changes = bridge_changes(seed);
+  }
+  auto scene = bridge ? bridge_scene(s.changes) : corridor_scene();
   s.analytic = scene.get();
   s.world = std::move(scene);
   MotionOptions motion = options.motion;
@@ -186,7 +262,7 @@ Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions&
   s.motion = std::make_unique<PathMotion>(
       SmoothPath(bridge ? repeat_laps(bridge_waypoints(), bridge_turnaround(), motion.laps)
                         : corridor_waypoints()),
-      motion, seed);
+      motion, survey_seed(seed, options.survey));
   s.default_duration_s = std::ceil(s.motion->end_time());
   if (!bridge) s.degenerate_axis_world = Eigen::Vector3d::UnitX();
   add_usv_rig(&s);
@@ -252,7 +328,8 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   if (!options.speed_overridden) motion.cruise_speed_mps = 0.25;
   motion.roll_amplitude_rad = 0.005, motion.pitch_amplitude_rad = 0.004,
   motion.heave_amplitude_m = 0.01;
-  s.motion = std::make_unique<PathMotion>(SmoothPath(waypoints, {angles}), motion, seed);
+  s.motion = std::make_unique<PathMotion>(SmoothPath(waypoints, {angles}), motion,
+                                          survey_seed(seed, options.survey));
   s.default_duration_s = std::ceil(s.motion->end_time());
 
   // Foreign objects on the real hull (seed 001 Sec. 4: a 0.11 m cylinder, biofouling
@@ -265,18 +342,14 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
                                   {ForeignObject::Kind::kPatch, -2.8, 0.85},
                                   {ForeignObject::Kind::kPatch, 3.2, 0.46},
                                   {ForeignObject::Kind::kPatch, -0.6, 0.33}};
-  TriangleMesh real = transform_mesh(s.cad_mesh, s.T_world_cad);
-  const auto hull_landmarks =
-      scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
-  std::vector<Landmark> landmarks = hull_landmarks;
-  auto add_object = [&](const ForeignObject& object) {
-    const TriangleMesh object_mesh = foreign_object_mesh(object);
-    const auto on_object = scatter_landmarks(object_mesh, 150.0, 2.0, false,
-                                             1000000 + 10000 * int64_t(s.foreign_objects.size()),
-                                             seed, 1 + s.foreign_objects.size());
-    landmarks.insert(landmarks.end(), on_object.begin(), on_object.end());
-    append_mesh(&real, object_mesh);
-    s.foreign_objects.push_back(object);
+  // Objects are placed first (the scene), then a later survey's changes are applied, then
+  // their meshes and landmarks are built. `placed` keeps each object's index in the first
+  // survey's list, which names its landmark ids and stream.
+  std::vector<std::pair<ForeignObject, size_t>> placed;
+  auto clear_of_placed = [&](const ForeignObject& object) {
+    return std::all_of(placed.begin(), placed.end(), [&](const auto& p) {
+      return (p.first.center - object.center).norm() > p.first.radius_m + object.radius_m + 0.3;
+    });
   };
   for (const auto& place : placements) {
     ForeignObject object;
@@ -291,7 +364,7 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     } else {
       object.radius_m = rng.uniform(0.1, 0.25), object.height_m = rng.uniform(0.06, 0.18);
     }
-    add_object(object);
+    placed.emplace_back(object, placed.size());
   }
   // Fouling patches: uniform over the surveyed band (the lanes' x span and girth), clear of
   // every object placed before by 0.3 m so each stays a shape of its own. Its own random
@@ -300,25 +373,87 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     throw std::invalid_argument("hull.fouling_patches: expected an integer in [0, " +
                                 std::to_string(kMaxFoulingPatches) + "], got " +
                                 std::to_string(options.fouling_patches));
+  // A patch somewhere in the surveyed band; false when it misses the hull or crowds another.
+  auto random_patch = [&](Rng& r, ForeignObject* object) {
+    object->kind = ForeignObject::Kind::kPatch;
+    const double x = r.uniform(-half_span_m, half_span_m);
+    const SurfacePoint sp =
+        shape.surface(2.0 * x / options.hull.length_m, r.uniform(lanes[4] - 0.03, lanes[0] + 0.03));
+    object->radius_m = r.uniform(0.1, 0.25);
+    object->height_m = r.uniform(0.06, 0.18);
+    if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object->center, &object->axis))
+      return false;
+    return clear_of_placed(*object);
+  };
   Rng fouling_rng(seed, Stream::kHull, 1);
-  for (int tries = 0; int(s.foreign_objects.size()) < 4 + options.fouling_patches; ++tries) {
+  for (int tries = 0; int(placed.size()) < 4 + options.fouling_patches; ++tries) {
     if (tries > 1000 * (options.fouling_patches + 1))
       throw std::invalid_argument("hauv-hull: no room for " +
                                   std::to_string(options.fouling_patches) + " fouling patches");
     ForeignObject object;
-    object.kind = ForeignObject::Kind::kPatch;
-    const double x = fouling_rng.uniform(-half_span_m, half_span_m);
-    const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m,
-                                          fouling_rng.uniform(lanes[4] - 0.03, lanes[0] + 0.03));
-    object.radius_m = fouling_rng.uniform(0.1, 0.25);
-    object.height_m = fouling_rng.uniform(0.06, 0.18);
-    if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object.center, &object.axis)) continue;
-    const bool clear = std::all_of(
-        s.foreign_objects.begin(), s.foreign_objects.end(), [&](const ForeignObject& o) {
-          return (o.center - object.center).norm() > o.radius_m + object.radius_m + 0.3;
-        });
-    if (!clear) continue;
-    add_object(object);
+    if (random_patch(fouling_rng, &object)) placed.emplace_back(object, placed.size());
+  }
+  s.survey = options.survey;
+  if (options.survey > 1) {
+    // A later survey: every patch grew by 2-6 cm in height and radius, the cylinder was
+    // removed, one new patch settled. Drawn from the scene seed: every later survey of a seed
+    // shows the same changes.
+    Rng change_rng(seed, Stream::kHull, 2);
+    std::vector<std::pair<ForeignObject, size_t>> later;
+    for (auto& [object, index] : placed) {
+      SceneChange change;
+      change.structure = "hull";
+      change.center = object.center;
+      change.normal = object.axis;
+      change.object = int(index);
+      change.height_before_m = object.height_m;
+      change.radius_before_m = object.radius_m;
+      if (object.kind == ForeignObject::Kind::kCylinder) {
+        change.kind = "removed";
+        change.height_m = object.height_m;
+        change.radius_m = object.radius_m;
+        s.changes.push_back(change);
+        continue;
+      }
+      object.height_m += change_rng.uniform(0.02, 0.06);
+      object.radius_m += change_rng.uniform(0.02, 0.06);
+      change.kind = "grown";
+      change.height_m = object.height_m;
+      change.radius_m = object.radius_m;
+      s.changes.push_back(change);
+      later.emplace_back(object, index);
+    }
+    // The new patch keeps clear of every object of the first survey (the removed one too).
+    const size_t first_count = placed.size();
+    ForeignObject fresh;
+    int tries = 0;
+    while (!random_patch(change_rng, &fresh))
+      if (++tries > 1000) throw std::invalid_argument("hauv-hull: no room for the new patch");
+    placed = later;
+    fresh.height_m = std::min(fresh.height_m, 0.12);
+    SceneChange change;
+    change.kind = "new";
+    change.structure = "hull";
+    change.center = fresh.center;
+    change.normal = fresh.axis;
+    change.height_m = fresh.height_m;
+    change.radius_m = fresh.radius_m;
+    s.changes.push_back(change);
+    placed.emplace_back(fresh, first_count);
+  }
+
+  TriangleMesh real = transform_mesh(s.cad_mesh, s.T_world_cad);
+  const auto hull_landmarks =
+      scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
+  std::vector<Landmark> landmarks = hull_landmarks;
+  for (const auto& [object, index] : placed) {
+    const TriangleMesh object_mesh = foreign_object_mesh(object);
+    const auto on_object =
+        scatter_landmarks(object_mesh, 150.0, 2.0, false, 1000000 + 10000 * int64_t(index),
+                          survey_seed(seed, options.survey), 1 + index);
+    landmarks.insert(landmarks.end(), on_object.begin(), on_object.end());
+    append_mesh(&real, object_mesh);
+    s.foreign_objects.push_back(object);
   }
   s.real_mesh_world = real;
   auto world = std::make_unique<HullWorld>(real, std::move(landmarks));
@@ -364,6 +499,10 @@ Pose3 Scenario::T_body_sensor_at(const std::string& sensor, double t_s) const {
   return T_body_servo * rotation * T_body_servo.inverse() * it->second;
 }
 
+uint64_t survey_seed(uint64_t seed, int survey) {
+  return survey <= 1 ? seed : splitmix64(seed ^ (uint64_t(survey) * 0x9E3779B97F4A7C15ULL));
+}
+
 std::vector<std::string> scenario_names() { return {"usv-bridge", "usv-corridor", "hauv-hull"}; }
 
 Scenario make_scenario(const std::string& name, uint64_t seed, const ScenarioOptions& options) {
@@ -374,6 +513,9 @@ Scenario make_scenario(const std::string& name, uint64_t seed, const ScenarioOpt
                                   std::to_string(options.fouling_patches));
     return make_usv(name, seed, options);
   }
+  if (options.survey < 1 || options.survey > 100)
+    throw std::invalid_argument("survey: expected an integer in [1, 100], got " +
+                                std::to_string(options.survey));
   if (name == "hauv-hull") return make_hauv(seed, options);
   throw std::invalid_argument("unknown scenario '" + name +
                               "' (expected usv-bridge, usv-corridor or hauv-hull)");

@@ -20,6 +20,23 @@ namespace keel::sim {
 // 90-100 patches; 90 were placed on every seed of 1-100, so 60 leaves a margin.
 constexpr int kMaxFoulingPatches = 60;
 
+// A known change of a repeated survey (survey >= 2) against the first, listed in truth.yaml's
+// `changes`. Frames: world (the scene's, which every survey shares).
+struct SceneChange {
+  // usv-bridge: "spall" (material removed from a pier face), "new_object" (a box attached to
+  // a pier face); hauv-hull: "grown" (a fouling patch higher and wider), "new", "removed".
+  std::string kind;
+  std::string structure;                             // the pier's name, or "hull"
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // on the first survey's surface
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // outward unit normal there
+  // Rectangular footprints on a pier face: width along the face (horizontal), height up it.
+  double width_m = 0.0, footprint_height_m = 0.0;
+  double depth_m = 0.0;   // spall: how deep the material was removed
+  double height_m = 0.0;  // how far the object stands out now (removed: stood out before)
+  double height_before_m = 0.0, radius_m = 0.0, radius_before_m = 0.0;  // hull patches
+  int object = -1;  // hauv-hull: index into the first survey's foreign_objects
+};
+
 struct ScenarioOptions {
   MotionOptions motion;  // the scenario sets speed/heading defaults, overrides follow
   bool speed_overridden = false;
@@ -31,7 +48,13 @@ struct ScenarioOptions {
   // the paper's hulls had 18 % and 66 % of their features off the model (lambda = 1 fractions
   // 0.82 and 0.34), the clean keel-sim hull about 0.3 %.
   int fouling_patches = 0;
+  // 1: the scene as first surveyed; 2, 3, ...: the same scene surveyed again later, with the
+  // known changes of Scenario::changes and its own vehicle motion and sensor noise.
+  int survey = 1;
 };
+
+// Seed of a survey's motion and sensor noise: the scene's seed for the first survey.
+uint64_t survey_seed(uint64_t seed, int survey);
 
 struct Scenario {
   std::string name;
@@ -57,6 +80,9 @@ struct Scenario {
   Pose3 T_world_cad = Pose3::Identity();
   std::vector<ForeignObject> foreign_objects;
   TriangleMesh real_mesh_world;  // CAD at T_world_cad plus the objects
+  // Repeated surveys.
+  int survey = 1;
+  std::vector<SceneChange> changes;
 
   double servo_angle(double t_s) const;
   // Extrinsic at time t (tray sensors follow the servo angle).

@@ -184,6 +184,35 @@ void emit_vector(YAML::Emitter& y, const Eigen::Vector3d& v) {
   y << YAML::Flow << YAML::BeginSeq << v.x() << v.y() << v.z() << YAML::EndSeq;
 }
 
+// truth.yaml `changes`: what a later survey changed (docs/mission-format.md).
+void emit_changes(YAML::Emitter& y, const std::vector<SceneChange>& changes) {
+  y << YAML::Key << "changes" << YAML::Value << YAML::BeginSeq;
+  for (const SceneChange& c : changes) {
+    y << YAML::Flow << YAML::BeginMap;
+    y << YAML::Key << "kind" << YAML::Value << c.kind;
+    y << YAML::Key << "structure" << YAML::Value << c.structure;
+    y << YAML::Key << "center" << YAML::Value;
+    emit_vector(y, c.center);
+    y << YAML::Key << "normal" << YAML::Value;
+    emit_vector(y, c.normal);
+    if (c.kind == "spall" || c.kind == "new_object") {
+      y << YAML::Key << "width" << YAML::Value << c.width_m;
+      y << YAML::Key << "footprint_height" << YAML::Value << c.footprint_height_m;
+    }
+    if (c.kind == "spall") y << YAML::Key << "depth" << YAML::Value << c.depth_m;
+    if (c.kind != "spall") y << YAML::Key << "height" << YAML::Value << c.height_m;
+    if (c.kind == "grown" || c.kind == "new" || c.kind == "removed")
+      y << YAML::Key << "radius" << YAML::Value << c.radius_m;
+    if (c.kind == "grown") {
+      y << YAML::Key << "height_before" << YAML::Value << c.height_before_m;
+      y << YAML::Key << "radius_before" << YAML::Value << c.radius_before_m;
+    }
+    if (c.object >= 0) y << YAML::Key << "object" << YAML::Value << c.object;
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq;
+}
+
 void write_text(const std::string& path, const std::string& text) {
   TextFile f(path);
   f.line(text);
@@ -272,6 +301,7 @@ SimSummary run_simulation(const SimOptions& options) {
   apply_settings(options.settings, &settings, &scenario_options);
   settings.dvl.scale = options.dvl_scale;
   settings.dvl.dropout_rate = options.dvl_dropout_rate;
+  scenario_options.survey = options.survey;
 
   const Scenario scenario = make_scenario(options.scenario, options.seed, scenario_options);
   const std::vector<std::string> sensors = resolve_sensors(options, scenario);
@@ -283,8 +313,9 @@ SimSummary run_simulation(const SimOptions& options) {
   if (!(duration > 0.0 && duration < 7 * 24 * 3600.0))
     throw std::invalid_argument("--duration: expected seconds in (0, 604800)");
   const bool hauv = scenario.platform == "hauv";
-  const uint64_t seed = options.seed;
-  const TimeNs t0 = options.t0_ns;
+  // Sensor noise and timing of this survey; the scene comes from options.seed.
+  const uint64_t seed = survey_seed(options.seed, options.survey);
+  const TimeNs t0 = options.t0_ns + TimeNs(options.survey - 1) * 30 * 86400 * 1000000000LL;
 
   const fs::path out(options.out_dir);
   fs::create_directories(out / "ground_truth");
@@ -518,7 +549,7 @@ SimSummary run_simulation(const SimOptions& options) {
         result.cloud = simulate_lidar_sweep(
             *scenario.world, truth, scenario.T_body_sensor.at(job.sensor), t, settings.lidar, rng);
       }
-      result.cloud.t_ns = options.t0_ns + job.t_ns;
+      result.cloud.t_ns = t0 + job.t_ns;
       result.cloud.frame = job.sensor;
       total_points += result.cloud.size();
       write_pcd_binary((out / job.sensor / file_name(job.index, "pcd")).string(), result.cloud);
@@ -641,6 +672,7 @@ SimSummary run_simulation(const SimOptions& options) {
     y << YAML::Key << "keel_truth" << YAML::Value << 1;
     y << YAML::Key << "scenario" << YAML::Value << scenario.name;
     y << YAML::Key << "seed" << YAML::Value << options.seed;
+    y << YAML::Key << "survey" << YAML::Value << options.survey;
     y << YAML::Key << "trajectory" << YAML::Value << "trajectory.tum";
     y << YAML::Key << "dvl_scale" << YAML::Value << settings.dvl.scale;
     y << YAML::Key << "extrinsics" << YAML::Value << YAML::BeginMap;
@@ -671,12 +703,14 @@ SimSummary run_simulation(const SimOptions& options) {
           << YAML::Value << "cam0_tracks.csv" << YAML::EndMap;
       }
     }
+    if (!scenario.changes.empty()) emit_changes(y, scenario.changes);
     y << YAML::EndMap;
     write_text((out / "ground_truth" / "truth.yaml").string(), y.c_str());
   }
 
   // ---- mission.yaml (and mission_bag.yaml) ----
-  const std::string name = scenario.name + "-seed" + std::to_string(options.seed);
+  const std::string name = scenario.name + "-seed" + std::to_string(options.seed) +
+                           (options.survey > 1 ? "-survey" + std::to_string(options.survey) : "");
   for (int which = 0; which < (bag ? 2 : 1); ++which) {
     YAML::Emitter y;
     y.SetDoublePrecision(10);

@@ -35,6 +35,10 @@ struct SensorSettings {
 struct SimOptions {
   std::string scenario = "usv-bridge";
   uint64_t seed = 1;
+  // 1: the first survey; 2, 3, ...: the same scene surveyed again 30 days apart, with the
+  // known changes of truth.yaml's `changes`, its own motion and sensor noise (usv-bridge,
+  // hauv-hull).
+  int survey = 1;
   std::string out_dir;
   double duration_s = 0.0;           // <= 0: the scenario's full path
   std::vector<std::string> sensors;  // imu,dvl,lidar_h,lidar_v,sonar,camera,depth; empty: all

@@ -27,5 +27,6 @@ Subcommand add_ate_command(CLI::App& app);    // ate_command.cc (evo_ape)
 Subcommand add_rpe_command(CLI::App& app);    // rpe_command.cc (evo_rpe)
 Subcommand add_filter_command(CLI::App& app);   // filter_command.cc (map filter chains)
 Subcommand add_metrics_command(CLI::App& app);  // metrics_command.cc (Table V metrics)
+Subcommand add_compare_command(CLI::App& app);  // compare_command.cc (two job folders)
 
 }  // namespace keel::worker

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
       keel::worker::add_rpe_command(app),
       keel::worker::add_filter_command(app),
       keel::worker::add_metrics_command(app),
+      keel::worker::add_compare_command(app),
   };
 
   std::vector<std::string> args = with_default_subcommand(argc, argv);

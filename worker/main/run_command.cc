@@ -34,10 +34,16 @@ int usage_error(const std::string& message) {
   return kExitUsage;
 }
 
-// The stages to run: --stages, checked against what this worker has, or all of them.
+// The stages to run: --stages, checked against what this worker has, or all of them but
+// `compare` (which reads two jobs, not a mission: `keel-worker compare`).
 std::vector<std::string> select_stages(const std::string& text) {
   const std::vector<std::string> available = pipeline::available_stages();
-  if (text.empty()) return available;
+  if (text.empty()) {
+    std::vector<std::string> stages;
+    for (const auto& s : available)
+      if (s != "compare") stages.push_back(s);
+    return stages;
+  }
   std::vector<std::string> stages = proto::parse_stage_list(text);
   for (const auto& stage : stages) {
     if (std::find(available.begin(), available.end(), stage) != available.end()) continue;

@@ -38,6 +38,7 @@ struct JobSpec {
   std::vector<std::string> stages;                    // in the order to run
   nlohmann::json options = nlohmann::json::object();  // {"stage": {"option": value}}
   std::vector<CompletedStage> completed;              // skipped; reports passed on
+  std::vector<InputJob> input_jobs;                   // the jobs a `compare` stage reads
 };
 
 // Every hook is optional. They are called on the thread that calls run(). An exception

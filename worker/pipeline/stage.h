@@ -20,12 +20,20 @@ struct Canceled : std::runtime_error {
   Canceled() : std::runtime_error("job canceled") {}
 };
 
+// A finished job that a `compare` stage reads: its artifacts, downloaded into `dir` (report.json
+// among them), and its record ({"id", "mission_id", "project", "stages", "options", ...}).
+struct InputJob {
+  std::filesystem::path dir;
+  nlohmann::json job = nlohmann::json::object();
+};
+
 struct StageContext {
   std::filesystem::path mission_dir;  // unpacked mission bundle (mission.yaml at its root)
   std::filesystem::path cad_path;     // CAD mesh file, empty when the mission has none
   std::filesystem::path work_dir;     // artifacts of every stage of this job live here
   nlohmann::json options = nlohmann::json::object();  // this stage's options (--set stage.x=v)
   nlohmann::json reports = nlohmann::json::object();  // sections of earlier stages, by stage name
+  std::vector<InputJob> input_jobs;  // `compare`: the earlier job A, then the later job B
 
   // Progress of this stage in [0, 1]; a line for the job log. Both cheap; call freely.
   std::function<void(double)> progress = [](double) {};
@@ -39,7 +47,7 @@ struct StageContext {
 
 struct StageResult {
   nlohmann::json report = nlohmann::json::object();  // this stage's section of report.json
-  std::vector<std::string> artifacts;                 // file names written into work_dir
+  std::vector<std::string> artifacts;                // file names written into work_dir
 };
 
 class Stage {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "worker/pipeline/ba_stage.h"
+#include "worker/pipeline/compare_stage.h"
 #include "worker/pipeline/ingest_stage.h"
 #include "worker/pipeline/inspect_stage.h"
 #include "worker/pipeline/map_stage.h"
@@ -27,6 +28,7 @@ const std::vector<StageEntry>& entries() {
       {"map", make_map_stage},
       {"ba", make_ba_stage},
       {"inspect", make_inspect_stage},
+      {"compare", make_compare_stage},
   };
   return table;
 }

@@ -1,0 +1,282 @@
+// The compare stage on synthetic job folders: a scene and its later survey (a block added, a
+// known rigid offset), a hull job, and the refusals (map vs hull, other project, unfinished).
+#include "worker/pipeline/compare_stage.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "proto/contract_error.h"
+#include "tests/worker/compare/test_surfaces.h"
+#include "worker/io/draco_codec.h"
+#include "worker/pipeline/ba_stage.h"
+#include "worker/pipeline/compare_runs.h"
+#include "worker/pipeline/inspect_stage.h"
+#include "worker/pipeline/map_stage.h"
+#include "worker/pipeline/report.h"
+
+namespace keel::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using compare::testing::sample_box;
+using compare::testing::sample_rectangle;
+using nlohmann::json;
+
+class CompareStageTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("keel_compare_stage_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  // A scene of floor, walls and boxes; `changed` adds a 10 cm slab on the floor.
+  std::vector<Eigen::Vector3f> scene(uint32_t seed, bool changed) {
+    std::mt19937 rng(seed);
+    std::vector<Eigen::Vector3f> p;
+    const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),
+                          Z = Eigen::Vector3d::UnitZ();
+    const double density = 2500, sigma = 0.004;
+    if (changed) {  // the floor but under the slab [5, 6.5] x [3.5, 4.5], which hides it
+      sample_rectangle({0, 0, 0}, X, 8, Y, 3.5, density, sigma, rng, &p);
+      sample_rectangle({0, 4.5, 0}, X, 8, Y, 1.5, density, sigma, rng, &p);
+      sample_rectangle({0, 3.5, 0}, X, 5, Y, 1, density, sigma, rng, &p);
+      sample_rectangle({6.5, 3.5, 0}, X, 1.5, Y, 1, density, sigma, rng, &p);
+    } else {
+      sample_rectangle({0, 0, 0}, X, 8, Y, 6, density, sigma, rng, &p);
+    }
+    sample_rectangle({0, 6, 0}, X, 8, Z, 3, density, sigma, rng, &p);
+    sample_rectangle({0, 0, 0}, Y, 6, Z, 3, density, sigma, rng, &p);
+    sample_box({2, 2, 0}, {3, 3.5, 1.5}, density, sigma, rng, &p);
+    sample_box({5, 1, 0}, {6.5, 1.6, 0.8}, density, sigma, rng, &p);
+    if (changed) {  // the slab's top and sides
+      sample_rectangle({5, 3.5, 0.1}, X, 1.5, Y, 1, density, sigma, rng, &p);
+      sample_rectangle({5, 3.5, 0}, X, 1.5, Z, 0.1, density, sigma, rng, &p);
+      sample_rectangle({5, 4.5, 0}, X, 1.5, Z, 0.1, density, sigma, rng, &p);
+      sample_rectangle({5, 3.5, 0}, Y, 1, Z, 0.1, density, sigma, rng, &p);
+      sample_rectangle({6.5, 3.5, 0}, Y, 1, Z, 0.1, density, sigma, rng, &p);
+    }
+    return p;
+  }
+
+  // A job folder with map_combined.drc and report.json.
+  InputJob map_job(const std::string& name, const std::vector<Eigen::Vector3f>& points,
+                   const json& record = json::object()) {
+    InputJob job;
+    job.dir = root_ / name;
+    fs::create_directories(job.dir);
+    io::write_draco_file(job.dir / map_draco_file(kCombinedMapName),
+                         io::encode_draco_point_cloud(points, {}, {18, 12, 5}).bytes);
+    write_report(job.dir, {{"map", {{"points", points.size()}, {"radius_m", 0.25}}}});
+    job.job = {
+        {"id", name}, {"state", "succeeded"}, {"project", "p1"}, {"mission_id", "m_" + name}};
+    job.job.update(record);
+    return job;
+  }
+
+  void write_report(const fs::path& dir, const json& stages) {
+    std::ofstream(dir / kReportFileName) << json{{"keel_report", 1}, {"stages", stages}}.dump();
+  }
+
+  StageResult run(std::vector<InputJob> jobs, const json& options = json::object()) {
+    StageContext context;
+    context.work_dir = root_ / "out";
+    fs::create_directories(context.work_dir);
+    context.options = options;
+    context.input_jobs = std::move(jobs);
+    return make_compare_stage()->run(context);
+  }
+
+  std::string refusal(std::vector<InputJob> jobs) {
+    try {
+      run(std::move(jobs));
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  }
+
+  fs::path root_;
+};
+
+TEST_F(CompareStageTest, LaterSurveyRegisteredAndItsNewSlabSignificant) {
+  const std::vector<Eigen::Vector3f> a = scene(1, false);
+  std::vector<Eigen::Vector3f> b = scene(2, true);
+  Pose3 T_b_a = Pose3::Identity();
+  T_b_a.linear() =
+      Eigen::AngleAxisd(0.01, Eigen::Vector3d(0.3, 0.1, 1).normalized()).toRotationMatrix();
+  T_b_a.translation() = Eigen::Vector3d(0.05, -0.04, 0.02);
+  for (auto& p : b) p = (T_b_a * p.cast<double>()).cast<float>();
+  const StageResult result = run({map_job("a", a), map_job("b", b)});
+
+  const json& r = result.report;
+  EXPECT_EQ(r["kind"], "maps");
+  const json& reg = r["maps"]["registration"];
+  const double t = reg["T_a_b"]["translation_norm_m"].get<double>();
+  EXPECT_NEAR(t, T_b_a.inverse().translation().norm(), 0.005);
+  EXPECT_NEAR(reg["T_a_b"]["rotation_deg"].get<double>(), 0.01 * 180 / M_PI, 0.05);
+  const json& m = r["maps"]["maps"][kCombinedMapName];
+  // The slab's top (1.5 m x 1 m) is significant, and a ring around its 5 m edge where the
+  // 0.2 m cylinders and the 0.5 m normal neighbourhood straddle it.
+  const double area = m["significant_area_m2"].get<double>();
+  EXPECT_GT(area, 1.2);
+  EXPECT_LT(area, 3.5);
+  EXPECT_EQ(m["points_b"].get<size_t>(), b.size());
+
+  // Per point: the slab's top rises 10 cm and is significant.
+  const io::DracoPointCloud change = io::decode_draco_point_cloud(
+      io::read_draco_file(root_ / "out" / change_draco_file(kCombinedMapName)));
+  std::map<std::string, const std::vector<float>*> field;
+  for (const auto& f : change.fields) field[f.name] = &f.values;
+  ASSERT_TRUE(field.count("m3c2_m") && field.count("significant") && field.count("c2c_m") &&
+              field.count("lod95_m"));
+  size_t top = 0, top_significant = 0;
+  for (size_t i = 0; i < change.positions.size(); ++i) {
+    const Eigen::Vector3f& p = change.positions[i];
+    if (p.x() > 5.2f && p.x() < 6.3f && p.y() > 3.7f && p.y() < 4.3f && p.z() > 0.05f) {
+      ++top;
+      top_significant += (*field["significant"])[i] == 1.0f;
+      EXPECT_NEAR((*field["m3c2_m"])[i], 0.1f, 0.01f);
+    }
+  }
+  EXPECT_GT(top, 500u);
+  EXPECT_EQ(top_significant, top);
+  // Farther than 0.4 m from the slab nothing changed: at most 1 % of those points significant.
+  size_t far = 0, far_significant = 0;
+  for (size_t i = 0; i < change.positions.size(); ++i) {
+    const Eigen::Vector3f& p = change.positions[i];
+    if (p.x() > 4.6f && p.x() < 6.9f && p.y() > 3.1f && p.y() < 4.9f) continue;
+    ++far;
+    far_significant += (*field["significant"])[i] == 1.0f;
+  }
+  EXPECT_LT(double(far_significant), 0.01 * far);
+  EXPECT_TRUE(fs::exists(root_ / "out" / kChangesFile));
+}
+
+TEST_F(CompareStageTest, AJobWithItselfGivesZeroChange) {
+  const InputJob a = map_job("a", scene(3, false));
+  const StageResult result = run({a, a});
+  const json& m = result.report["maps"]["maps"][kCombinedMapName];
+  EXPECT_EQ(m["significant_area_m2"].get<double>(), 0.0);
+  EXPECT_EQ(m["m3c2_m"]["max"].get<double>(), 0.0);
+  EXPECT_EQ(m["m3c2_m"]["min"].get<double>(), 0.0);
+  EXPECT_EQ(m["c2c_m"]["max"].get<double>(), 0.0);
+  EXPECT_LT(result.report["maps"]["registration"]["T_a_b"]["translation_norm_m"].get<double>(),
+            1e-3);
+  EXPECT_EQ(result.report["runs"]["figures_that_differ"].get<size_t>(), 0u);
+}
+
+TEST_F(CompareStageTest, RefusesMapAgainstHullOtherProjectsAndUnfinishedJobs) {
+  const InputJob a = map_job("a", scene(4, false));
+  InputJob hull;
+  hull.dir = root_ / "hull";
+  fs::create_directories(hull.dir);
+  TriangleMesh mesh;
+  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.faces = {{0, 1, 2}};
+  io::write_draco_file(hull.dir / kRemeshedDracoFile,
+                       io::encode_draco_mesh(mesh, {{"deviation", {0, 0, 0}}}).bytes);
+  std::ofstream(hull.dir / kShapesFile) << R"({"shapes": []})";
+  std::ofstream(hull.dir / kBaSolutionFile) << ba_solution_to_json(BaSolution{}).dump();
+  write_report(hull.dir, {{"inspect", {{"tau_m", 0.02}}}});
+  hull.job = {{"id", "j_hull"}, {"state", "succeeded"}, {"project", "p1"}, {"mission_id", "m2"}};
+
+  std::string why = refusal({a, hull});
+  EXPECT_NE(why.find("a map compares with a map, a hull with a hull"), std::string::npos) << why;
+  EXPECT_NE(why.find("job j_hull a remeshed hull"), std::string::npos) << why;
+
+  InputJob other = map_job("b", scene(5, false), {{"project", "p2"}});
+  why = refusal({a, other});
+  EXPECT_NE(why.find("only jobs of one project"), std::string::npos) << why;
+
+  InputJob running = map_job("c", scene(6, false), {{"state", "running"}});
+  why = refusal({a, running});
+  EXPECT_NE(why.find("job c is running"), std::string::npos) << why;
+
+  why = refusal({a});
+  EXPECT_NE(why.find("two finished jobs"), std::string::npos) << why;
+  EXPECT_THROW(run({a, a}, {{"projection_scale_m", -1}}), proto::ContractError);
+  EXPECT_THROW(run({a, a}, {{"no_such_option", 1}}), proto::ContractError);
+}
+
+TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
+  // The same CAD triangle strip in two surveys whose x_gM differ; vertex 4 rose 5 cm more.
+  auto hull_job = [&](const std::string& name, const Pose3& T_world_model, float deviation4,
+                      double shape_height) {
+    InputJob job;
+    job.dir = root_ / name;
+    fs::create_directories(job.dir);
+    TriangleMesh mesh;
+    for (int i = 0; i < 6; ++i)
+      mesh.vertices.push_back(T_world_model * Eigen::Vector3d(i % 3, i / 3, 0));
+    mesh.faces = {{0, 1, 3}, {1, 4, 3}, {1, 2, 4}, {2, 5, 4}};
+    std::vector<float> deviation(6, 0.0f);
+    deviation[4] = deviation4;
+    io::write_draco_file(
+        job.dir / kRemeshedDracoFile,
+        io::encode_draco_mesh(mesh, {{"deviation", deviation}}, {16, 14, 7}).bytes);
+    const Eigen::Vector3d c = T_world_model * Eigen::Vector3d(1, 1, 0);
+    json shapes = {{"options", {{"dbscan_eps_m", 0.1}}},
+                   {"shapes",
+                    {{{"id", 0},
+                      {"centroid_world_m", {c.x(), c.y(), c.z()}},
+                      {"extent_m", {0.3, 0.3, shape_height}},
+                      {"max_deviation_m", shape_height}}}}};
+    std::ofstream(job.dir / kShapesFile) << shapes.dump();
+    BaSolution solution;
+    solution.T_world_model = T_world_model;
+    std::ofstream(job.dir / kBaSolutionFile) << ba_solution_to_json(solution).dump();
+    write_report(job.dir, {{"inspect", {{"deviation_noise_sigma_m", 0.003}}}});
+    job.job = {
+        {"id", name}, {"state", "succeeded"}, {"project", "p1"}, {"mission_id", "m_" + name}};
+    return job;
+  };
+  Pose3 T_b = Pose3::Identity();
+  T_b.translation() = Eigen::Vector3d(0.4, -0.2, 0.1);
+  const StageResult result =
+      run({hull_job("a", Pose3::Identity(), 0.10f, 0.10), hull_job("b", T_b, 0.15f, 0.15)});
+  const json& h = result.report["hull"];
+  EXPECT_NEAR(h["x_gM_difference"]["translation_norm_m"].get<double>(), T_b.translation().norm(),
+              1e-9);
+  EXPECT_LT(h["vertex_pairing_max_m"].get<double>(), 1e-3);
+  EXPECT_EQ(h["kept"], 1);
+  EXPECT_EQ(h["new"], 0);
+  const json& row = h["shapes"][0];
+  EXPECT_NEAR(row["height_growth_m"].get<double>(), 0.05, 1e-9);
+  EXPECT_NEAR(row["height_growth_sigma_m"].get<double>(), std::hypot(0.003, 0.003), 1e-12);
+  EXPECT_TRUE(row["significant_growth"].get<bool>());
+  const io::DracoMesh change = io::decode_draco_mesh(
+      io::read_draco_file(root_ / "out" / change_draco_file(kHullChangeName)));
+  for (const auto& f : change.fields)
+    if (f.name == "deviation_change")
+      for (size_t i = 0; i < f.values.size(); ++i)
+        EXPECT_NEAR(f.values[i],
+                    change.mesh.vertices[i].isApprox(Eigen::Vector3d(1, 1, 0), 1e-3) ? 0.05f : 0.0f,
+                    1e-3);
+}
+
+TEST(CompareRuns, OptionsAndFiguresThatDiffer) {
+  const json a = {{"map", {{"metrics_radius_m", 0.25}, {"threads", 2}}}};
+  const json b = {{"map", {{"metrics_radius_m", 0.3}, {"threads", 2}}},
+                  {"refine", {{"dvl", false}}}};
+  const json diff = options_difference(a, b);
+  ASSERT_EQ(diff.size(), 2u);
+  EXPECT_EQ(diff[0]["option"], "map.metrics_radius_m");
+  EXPECT_EQ(diff[0]["b"], 0.3);
+  EXPECT_EQ(diff[1]["option"], "refine.dvl");
+  EXPECT_TRUE(diff[1]["a"].is_null());
+  std::vector<std::pair<std::string, double>> numbers;
+  flatten_numbers({{"map", {{"density", {{"mean", 3.5}}}, {"hist", {1, 2}}}}}, "", &numbers);
+  ASSERT_EQ(numbers.size(), 1u);
+  EXPECT_EQ(numbers[0].first, "map.density.mean");
+}
+
+}  // namespace
+}  // namespace keel::pipeline

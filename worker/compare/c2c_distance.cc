@@ -1,0 +1,23 @@
+#include "worker/compare/c2c_distance.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "worker/mapping/parallel_for.h"
+
+namespace keel::compare {
+
+std::vector<float> c2c_distances(const NearestIndex& reference,
+                                 const std::vector<Eigen::Vector3f>& compared, int threads) {
+  for (size_t i = 0; i < compared.size(); ++i)
+    if (!compared[i].allFinite())
+      throw std::invalid_argument("C2C: compared point " + std::to_string(i) + " is not finite");
+  std::vector<float> out(compared.size());
+  mapping::parallel_for(compared.size(), threads, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      out[i] = static_cast<float>(reference.nearest(compared[i]).distance_m);
+  });
+  return out;
+}
+
+}  // namespace keel::compare

@@ -1,0 +1,148 @@
+#include "worker/compare/m3c2.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "worker/mapping/parallel_for.h"
+
+namespace keel::compare {
+namespace {
+
+void require(bool ok, const char* field, const char* expected) {
+  if (!ok) throw std::invalid_argument(std::string(field) + ": expected " + expected);
+}
+
+// Moments of the voxels whose mean lies within `radius` of `at`.
+Moments gather(const VoxelMoments& voxels, const NearestIndex& index, const Eigen::Vector3f& at,
+               double radius, std::vector<uint32_t>* scratch) {
+  index.within(at, radius, scratch);
+  Moments sum;
+  for (const uint32_t v : *scratch) sum.add(voxels.voxels[v]);
+  return sum;
+}
+
+struct Projection {
+  double sum = 0.0, sum_squares = 0.0;
+  uint32_t count = 0;
+};
+
+// Points of `cloud` in the cylinder of radius r and half-length `depth` about core + t n.
+Projection project(const NearestIndex& cloud, const Eigen::Vector3d& core,
+                   const Eigen::Vector3d& normal, double radius, double depth,
+                   std::vector<uint32_t>* scratch) {
+  cloud.within(core.cast<float>(), std::sqrt(radius * radius + depth * depth), scratch);
+  Projection p;
+  const double r2 = radius * radius;
+  for (const uint32_t i : *scratch) {
+    const Eigen::Vector3d v = cloud.point(i).cast<double>() - core;
+    const double t = v.dot(normal);
+    if (std::abs(t) > depth || v.squaredNorm() - t * t > r2) continue;
+    p.sum += t;
+    p.sum_squares += t * t;
+    ++p.count;
+  }
+  return p;
+}
+
+double sample_sigma(const Projection& p) {
+  if (p.count < 2) return 0.0;
+  const double mean = p.sum / p.count;
+  return std::sqrt(std::max(0.0, (p.sum_squares - p.count * mean * mean) / (p.count - 1)));
+}
+
+Eigen::Vector3d oriented(Eigen::Vector3d n, const Eigen::Vector3d& core,
+                         const NearestIndex* viewpoints) {
+  if (viewpoints) {
+    const Neighbour v = viewpoints->nearest(core.cast<float>());
+    if (n.dot(viewpoints->point(v.index).cast<double>() - core) < 0.0) n = -n;
+    return n;
+  }
+  for (int axis : {2, 0, 1}) {
+    if (std::abs(n[axis]) > 1e-9) return n[axis] < 0.0 ? Eigen::Vector3d(-n) : n;
+  }
+  return n;
+}
+
+}  // namespace
+
+void validate(const M3c2Options& o) {
+  require(std::isfinite(o.normal_scale_m) && o.normal_scale_m > 0, "normal_scale_m", "> 0");
+  require(std::isfinite(o.projection_scale_m) && o.projection_scale_m > 0, "projection_scale_m",
+          "> 0");
+  require(std::isfinite(o.max_depth_m) && o.max_depth_m > 0, "max_depth_m", "> 0");
+  require(std::isfinite(o.core_spacing_m) && o.core_spacing_m > 0, "core_spacing_m", "> 0");
+  require(o.min_points >= 2, "min_points", "an integer >= 2");
+  require(std::isfinite(o.registration_error_m) && o.registration_error_m >= 0,
+          "registration_error_m", ">= 0");
+  require(std::isfinite(o.confidence_z) && o.confidence_z > 0, "confidence_z", "> 0");
+}
+
+std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::Vector3f>& cores,
+                             const std::vector<Eigen::Vector3f>& viewpoints,
+                             const M3c2Options& options) {
+  validate(options);
+  if (!clouds.reference || !clouds.compared || !clouds.reference_voxels || !clouds.compared_voxels)
+    throw std::invalid_argument("m3c2: both clouds and their voxel moments are needed");
+  const NearestIndex reference_voxels(clouds.reference_voxels->means);
+  const NearestIndex compared_voxels(clouds.compared_voxels->means);
+  std::unique_ptr<NearestIndex> views;
+  if (!viewpoints.empty()) views = std::make_unique<NearestIndex>(viewpoints);
+
+  const double normal_radius = 0.5 * options.normal_scale_m;
+  const double radius = 0.5 * options.projection_scale_m;
+  // Most cylinders find both surfaces close to the core point: a short search first, the full
+  // depth only when a cloud has too few points in it (a large change).
+  const double short_depth = std::min(options.max_depth_m, std::max(0.25, 2.0 * radius));
+  const double s2 = options.core_spacing_m * options.core_spacing_m;
+
+  std::vector<CoreChange> out(cores.size());
+  mapping::parallel_for(cores.size(), options.threads, [&](size_t begin, size_t end) {
+    std::vector<uint32_t> scratch;
+    for (size_t i = begin; i < end; ++i) {
+      if (options.check_canceled && (i - begin) % 4096 == 0) options.check_canceled();
+      CoreChange& c = out[i];
+      c.position = cores[i];
+      const Eigen::Vector3d core = cores[i].cast<double>();
+      // Step 1: the normal, from A (B where A has too few points: new structure).
+      LocalPlane plane = fit_plane(
+          gather(*clouds.reference_voxels, reference_voxels, cores[i], normal_radius, &scratch));
+      if (!plane.valid)
+        plane = fit_plane(
+            gather(*clouds.compared_voxels, compared_voxels, cores[i], normal_radius, &scratch));
+      if (!plane.valid) continue;
+      const Eigen::Vector3d n = oriented(plane.normal, core, views.get());
+      c.normal = n.cast<float>();
+      c.area_m2 = float(s2 / n.lpNorm<1>());
+      // Step 2: the cylinders.
+      Projection a = project(*clouds.reference, core, n, radius, short_depth, &scratch);
+      Projection b = project(*clouds.compared, core, n, radius, short_depth, &scratch);
+      if ((a.count < uint32_t(options.min_points) || b.count < uint32_t(options.min_points)) &&
+          options.max_depth_m > short_depth) {
+        a = project(*clouds.reference, core, n, radius, options.max_depth_m, &scratch);
+        b = project(*clouds.compared, core, n, radius, options.max_depth_m, &scratch);
+      }
+      c.count_a = a.count;
+      c.count_b = b.count;
+      if (a.count < uint32_t(options.min_points) || b.count < uint32_t(options.min_points))
+        continue;
+      // Steps 3-4.
+      const double sigma_a = sample_sigma(a), sigma_b = sample_sigma(b);
+      const double distance = b.sum / b.count - a.sum / a.count;
+      const double lod = options.confidence_z *
+                         (std::sqrt(sigma_a * sigma_a / a.count + sigma_b * sigma_b / b.count) +
+                          options.registration_error_m);
+      c.sigma_a_m = float(sigma_a);
+      c.sigma_b_m = float(sigma_b);
+      c.distance_m = float(distance);
+      c.lod95_m = float(lod);
+      c.significant = std::abs(distance) > lod;
+    }
+  });
+  return out;
+}
+
+}  // namespace keel::compare

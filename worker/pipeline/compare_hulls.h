@@ -1,0 +1,43 @@
+// Step 3 of the compare stage: hulls. Both remeshed hulls come from the same CAD model, so they
+// are compared in the model frame (each job's mesh moved back by its own x_gM): each vertex of
+// B takes the deviation of A's nearest vertex, and the shapes of both shapes.json are matched
+// by overlap into changes.json (new, gone, and the growth of each kept shape).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "worker/pipeline/compare_stage.h"
+
+namespace keel::pipeline {
+
+// True when `dir` holds what a hull comparison reads: mesh_remeshed.drc, shapes.json and
+// ba_solution.json.
+bool has_hull_products(const std::filesystem::path& dir);
+
+// A shape of one survey in the model frame.
+struct SurveyShape {
+  int id = 0;
+  Eigen::Vector3d centroid_model = Eigen::Vector3d::Zero();
+  double height_m = 0.0;
+  double radius_m = 0.0;  // footprint: a disc of this radius
+};
+
+struct ShapeMatch {
+  int a = -1, b = -1;  // indices into the two lists; -1 = none (new / gone)
+  double distance_m = 0.0;
+};
+
+// Pairs shapes whose footprint discs overlap (centroid distance < r_a + r_b), nearest first,
+// each shape at most once; the rest are gone (A only) or new (B only).
+std::vector<ShapeMatch> match_shapes(const std::vector<SurveyShape>& a,
+                                     const std::vector<SurveyShape>& b);
+
+// Writes change_hull.drc / .ply and returns the report section (the changes.json document).
+nlohmann::json compare_hulls(StageContext& context, const CompareStageOptions& options,
+                             std::vector<std::string>* artifacts);
+
+}  // namespace keel::pipeline
