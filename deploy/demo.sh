@@ -38,6 +38,7 @@ done
 export KEEL_URL="$(cat "$data/server.url")"
 export KEEL_TOKEN_FILE="$data/token"
 echo "   listening on $KEEL_URL"
+echo "   web dashboard: $KEEL_URL/  (sign in with the API token in $KEEL_TOKEN_FILE)"
 
 if [ "$scenario" = hauv-hull ] && [ "$duration" != 0 ]; then
   echo "   (a $duration s hull mission surveys part of the first lane; KEEL_DEMO_DURATION=0 flies"
@@ -56,3 +57,10 @@ echo "== fetching artifacts"
 ls -l "$out/artifacts"
 /usr/bin/python3 "$here/deploy/demo_summary.py" "$out/artifacts/report.json"
 echo "== done: artifacts in $out/artifacts, report at $out/artifacts/report.json"
+echo "   web dashboard of this job: $KEEL_URL/#/jobs/$job  (report: #/jobs/$job/report, 3D: #/jobs/$job/viewer)"
+echo "   sign in with the token in $KEEL_TOKEN_FILE"
+# On a terminal the server stays up for the dashboard until Ctrl-C (KEEL_DEMO_SERVE=0: exit now).
+if [ -t 0 ] && [ "${KEEL_DEMO_SERVE:-1}" != 0 ]; then
+  echo "   the server keeps running for the dashboard; press Ctrl-C to stop it"
+  wait "$server_pid" || true
+fi

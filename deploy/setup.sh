@@ -21,6 +21,8 @@ packages=(
   python3-tf2-msgs python3-numpy curl
   # reference tool for the C2C distance test (compare/cloudcompare_c2c)
   cloudcompare
+  # the web dashboard: its npm packages (web/package-lock.json) and the browser tests
+  nodejs npm chromium
 )
 
 missing=()
@@ -30,13 +32,21 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "keel setup: all ${#packages[@]} packages present"
-  exit 0
+else
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  echo "keel setup: installing ${#missing[@]} packages: ${missing[*]}"
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  echo "keel setup: done"
 fi
 
-SUDO=""
-[ "$(id -u)" -eq 0 ] || SUDO="sudo"
-export DEBIAN_FRONTEND=noninteractive
-echo "keel setup: installing ${#missing[@]} packages: ${missing[*]}"
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-echo "keel setup: done"
+# three.js, uPlot and playwright-core for web/, exactly as package-lock.json pins them (the
+# build copies what the pages load from web/node_modules; nothing is fetched at build time).
+web="$(cd "$(dirname "$0")/../web" && pwd)"
+if [ ! -f "$web/node_modules/.package-lock.json" ] ||
+   [ "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+  echo "keel setup: npm ci in web/"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+fi

@@ -15,6 +15,7 @@
 
 #include "server/http_types.h"
 #include "server/request_counters.h"
+#include "server/static_files.h"
 #include "storage/store.h"
 
 namespace keel::server {
@@ -24,6 +25,7 @@ struct HandlerOptions {
   uint64_t max_json_bytes = 1ull << 20;    // every other body
   std::string version = "0.1.0";           // shown by /healthz
   std::function<int()> workers_alive;      // for /metrics; empty = 0
+  std::shared_ptr<const StaticFiles> web;  // the dashboard at "/"; null = none (404)
 };
 
 class HttpHandler {

@@ -1,7 +1,7 @@
 // keel-server: Keel's HTTP API, its store in --data-dir and N local workers.
 //
 //   keel-server --data-dir DIR [--listen 127.0.0.1:8080] [--workers N] [--worker-binary P]
-//               [--max-chunk-bytes B] [--threads T]
+//               [--max-chunk-bytes B] [--threads T] [--web-dir D]
 //
 // Prints the URL it listens on (also written to <data-dir>/server.url) once it accepts
 // connections. SIGTERM/SIGINT: workers are stopped first (they may still report to the
@@ -19,6 +19,7 @@
 #include "server/data_dir.h"
 #include "server/http_handler.h"
 #include "server/http_server.h"
+#include "server/static_files.h"
 #include "server/worker_supervisor.h"
 #include "storage/store.h"
 
@@ -31,11 +32,20 @@ std::filesystem::path default_worker_binary() {
   return self.parent_path() / "keel-worker";
 }
 
+// The dashboard's files, installed by the build next to the binaries: <prefix>/share/keel/web.
+std::filesystem::path default_web_dir() {
+  std::error_code ec;
+  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "share/keel/web";
+  return self.parent_path().parent_path() / "share" / "keel" / "web";
+}
+
 struct Settings {
   std::filesystem::path data_dir;
   std::string listen = "127.0.0.1:8080";
   int workers = 1;
   std::string worker_binary;
+  std::string web_dir;
   int worker_lease_seconds = 30;
   uint64_t max_chunk_bytes = 64ull << 20;
   int threads = 2;
@@ -70,6 +80,11 @@ int run(const Settings& settings) {
   ks::HandlerOptions handler_options;
   handler_options.max_chunk_bytes = settings.max_chunk_bytes;
   handler_options.workers_alive = [&supervisor] { return supervisor.alive(); };
+  const std::filesystem::path web_dir =
+      settings.web_dir.empty() ? default_web_dir() : std::filesystem::path(settings.web_dir);
+  handler_options.web = std::make_shared<ks::StaticFiles>(web_dir);
+  if (!std::filesystem::exists(web_dir / "index.html"))
+    spdlog::warn("no web dashboard in {} (no index.html): / answers 404", web_dir.string());
   ks::HttpHandler handler(*store, handler_options);
 
   ks::ServerOptions server_options;
@@ -88,9 +103,9 @@ int run(const Settings& settings) {
       listen.host == "0.0.0.0" || listen.host == "127.0.0.1" || listen.host == "localhost"
           ? "http://127.0.0.1:" + std::to_string(server.port())
           : url;
-  supervisor.start(
-      {"--server", worker_url, "--token-file", (settings.data_dir / "token").string(),
-       "--lease-seconds", std::to_string(settings.worker_lease_seconds), "--exit-with-parent", std::to_string(::getpid())});
+  supervisor.start({"--server", worker_url, "--token-file", (settings.data_dir / "token").string(),
+                    "--lease-seconds", std::to_string(settings.worker_lease_seconds),
+                    "--exit-with-parent", std::to_string(::getpid())});
 
   std::cout << url << std::endl;
   spdlog::info("keel-server listening on {} with {} io threads, {} workers, data in {}", url,
@@ -119,6 +134,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--worker-binary", settings.worker_binary,
                  "keel-worker executable (default: next to keel-server)");
+  app.add_option(
+      "--web-dir", settings.web_dir,
+      "the web dashboard's files, served at / (default: ../share/keel/web from the binary)");
   app.add_option("--worker-lease-seconds", settings.worker_lease_seconds,
                  "lease the local workers ask for: a crashed worker's job is re-run after it")
       ->check(CLI::Range(1, 3600));

@@ -60,6 +60,9 @@ Response worker_complete_stage(const Call& call);
 Response worker_complete_job(const Call& call);
 Response worker_fail_job(const Call& call);
 
+// routes_web.cc: the dashboard's files for any GET/HEAD outside /v1 that no route above takes.
+Response web_file(const Call& call);
+
 // Query helpers shared by route files: ApiException 400 `invalid_field` on bad values.
 int64_t query_int(const Call& call, const std::string& name, int64_t fallback, int64_t min,
                   int64_t max);
