@@ -1,0 +1,375 @@
+// The dashboard in a real headless Chromium against a real keel-server with a worker on
+// loopback and keel-sim missions (issue #13, "Tests"): sign-in and a refused token, the job
+// list updated live while a job runs, a failed job's error, the report view's numbers
+// against report.json, the viewer's point and vertex counts against Debian's draco_decoder,
+// the legend's range against the sidecar and the decoded values, a shape click moving the
+// camera, the camera restored from the URL, the queue page against GET /v1/queue, missing
+// and corrupt artifacts shown as messages; and no console error or failed request.
+//   node tests/web/browser_test.mjs --bin build/bin --web build/share/keel/web --out DIR
+// Exits 77 (CTest: skipped) with the reason when Chromium or node_modules are absent.
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import path from 'node:path';
+import {after, before, test} from 'node:test';
+import {Server, dracoVertexCount, launchChromium, missingPrerequisite, parseArgs, simulate, sourceDir,
+        tempDir, watchPage} from './harness.mjs';
+
+const args = parseArgs(process.argv.slice(2));
+const binDir = path.resolve(args.bin || path.join(sourceDir, 'build/bin'));
+const webDir = path.resolve(args.web || path.join(binDir, '../share/keel/web'));
+const outDir = path.resolve(args.out || tempDir('keel-web-out-'));
+const why = missingPrerequisite(binDir, webDir);
+if (why) {
+  console.log(`SKIP: browser tests: ${why}`);
+  process.exit(77);
+}
+fs.mkdirSync(outDir, {recursive: true});
+
+// The map stage writes per-point metrics as Draco attributes when asked (docs/stage-options.md).
+const stageOptions = fs.readFileSync(path.join(sourceDir, 'docs/stage-options.md'), 'utf8');
+const pointMetrics = stageOptions.includes('write_point_metrics');
+
+let server;
+let browser;
+let page;
+let problems;
+const jobs = {};
+const work = tempDir('keel-web-test-');
+
+// Screenshots of the page when a test fails, named after the test.
+async function step(name, fn) {
+  try {
+    await fn();
+  } catch (e) {
+    if (page) {
+      const file = path.join(outDir, `${name.replace(/[^a-z0-9]+/gi, '_')}.png`);
+      await page.screenshot({path: file, fullPage: true}).catch(() => {});
+      console.log(`screenshot: ${file}`);
+    }
+    throw e;
+  }
+}
+
+async function signIn(p, token) {
+  await p.goto(`${server.url}/#/signin`);
+  await p.fill('#token', token);
+  await p.click('form.signin button[type=submit]');
+}
+
+before(async () => {
+  const bridge = path.join(work, 'bridge');
+  const hull = path.join(work, 'hull');
+  simulate(binDir, bridge, {scenario: 'usv-bridge', duration: 20, sensors: 'imu,dvl,lidar_h,sonar,depth'});
+  simulate(binDir, hull, {scenario: 'hauv-hull', duration: 60});
+  jobs.bridgeMission = bridge;
+  jobs.hullMission = hull;
+  server = await new Server(binDir, webDir, {workers: 1}).start();
+  browser = await launchChromium();
+  page = await browser.context.newPage();
+  problems = watchPage(page);
+});
+
+after(async () => {
+  await browser?.close();
+  await server?.stop();
+  fs.rmSync(work, {recursive: true, force: true});
+});
+
+test('a refused token shows the sign-in page with the reason', () => step('refused token', async () => {
+  const p = await browser.context.newPage();
+  try {
+    await p.goto(`${server.url}/#/jobs`);
+    await p.waitForSelector('form.signin');  // no token: the sign-in page, not a blank one
+    await p.fill('#token', 'not-a-token');
+    await p.click('form.signin button[type=submit]');
+    const text = await p.textContent('#signin-status .message', {timeout: 10000});
+    assert.match(text, /refused this token/);
+    assert.match(text, /401 unauthorized/);
+    // A token the server stops accepting mid-session sends the user back with the reason.
+    await p.evaluate(() => sessionStorage.setItem('keel.token', 'revoked-token'));
+    await p.goto(`${server.url}/#/queue`);
+    await p.reload();
+    const reason = await p.textContent('#signin-status .message', {timeout: 10000});
+    assert.match(reason, /refused your token/);
+    assert.equal(await p.evaluate(() => sessionStorage.getItem('keel.token')), null);
+  } finally {
+    await p.close();
+  }
+}));
+
+test('signed in, the job list follows a job live from queued to succeeded', () => step('live job list', async () => {
+  await signIn(page, server.token);
+  await page.waitForSelector('#jobs-table');
+  // Every state a row shows is recorded in the page, without reloading it.
+  await page.evaluate(() => {
+    window.seenStates = {};
+    window.notReloaded = true;
+    new MutationObserver(() => {
+      for (const tr of document.querySelectorAll('#jobs-table tr[data-job-id]')) {
+        const seen = (window.seenStates[tr.dataset.jobId] ||= []);
+        const progress = tr.querySelector('.pct')?.textContent || '';
+        const entry = `${tr.dataset.state}${progress ? ` ${progress}` : ''}`;
+        if (seen[seen.length - 1] !== entry) seen.push(entry);
+      }
+    }).observe(document.getElementById('jobs-table'), {childList: true, subtree: true});
+  });
+  const set = pointMetrics ? ['--set', 'map.write_point_metrics=true'] : [];
+  jobs.bridge = server.submit(jobs.bridgeMission, 'ingest,refine,map', set);
+  jobs.hull = server.submit(jobs.hullMission, 'ingest,refine,ba,inspect', ['--set', 'ba.mode=proposed']);
+  await page.waitForSelector(`tr[data-job-id="${jobs.bridge}"]`, {timeout: 20000});
+  await page.waitForSelector(`tr[data-job-id="${jobs.bridge}"][data-state="succeeded"]`, {timeout: 600000});
+  const seen = await page.evaluate((id) => window.seenStates[id], jobs.bridge);
+  assert.ok(await page.evaluate(() => window.notReloaded), 'the page was reloaded');
+  assert.ok(seen.some((s) => s.startsWith('running')), `never shown running: ${seen}`);
+  assert.equal(seen[seen.length - 1], 'succeeded');
+  const job = await server.api(`v1/jobs/${jobs.bridge}`);
+  assert.equal(job.state, 'succeeded', job.error);
+  const row = await page.$(`tr[data-job-id="${jobs.bridge}"]`);
+  assert.equal(await row.$eval('td.attempts', (td) => td.textContent), String(job.attempts));
+}));
+
+test('a failed job shows its error before anything else', () => step('failed job', async () => {
+  const id = server.submit(jobs.bridgeMission, 'ingest,refine', ['--set', 'refine.no_such_option=1']);
+  const job = await server.waitJob(id);
+  assert.equal(job.state, 'failed');
+  await page.goto(`${server.url}/#/jobs/${id}`);
+  const error = await page.waitForSelector('#job-error .message.error');
+  assert.ok((await error.textContent()).includes(job.error), `page shows: ${await error.textContent()}`);
+  const first = await page.evaluate(() => {
+    const e = document.getElementById('job-error');
+    const t = document.getElementById('timeline');
+    return Boolean(e.compareDocumentPosition(t) & Node.DOCUMENT_POSITION_FOLLOWING);
+  });
+  assert.ok(first, 'the error comes after the timeline');
+  assert.equal(await page.getAttribute('.stage-row[data-stage="refine"]', 'class'), 'stage-row failed');
+  await page.selectOption('#log-level', 'error');
+  const visible = await page.$$eval('#log .line:not([hidden])', (lines) => lines.map((l) => l.textContent));
+  assert.ok(visible.length >= 1 && visible.every((l) => /failed|error/i.test(l)), `error lines: ${visible}`);
+}));
+
+// Every number the report view prints equals report.json's at the same path.
+async function checkReportNumbers(id, requiredKeys) {
+  const report = await server.artifactJson((await server.artifacts(id))['report.json']);
+  await page.goto(`${server.url}/#/jobs/${id}/report`);
+  await page.waitForSelector('body[data-report-ready="true"]', {timeout: 30000});
+  const cells = await page.$$eval('[data-key]', (els) => els.map((e) => ({key: e.dataset.key, value: e.dataset.value, text: e.textContent})));
+  const keys = new Set(cells.map((c) => c.key));
+  for (const key of requiredKeys) assert.ok(keys.has(key), `the report view lacks ${key}`);
+  for (const c of cells) {
+    const expected = c.key.split('.').reduce((o, k) => (o === undefined || o === null ? undefined : o[k]), report);
+    assert.notEqual(expected, undefined, `${c.key} is not in report.json`);
+    if (typeof expected === 'number') {
+      assert.equal(Number(c.value), expected, c.key);
+      const shown = Number(c.text.replace(/,/g, ''));
+      assert.ok(Math.abs(shown - expected) <= 1e-3 * Math.abs(expected) + 1e-12, `${c.key}: shows ${c.text} for ${expected}`);
+    } else {
+      assert.equal(c.value, typeof expected === 'object' ? JSON.stringify(expected) : String(expected), c.key);
+    }
+  }
+  return {report, cells};
+}
+
+test('the report view shows report.json\'s figures for refine and map', () => step('report bridge', async () => {
+  const t = 'stages.refine.evaluation.table';
+  const required = [`${t}.map.ate.translation_m.rmse`, `${t}.refined_with_dvl.ate.translation_m.rmse`,
+                    `${t}.refined_without_dvl.ate.translation_m.rmse`, `${t}.refined_with_dvl.rpe.translation_m.rmse`,
+                    'stages.refine.dvl.dvl_scale.value', 'stages.refine.dvl.dvl_scale.sigma',
+                    'stages.refine.dvl.dvl_rotation.sigma_deg.0', 'stages.map.metrics.table_v.rows.0.slam_map'];
+  const {report, cells} = await checkReportNumbers(jobs.bridge, required);
+  assert.ok(cells.length > 40, `${cells.length} figures`);
+  // Histograms drawn from the same counts.
+  const plots = await page.evaluate(() => Object.fromEntries(window.keelReport.plots));
+  for (const [name, metrics] of Object.entries(report.stages.map.metrics.maps)) {
+    const plot = plots[`hist-${name}-roughness_m`];
+    assert.ok(plot, `no roughness histogram of ${name}`);
+    assert.deepEqual(plot.series[0].values, metrics.roughness_m.histogram_counts);
+    assert.deepEqual(plot.edges, metrics.roughness_m.histogram_edges);
+  }
+  const artifacts = await server.artifacts(jobs.bridge);
+  if (artifacts['trajectories.json']) {
+    const trajectories = await server.artifactJson(artifacts['trajectories.json']);
+    const refined = trajectories.trajectories.find((x) => x.name === 'refined');
+    if (refined?.ate_m) assert.deepEqual(plots['ate-refined'].series[0].values, refined.ate_m);
+  }
+}));
+
+async function openViewer(id, query = '') {
+  await page.goto(`${server.url}/#/jobs/${id}/viewer${query}`);
+  await page.waitForSelector('body[data-viewer-ready="true"]', {timeout: 120000});
+}
+
+async function layerShown(name) {
+  await page.waitForSelector(`.layer-entry[data-layer="${name}"][data-status="shown"]`, {timeout: 120000});
+}
+
+test('the viewer shows every map with its point count and a legend equal to the attribute range', () => step('viewer maps', async () => {
+  const artifacts = await server.artifacts(jobs.bridge);
+  const maps = Object.keys(artifacts).filter((n) => /^map_.*\.drc$/.test(n) && !n.endsWith('_preview.drc'));
+  assert.ok(maps.length >= 2, `maps: ${maps}`);
+  await openViewer(jobs.bridge);
+  for (const file of maps) {
+    const name = file.replace(/\.drc$/, '');
+    const box = await page.$(`.layer-entry[data-layer="${name}"] input[type=checkbox]`);
+    if (!(await box.isChecked())) await box.check();
+    await layerShown(name);
+    const decoded = Number(await page.getAttribute(`.layer-entry[data-layer="${name}"]`, 'data-points'));
+    const level = await page.getAttribute(`.layer-entry[data-layer="${name}"]`, 'data-level');
+    const shownFile = level === 'preview' ? `${name}_preview.drc` : file;
+    const oracle = dracoVertexCount(await server.artifactBytes(artifacts[shownFile]));
+    if (oracle !== null) assert.equal(decoded, oracle, `${shownFile}: page vs draco_decoder`);
+    const sidecar = artifacts[`${name}.json`] ? await server.artifactJson(artifacts[`${name}.json`]) : null;
+    if (sidecar && level === 'full') assert.equal(decoded, sidecar.points, `${name}: page vs sidecar`);
+    if (!sidecar) continue;
+    // Each colouring's legend: the sidecar's min/max, and the decoded values' min/max.
+    for (const mode of await page.$$eval('#color-by option', (os) => os.map((o) => o.value))) {
+      await page.selectOption('#color-by', mode);
+      const legend = await page.$(`.legend-box[data-layer="${name}"][data-mode="${mode}"]`);
+      if (!legend) continue;  // this map lacks the attribute (keeps its height colouring)
+      const min = Number(await legend.getAttribute('data-min'));
+      const max = Number(await legend.getAttribute('data-max'));
+      const expected = mode === 'height' ? {min: sidecar.bbox_min[2], max: sidecar.bbox_max[2]} : sidecar.attributes[mode];
+      assert.equal(min, expected.min, `${name} ${mode} min`);
+      assert.equal(max, expected.max, `${name} ${mode} max`);
+      if (level === 'full') {
+        const decodedRange = await page.evaluate(([l, m]) => window.keelViewer.attributeRange(l, m === 'height' ? 'position' : m), [name, mode]);
+        const tolerance = 1e-5 * Math.max(1, Math.abs(expected.max - expected.min));
+        assert.ok(Math.abs(decodedRange.min - expected.min) <= tolerance, `${name} ${mode}: decoded min ${decodedRange.min} vs ${expected.min}`);
+        assert.ok(Math.abs(decodedRange.max - expected.max) <= tolerance, `${name} ${mode}: decoded max ${decodedRange.max} vs ${expected.max}`);
+      }
+    }
+  }
+  if (pointMetrics) {
+    const modes = await page.$$eval('#color-by option', (os) => os.map((o) => o.value));
+    for (const m of ['density', 'roughness', 'planarity']) assert.ok(modes.includes(m), `no ${m} colouring: ${modes}`);
+  }
+  // Trajectories: the line has as many vertices as trajectories.json has poses.
+  if (artifacts['trajectories.json']) {
+    const doc = await server.artifactJson(artifacts['trajectories.json']);
+    for (const t of doc.trajectories)
+      assert.equal(Number(await page.getAttribute(`.layer-entry[data-layer="trajectory:${t.name}"]`, 'data-poses')), t.xyz.length);
+  }
+}));
+
+test('the camera in the URL reopens the same view', () => step('camera url', async () => {
+  await openViewer(jobs.bridge, '?cam=12.5,-40.25,18,3,4.5,-1');
+  assert.equal(await page.evaluate(() => window.keelViewer.camera()), '12.5,-40.25,18,3,4.5,-1');
+  // Orbit with the mouse: the URL follows, and a reload restores exactly that.
+  const canvas = await page.$('#viewer-canvas');
+  const b = await canvas.boundingBox();
+  await page.mouse.move(b.x + b.width / 2, b.y + b.height / 2);
+  await page.mouse.down();
+  await page.mouse.move(b.x + b.width / 2 + 120, b.y + b.height / 2 + 40, {steps: 8});
+  await page.mouse.up();
+  const moved = await page.evaluate(() => window.keelViewer.camera());
+  assert.notEqual(moved, '12.5,-40.25,18,3,4.5,-1');
+  await page.waitForFunction((c) => location.hash.includes(`cam=${c}`), moved);
+  await page.reload();
+  await page.waitForSelector('body[data-viewer-ready="true"]', {timeout: 120000});
+  assert.equal(await page.evaluate(() => window.keelViewer.camera()), moved);
+}));
+
+test('the hull: ba and inspect figures, mesh vertices, deviation legend, a shape click moves the camera', () => step('hull', async () => {
+  const job = await server.waitJob(jobs.hull);
+  assert.equal(job.state, 'succeeded', job.error);
+  const {report} = await checkReportNumbers(jobs.hull, ['stages.ba.modes.proposed.iterations', 'stages.inspect.tau_m']);
+  const plots = await page.evaluate(() => Object.fromEntries(window.keelReport.plots));
+  assert.deepEqual(plots.fig17.series[0].values, report.stages.ba.modes.proposed.cost_per_iteration);
+  assert.deepEqual(plots.fig16.series[0].values, report.stages.ba.modes.proposed.lambda1_fraction_per_iteration);
+  assert.deepEqual(plots['fig18c-proposed'].series[1].values, report.stages.ba.modes.proposed.dvl_residuals_final.histogram.counts);
+
+  const artifacts = await server.artifacts(jobs.hull);
+  await openViewer(jobs.hull);
+  await layerShown('mesh_remeshed');
+  const vertices = Number(await page.getAttribute('.layer-entry[data-layer="mesh_remeshed"]', 'data-vertices'));
+  const oracle = dracoVertexCount(await server.artifactBytes(artifacts['mesh_remeshed.drc']));
+  if (oracle !== null) assert.equal(vertices, oracle, 'mesh_remeshed.drc: page vs draco_decoder');
+  if (artifacts['mesh_remeshed.json']) {
+    const sidecar = await server.artifactJson(artifacts['mesh_remeshed.json']);
+    assert.equal(vertices, sidecar.points);
+    const legend = await page.$('.legend-box[data-layer="mesh_remeshed"]');
+    assert.equal(Number(await legend.getAttribute('data-min')), sidecar.attributes.deviation.min);
+    assert.equal(Number(await legend.getAttribute('data-max')), sidecar.attributes.deviation.max);
+    const decoded = await page.evaluate(() => window.keelViewer.attributeRange('mesh_remeshed', 'deviation'));
+    assert.ok(Math.abs(decoded.max - sidecar.attributes.deviation.max) <= 1e-6 + 1e-5 * Math.abs(sidecar.attributes.deviation.max));
+    // The threshold slider greys what is below it and says how much is above.
+    await page.$eval('#deviation-threshold', (s) => {
+      s.value = String(Number(s.max) / 2);
+      s.dispatchEvent(new Event('input'));
+    });
+    assert.match(await page.textContent('#threshold-share'), /% of vertices at or above/);
+  }
+  const shapes = artifacts['shapes.json'] ? (await server.artifactJson(artifacts['shapes.json'])).shapes : [];
+  if (shapes.length > 0) {
+    const before = await page.evaluate(() => window.keelViewer.camera());
+    await page.click('#shapes-table tbody tr:first-child');
+    await page.waitForFunction((b) => window.keelViewer.camera() !== b && !window.keelViewer.scene.flight, before);
+    const target = (await page.evaluate(() => window.keelViewer.camera())).split(',').slice(3).map(Number);
+    shapes[0].centroid_world_m.forEach((c, i) => assert.ok(Math.abs(target[i] - c) <= 1e-3, `camera target ${target} vs shape ${shapes[0].centroid_world_m}`));
+  } else {
+    console.log('# note: the hull mission gave no shape; the shape click was not exercised');
+  }
+}));
+
+test('the queue page shows the server\'s own figures', () => step('queue', async () => {
+  await page.goto(`${server.url}/#/queue`);
+  await page.waitForSelector('#count-succeeded');
+  const queue = await server.api('v1/queue');
+  for (const state of ['queued', 'running', 'succeeded', 'failed', 'canceled'])
+    assert.equal(await page.textContent(`#count-${state} .value`), String(queue.jobs_by_state[state] ?? 0), state);
+  assert.equal(await page.textContent('#workers-alive .value'), String(queue.workers_alive));
+}));
+
+test('no console error and no failed request on the signed-in pages', () => {
+  assert.deepEqual(problems, []);
+});
+
+// A job made through the worker protocol with artifacts that are missing or corrupt: the
+// pages name them in messages instead of drawing nothing.
+test('missing and corrupt artifacts are named in messages', () => step('bad artifacts', async () => {
+  const bare = await new Server(binDir, webDir, {workers: 0}).start();
+  try {
+    const upload = async (name, bytes) => {
+      const created = await bare.api('v1/uploads', {method: 'POST', json: {name, size: bytes.length}});
+      await fetch(`${bare.url}/v1/uploads/${created.id}`, {method: 'PUT', body: bytes, headers: {
+        Authorization: `Bearer ${bare.token}`, 'Content-Range': `bytes 0-${bytes.length - 1}/${bytes.length}`}});
+      const {createHash} = await import('node:crypto');
+      return (await bare.api(`v1/uploads/${created.id}/complete`, {method: 'POST',
+        json: {sha256: createHash('sha256').update(bytes).digest('hex')}})).blob;
+    };
+    const tarDir = tempDir('keel-web-tar-');
+    fs.cpSync(jobs.bridgeMission, tarDir, {recursive: true});
+    const {execFileSync} = await import('node:child_process');
+    const tar = path.join(work, 'bundle.tar');
+    execFileSync('tar', ['-C', tarDir, '-cf', tar, '.']);
+    const mission = await bare.api('v1/missions', {method: 'POST', json: {name: 'forged', bundle_blob: await upload('bundle.tar', fs.readFileSync(tar))}});
+    const job = await bare.api('v1/jobs', {method: 'POST', json: {mission_id: mission.id, stages: ['map']}});
+    const lease = await bare.api('v1/worker/lease', {method: 'POST', json: {worker: 'test:forged', lease_seconds: 60}});
+    const register = async (name, bytes) => bare.api(`v1/worker/jobs/${job.id}/artifacts`, {method: 'POST',
+      json: {lease_id: lease.lease_id, stage: 'map', name, blob: await upload(name, bytes)}});
+    await register('map_combined.drc', Buffer.from('DRACO this is not a draco file at all'));
+    await register('map_lidar_h.drc', Buffer.from([0x44, 0x52, 0x41, 0x43, 0x4f, 2, 2, 0, 0, 0, 1, 2, 3]));
+    await register('report.json', Buffer.from('{"stages": {"map": '));
+    await register('trajectories.json', Buffer.from('{"trajectories": [{"name": "refined", "xyz": [[0, 0]]}]}'));
+    await bare.api(`v1/worker/jobs/${job.id}/complete`, {method: 'POST', json: {lease_id: lease.lease_id}});
+
+    const p = await browser.context.newPage();
+    try {
+      await signIn(p, bare.token);
+      await p.waitForSelector('#jobs-table');
+      await p.goto(`${bare.url}/#/jobs/${job.id}/viewer`);
+      await p.waitForSelector('body[data-viewer-ready="true"]', {timeout: 60000});
+      const messages = await p.$$eval('#viewer-messages .message', (ms) => ms.map((m) => m.textContent));
+      const all = messages.join('\n');
+      assert.match(all, /map_combined\.json is missing/);
+      assert.match(all, /map_combined\.drc could not be decoded/);
+      assert.match(all, /map_lidar_h\.json is missing/);
+      assert.match(all, /trajectories\.json: trajectories\[0\] \(refined\): xyz must be \[x, y, z\] numbers/);
+      await p.goto(`${bare.url}/#/jobs/${job.id}/report`);
+      assert.match(await p.textContent('#report .message.error'), /report\.json cannot be read: report\.json is not valid JSON/);
+    } finally {
+      await p.close();
+    }
+  } finally {
+    await bare.stop();
+  }
+}));

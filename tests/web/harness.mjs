@@ -1,0 +1,195 @@
+// Real Keel processes on loopback and a headless Chromium for the browser tests and the web
+// benchmark: keel-sim writes missions, keel-server (with local keel-workers) serves the API
+// and the dashboard, the `keel` CLI submits, playwright-core drives Debian's chromium.
+import {spawn, spawnSync} from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import {createRequire} from 'node:module';
+import {fileURLToPath} from 'node:url';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+export const sourceDir = path.resolve(here, '../..');
+export const CHROMIUM = process.env.KEEL_CHROMIUM || '/usr/bin/chromium';
+
+export function parseArgs(argv) {
+  const args = {};
+  for (let i = 0; i < argv.length; i += 1)
+    if (argv[i].startsWith('--')) args[argv[i].slice(2)] = argv[i + 1]?.startsWith('--') ? 'true' : argv[++i];
+  return args;
+}
+
+// Why the browser tests cannot run here, or '' when they can.
+export function missingPrerequisite(binDir, webDir) {
+  if (!fs.existsSync(CHROMIUM)) return `no Chromium at ${CHROMIUM} (deploy/setup.sh installs Debian's chromium)`;
+  if (!fs.existsSync(path.join(sourceDir, 'web/node_modules/playwright-core')))
+    return 'web/node_modules has no playwright-core (deploy/setup.sh runs npm ci in web/)';
+  if (!fs.existsSync(path.join(webDir, 'index.html'))) return `no dashboard in ${webDir} (build the keel_web target)`;
+  if (!fs.readdirSync(path.join(webDir, 'vendor')).some((d) => d.startsWith('three-') && d !== 'three-missing'))
+    return `${webDir}/vendor has no three.js (npm ci in web/, then rebuild)`;
+  for (const p of ['keel-server', 'keel-worker', 'keel', 'keel-sim'])
+    if (!fs.existsSync(path.join(binDir, p))) return `no ${p} in ${binDir}`;
+  return '';
+}
+
+export function playwright() {
+  const require = createRequire(path.join(sourceDir, 'web/package.json'));
+  return require('playwright-core');
+}
+
+export function tempDir(prefix = 'keel-web-') {
+  return fs.mkdtempSync(path.join(os.tmpdir(), prefix));
+}
+
+export function run(binary, args, {env = {}, timeoutMs = 600000} = {}) {
+  const r = spawnSync(binary, args, {env: {...process.env, ...env}, encoding: 'utf8', timeout: timeoutMs});
+  if (r.status !== 0)
+    throw new Error(`${path.basename(binary)} ${args.join(' ')} exited ${r.status}${r.signal ? ` (${r.signal})` : ''}:\n${r.stdout}\n${r.stderr}`);
+  return r.stdout.trim();
+}
+
+export function simulate(binDir, out, {scenario = 'usv-bridge', duration = 20, sensors = '', seed = 1, set = []} = {}) {
+  const args = ['--scenario', scenario, '--seed', String(seed), '--duration', String(duration), '--out', out];
+  if (sensors) args.push('--sensors', sensors);
+  for (const s of set) args.push('--set', s);
+  run(path.join(binDir, 'keel-sim'), args);
+  return out;
+}
+
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+export class Server {
+  constructor(binDir, webDir, {workers = 1, dataDir = tempDir('keel-web-data-')} = {}) {
+    this.binDir = binDir;
+    this.webDir = webDir;
+    this.workers = workers;
+    this.dataDir = dataDir;
+    this.log = path.join(dataDir, 'server.log');
+  }
+
+  async start() {
+    const log = fs.openSync(this.log, 'a');
+    this.process = spawn(path.join(this.binDir, 'keel-server'),
+      ['--data-dir', this.dataDir, '--listen', '127.0.0.1:0', '--workers', String(this.workers), '--web-dir', this.webDir],
+      {stdio: ['ignore', log, log]});
+    const urlFile = path.join(this.dataDir, 'server.url');
+    for (let i = 0; i < 300; i += 1) {
+      if (fs.existsSync(urlFile) && fs.existsSync(path.join(this.dataDir, 'token'))) break;
+      if (this.process.exitCode !== null) throw new Error(`keel-server exited: ${fs.readFileSync(this.log, 'utf8')}`);
+      await sleep(100);
+    }
+    this.url = fs.readFileSync(urlFile, 'utf8').trim();
+    this.token = fs.readFileSync(path.join(this.dataDir, 'token'), 'utf8').trim();
+    return this;
+  }
+
+  env() {
+    return {KEEL_URL: this.url, KEEL_TOKEN_FILE: path.join(this.dataDir, 'token')};
+  }
+
+  keel(args, options = {}) {
+    return run(path.join(this.binDir, 'keel'), args, {env: this.env(), ...options});
+  }
+
+  // Submits a mission folder with the CLI; returns the job id.
+  submit(missionDir, stages, extra = []) {
+    const out = this.keel(['submit', missionDir, '--stages', stages, '-q', ...extra]);
+    const match = /j_[0-9a-f]+/.exec(out);
+    if (!match) throw new Error(`no job id in: ${out}`);
+    return match[0];
+  }
+
+  async api(pathname, {method = 'GET', json, token = this.token, raw = false} = {}) {
+    const response = await fetch(`${this.url}/${pathname}`, {method, headers: {Authorization: `Bearer ${token}`,
+      ...(json ? {'Content-Type': 'application/json'} : {})}, body: json ? JSON.stringify(json) : undefined});
+    if (raw) return response;
+    const text = await response.text();
+    if (!response.ok) throw new Error(`${method} ${pathname}: ${response.status} ${text}`);
+    return text ? JSON.parse(text) : null;
+  }
+
+  async waitJob(id, done = (job) => ['succeeded', 'failed', 'canceled'].includes(job.state), timeoutMs = 600000) {
+    const end = Date.now() + timeoutMs;
+    for (;;) {
+      const job = await this.api(`v1/jobs/${id}`);
+      if (done(job)) return job;
+      if (Date.now() > end) throw new Error(`job ${id} still ${job.state} after ${timeoutMs / 1000} s`);
+      await sleep(250);
+    }
+  }
+
+  async artifacts(id) {
+    const {artifacts} = await this.api(`v1/jobs/${id}/artifacts`);
+    return Object.fromEntries(artifacts.map((a) => [a.name, a]));
+  }
+
+  async artifactBytes(artifact) {
+    const response = await this.api(`v1/artifacts/${artifact.id}`, {raw: true});
+    if (!response.ok) throw new Error(`artifact ${artifact.name}: ${response.status}`);
+    return Buffer.from(await response.arrayBuffer());
+  }
+
+  async artifactJson(artifact) {
+    return JSON.parse((await this.artifactBytes(artifact)).toString('utf8'));
+  }
+
+  async stop() {
+    if (!this.process || this.process.exitCode !== null) return;
+    this.process.kill('SIGTERM');
+    for (let i = 0; i < 100 && this.process.exitCode === null; i += 1) await sleep(100);
+    if (this.process.exitCode === null) this.process.kill('SIGKILL');
+  }
+}
+
+export const CHROMIUM_ARGS = ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--headless',
+  '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run',
+  '--disable-default-apps', '--mute-audio'];
+
+// A Chromium with a fresh profile folder (removed by close()).
+export async function launchChromium() {
+  const {chromium} = playwright();
+  const profile = tempDir('keel-chromium-');
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: CHROMIUM, headless: true, args: CHROMIUM_ARGS, viewport: {width: 1400, height: 900},
+  });
+  return {context, close: async () => {
+    await context.close();
+    fs.rmSync(profile, {recursive: true, force: true});
+  }};
+}
+
+// Records console errors, page errors, failed requests and HTTP errors of a page.
+export function watchPage(page, {allowStatus = () => false} = {}) {
+  const problems = [];
+  page.on('console', (m) => {
+    if (m.type() === 'error') problems.push(`console error: ${m.text()}`);
+  });
+  page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  page.on('requestfailed', (r) => {
+    const why = r.failure()?.errorText || '';
+    // A stream or download the page itself stops when it moves on is not a failure.
+    if (why.includes('ERR_ABORTED')) return;
+    problems.push(`request failed: ${r.method()} ${r.url()} ${why}`);
+  });
+  page.on('response', (r) => {
+    if (r.status() >= 400 && !allowStatus(r)) problems.push(`HTTP ${r.status()}: ${r.request().method()} ${r.url()}`);
+  });
+  return problems;
+}
+
+// The number of vertices of a Draco file as Debian's draco_decoder (an independent decoder)
+// reads it, or null when the tool is absent.
+export function dracoVertexCount(bytes) {
+  const tool = '/usr/bin/draco_decoder';
+  if (!fs.existsSync(tool)) return null;
+  const dir = tempDir('keel-draco-');
+  try {
+    fs.writeFileSync(path.join(dir, 'in.drc'), bytes);
+    run(tool, ['-i', path.join(dir, 'in.drc'), '-o', path.join(dir, 'out.ply')]);
+    const header = fs.readFileSync(path.join(dir, 'out.ply')).subarray(0, 4096).toString('latin1');
+    const match = /element vertex (\d+)/.exec(header);
+    return match ? Number(match[1]) : null;
+  } finally {
+    fs.rmSync(dir, {recursive: true, force: true});
+  }
+}

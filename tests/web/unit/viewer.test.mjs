@@ -1,0 +1,72 @@
+// The viewer's pure parts: colour ramps against matplotlib's viridis ends, histograms and
+// ranges against brute force, the camera in the URL, even thinning, the residual CSV.
+import assert from 'node:assert/strict';
+import {test} from 'node:test';
+import {finiteRange, histogram, rampColor, rampTexels} from '../../../web/js/viewer/colormap.js';
+import {decodeCamera, encodeCamera} from '../../../web/js/viewer/camera_url.js';
+import {strideFor, strided} from '../../../web/js/viewer/thinning.js';
+import {parseResiduals} from '../../../web/js/viewer/residual_layer.js';
+import {taskConfigFor} from '../../../web/js/viewer/draco.js';
+
+test('viridis ends are matplotlib\'s #440154 and #fde725', () => {
+  assert.deepEqual(rampColor('viridis', 0), [0x44, 0x01, 0x54]);
+  assert.deepEqual(rampColor('viridis', 1), [0xfd, 0xe7, 0x25]);
+  assert.deepEqual(rampColor('viridis', -3), rampColor('viridis', 0));
+  const texels = rampTexels('viridis', 3);
+  // Three categories fill the 256 texels in three flat runs.
+  assert.deepEqual([...texels.slice(0, 3)], [...texels.slice(4 * 80, 4 * 80 + 3)]);
+  assert.notDeepEqual([...texels.slice(0, 3)], [...texels.slice(4 * 100, 4 * 100 + 3)]);
+});
+
+test('range and histogram equal a brute-force count', () => {
+  const values = Float32Array.from({length: 10001}, (_, i) => Math.sin(i) * 3 + (i % 7));
+  const {min, max} = finiteRange(values);
+  assert.equal(min, Math.min(...values));
+  assert.equal(max, Math.max(...values));
+  const bins = 17;
+  const counts = histogram(values, bins, min, max);
+  assert.equal(counts.reduce((a, b) => a + b, 0), values.length);
+  const width = (max - min) / bins;
+  for (let b = 0; b < bins; b += 1) {
+    const lo = min + b * width;
+    const hi = b === bins - 1 ? Infinity : min + (b + 1) * width;
+    const brute = values.filter((v) => v >= lo && v < hi).length;
+    assert.ok(Math.abs(brute - counts[b]) <= 2, `bin ${b}: ${brute} vs ${counts[b]}`);  // float edges
+  }
+  const xyz = Float32Array.from([0, 0, 5, 1, 1, -2, 2, 2, 9]);
+  assert.deepEqual(finiteRange(xyz, 3, 2), {min: -2, max: 9});
+});
+
+test('the camera survives the URL to the millimetre and junk is refused', () => {
+  const text = encodeCamera({x: 1.23456, y: -2, z: 3e-4}, {x: 10, y: 20.0004, z: -30});
+  assert.equal(text, '1.235,-2,0,10,20,-30');
+  assert.deepEqual(decodeCamera(text), {position: {x: 1.235, y: -2, z: 0}, target: {x: 10, y: 20, z: -30}});
+  for (const bad of ['', '1,2,3', '1,2,3,4,5,x', '1,2,3,1,2,3', '1,,3,4,5,6', null, 'NaN,1,1,1,1,1'])
+    assert.equal(decodeCamera(bad), null, String(bad));
+});
+
+test('even thinning keeps every k-th point and its attributes together', () => {
+  assert.equal(strideFor(14e6, 3e6), 5);
+  assert.equal(strideFor(100, 3e6), 1);
+  const xyz = Float32Array.from({length: 30}, (_, i) => i);  // 10 points
+  assert.deepEqual([...strided(xyz, 3, 4)], [0, 1, 2, 12, 13, 14, 24, 25, 26]);
+  const values = Float32Array.from({length: 10}, (_, i) => i * 10);
+  assert.deepEqual([...strided(values, 1, 4)], [0, 40, 80]);
+});
+
+test('residual CSV: columns by name, errors naming file and line', () => {
+  const csv = 'state,t,x_model_m,y_model_m,z_model_m,residual_m\ngicp,1.5,1,2,3,0.25\nba,1.5,1,2,3,-0.01\n';
+  const rows = parseResiduals(csv, 'dvl_residuals.csv');
+  assert.deepEqual(rows.gicp, [{x: 1, y: 2, z: 3, r: 0.25}]);
+  assert.deepEqual(rows.ba, [{x: 1, y: 2, z: 3, r: -0.01}]);
+  assert.throws(() => parseResiduals('state,t,x\n', 'f.csv'), /f\.csv: line 1: no column "x_model_m"/);
+  assert.throws(() => parseResiduals(`${csv}ba,2,1,2,zz,0\n`, 'f.csv'), /f\.csv: line 4: expected numbers/);
+});
+
+test('Draco attribute ids come from the sidecar; position defaults to 0', () => {
+  const config = taskConfigFor({attributes: {intensity: {unique_id: 1}, sensor: {unique_id: 2}, bad: {}}});
+  assert.deepEqual(config.attributeIDs, {position: 0, intensity: 1, sensor: 2});
+  assert.equal(config.useUniqueIDs, true);
+  assert.deepEqual(taskConfigFor(null).attributeIDs, {position: 0});
+  assert.equal(taskConfigFor({position_unique_id: 3}).attributeIDs.position, 3);
+});

@@ -1,0 +1,53 @@
+// Legend boxes of the viewer: one per coloured layer on screen, its range printed from the
+// numbers the layer colours with (data-min/data-max carry them at full precision).
+import {h} from '../dom.js';
+import {formatNumber} from '../format.js';
+import {CATEGORICAL, cssColor, cssGradient} from './colormap.js';
+
+export function legendBox(legend, layerName) {
+  const box = h('div', {class: 'legend-box', dataset: {layer: layerName, mode: legend.mode,
+                                                     min: String(legend.min), max: String(legend.max)}},
+                h('div', {class: 'legend-title'}, legend.title));
+  if (legend.ramp === 'categorical') {
+    const first = Math.round(legend.min);
+    const last = Math.round(legend.max);
+    for (let v = first; v <= last; v += 1)
+      box.append(h('div', null, h('span', {class: 'swatch', style: {background: cssColor(CATEGORICAL[(v - first) % CATEGORICAL.length])}}),
+                   legend.labels?.[v] ?? `sensor ${v}`));
+    return box;
+  }
+  box.append(h('div', {class: 'ramp', style: {background: cssGradient(legend.ramp)}}),
+             h('div', {class: 'ends'}, h('span', {class: 'min'}, formatNumber(legend.min)),
+               h('span', {class: 'max'}, formatNumber(legend.max))));
+  return box;
+}
+
+// A small histogram (bars over [min, max]) with an optional threshold marker, on a canvas.
+export function drawHistogram(canvas, counts, {min, max, threshold = null, color = '#4e79a7'}) {
+  const width = canvas.clientWidth || 260;
+  const height = canvas.clientHeight || 70;
+  canvas.width = width;
+  canvas.height = height;
+  const g = canvas.getContext('2d');
+  g.clearRect(0, 0, width, height);
+  const top = Math.max(1, ...counts);
+  const bar = width / counts.length;
+  g.fillStyle = color;
+  counts.forEach((c, i) => {
+    const barHeight = (Math.log1p(c) / Math.log1p(top)) * (height - 12);
+    g.fillRect(i * bar, height - 12 - barHeight, Math.max(1, bar - 1), barHeight);
+  });
+  g.fillStyle = '#6b7385';
+  g.font = '10px sans-serif';
+  g.fillText(formatNumber(min, 3), 0, height - 1);
+  const right = formatNumber(max, 3);
+  g.fillText(right, width - g.measureText(right).width, height - 1);
+  if (threshold !== null && max > min) {
+    for (const t of [threshold, -threshold]) {
+      if (t < min || t > max) continue;
+      const x = ((t - min) / (max - min)) * width;
+      g.fillStyle = '#c62828';
+      g.fillRect(x - 1, 0, 2, height - 12);
+    }
+  }
+}

@@ -1,0 +1,143 @@
+// A Draco mesh of a job: the remeshed hull (mesh_remeshed.drc, per-vertex `deviation` in
+// metres) coloured by its deviation from the CAD model, vertices under the threshold grey;
+// or the CAD model itself (cad_model.drc), flat and translucent, for point-to-CAD
+// measurement.
+import * as THREE from 'three';
+import {decodeDraco} from './draco.js';
+import {meshMaterial} from './materials.js';
+
+export class MeshLayer {
+  // source: {name, sidecar, artifact, fetchBytes}; kind: 'deviation' | 'cad'
+  // transform: a THREE.Matrix4 placing the mesh in the scene (model -> world), or null.
+  constructor(source, {kind, onChange, transform = null}) {
+    this.name = source.name;
+    this.source = source;
+    this.sidecar = source.sidecar;
+    this.kind = kind;
+    this.onChange = onChange;
+    this.object3d = new THREE.Group();
+    this.object3d.name = source.name;
+    this.transform = transform;
+    if (transform) {
+      this.object3d.matrixAutoUpdate = false;
+      this.object3d.matrix.copy(transform);
+    }
+    this.material = meshMaterial(kind === 'cad' ? {flat: true, opacity: 0.35} : {});
+    this.mesh = null;
+    this.status = 'idle';
+    this.message = '';
+    this.progress = 0;
+    this.vertices = 0;
+    this.faces = 0;
+    this.threshold = 0;
+  }
+
+  async load() {
+    const artifact = this.source.artifact;
+    this.status = 'loading';
+    this.message = `downloading ${artifact.name}`;
+    this.onChange?.(this);
+    try {
+      const bytes = await this.source.fetchBytes(artifact, (got, total) => {
+        this.progress = total ? got / total : 0;
+        this.onChange?.(this);
+      });
+      const geometry = await decodeDraco(bytes, this.sidecar, artifact.name);
+      if (!geometry.index) throw new Error(`${artifact.name} is a point cloud, not a mesh`);
+      if (this.kind === 'deviation' && !geometry.getAttribute('deviation'))
+        throw new Error(`${artifact.name} has no deviation attribute (its sidecar lists none)`);
+      geometry.computeVertexNormals();
+      this.vertices = geometry.getAttribute('position').count;
+      this.faces = geometry.index.count / 3;
+      if (this.kind === 'deviation') geometry.setAttribute('value', geometry.getAttribute('deviation'));
+      this.mesh = new THREE.Mesh(geometry, this.material);
+      this.object3d.add(this.mesh);
+      this.applyRange();
+      this.status = 'shown';
+      this.message = '';
+    } catch (e) {
+      this.status = 'error';
+      this.message = e.message || String(e);
+    }
+    this.onChange?.(this);
+  }
+
+  range() {
+    const info = this.sidecar?.attributes?.deviation;
+    if (info && Number.isFinite(info.min) && Number.isFinite(info.max)) return {min: info.min, max: info.max};
+    return {min: NaN, max: NaN};
+  }
+
+  deviations() {
+    return this.mesh?.geometry.getAttribute('deviation')?.array || new Float32Array(0);
+  }
+
+  applyRange() {
+    if (this.kind !== 'deviation') return;
+    const {min, max} = this.range();
+    this.material.uniforms.vmin.value = min;
+    this.material.uniforms.vmax.value = max;
+    this.material.uniforms.threshold.value = this.threshold > 0 ? this.threshold : -1;
+  }
+
+  // Vertices whose |deviation| is below `metres` are drawn grey (on the CAD model).
+  setThreshold(metres) {
+    this.threshold = metres;
+    this.applyRange();
+  }
+
+  legend() {
+    if (this.kind !== 'deviation') return null;
+    const {min, max} = this.range();
+    return {title: `${this.name}: deviation from CAD (m)`, min, max, ramp: 'viridis', mode: 'deviation'};
+  }
+
+  boundingBox() {
+    const s = this.sidecar;
+    let box = null;
+    if (s?.bbox_min && s?.bbox_max) box = new THREE.Box3(new THREE.Vector3(...s.bbox_min), new THREE.Vector3(...s.bbox_max));
+    else if (this.mesh) {
+      this.mesh.geometry.computeBoundingBox();
+      box = this.mesh.geometry.boundingBox.clone();
+    }
+    return box && this.transform ? box.applyMatrix4(this.transform) : box;
+  }
+
+  // The closest point of this mesh's surface to a scene point: {point, distance}.
+  closestPoint(scenePoint) {
+    if (!this.transform) return this.closestPointLocal(scenePoint);
+    const local = scenePoint.clone().applyMatrix4(this.transform.clone().invert());
+    const best = this.closestPointLocal(local);
+    best.point.applyMatrix4(this.transform);
+    return best;
+  }
+
+  // The closest point of this mesh's surface to `point` in its own frame (brute force over
+  // the triangles): {point, distance}.
+  closestPointLocal(point) {
+    const geometry = this.mesh.geometry;
+    const position = geometry.getAttribute('position');
+    const index = geometry.index.array;
+    const triangle = new THREE.Triangle();
+    const candidate = new THREE.Vector3();
+    const best = {point: new THREE.Vector3(), distance: Infinity};
+    for (let i = 0; i < index.length; i += 3) {
+      triangle.a.fromBufferAttribute(position, index[i]);
+      triangle.b.fromBufferAttribute(position, index[i + 1]);
+      triangle.c.fromBufferAttribute(position, index[i + 2]);
+      triangle.closestPointToPoint(point, candidate);
+      const d = candidate.distanceToSquared(point);
+      if (d < best.distance) {
+        best.distance = d;
+        best.point.copy(candidate);
+      }
+    }
+    best.distance = Math.sqrt(best.distance);
+    return best;
+  }
+
+  dispose() {
+    if (this.mesh) this.mesh.geometry.dispose();
+    this.material.dispose();
+  }
+}

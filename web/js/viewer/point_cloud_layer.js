@@ -1,0 +1,165 @@
+// One Draco map of a job (map_<sensor>.drc or map_combined.drc) with its sidecar: the
+// preview first when the map stage wrote one, the full map on demand, both kept within the
+// point budget by even thinning. A coarse copy (at most COARSE_POINTS) gives the first
+// picture fast and is drawn while the camera moves; the budgeted copy when it rests.
+import * as THREE from 'three';
+import {decodeDraco} from './draco.js';
+import {pointMaterial, rampTexture} from './materials.js';
+import {strideFor, thinGeometry} from './thinning.js';
+
+export const COARSE_POINTS = 250000;
+
+// What a map can be coloured by: height always; the rest when the sidecar lists them.
+export const COLOR_MODES = ['height', 'intensity', 'sensor', 'density', 'roughness', 'planarity'];
+
+export class PointCloudLayer {
+  // source: {name, sidecar (or null), full: artifact, preview: artifact or null,
+  //          fetchBytes(artifact, onProgress) -> ArrayBuffer}
+  constructor(source, {budget, onChange}) {
+    this.name = source.name;
+    this.source = source;
+    this.sidecar = source.sidecar;
+    this.budget = budget;
+    this.onChange = onChange;
+    this.object3d = new THREE.Group();
+    this.object3d.name = source.name;
+    this.material = pointMaterial();
+    this.coarse = null;  // THREE.Points
+    this.detail = null;  // THREE.Points
+    this.level = '';     // 'preview' | 'full'
+    this.status = 'idle';
+    this.message = '';
+    this.progress = 0;
+    this.decodedPoints = 0;
+    this.drawnPoints = 0;
+    this.colorMode = 'height';
+    this.decoded = null;  // the geometry as decoded, kept for tests' read-back
+  }
+
+  modes() {
+    const attributes = this.sidecar?.attributes || {};
+    return COLOR_MODES.filter((m) => m === 'height' || attributes[m]);
+  }
+
+  hasPreview() {
+    return Boolean(this.source.preview);
+  }
+
+  // Loads the preview (or the map when there is none), or the full map when `full`.
+  async load({full = false} = {}) {
+    const artifact = full || !this.source.preview ? this.source.full : this.source.preview;
+    this.level = artifact === this.source.full ? 'full' : 'preview';
+    this.status = 'loading';
+    this.message = `downloading ${artifact.name}`;
+    this.onChange?.(this);
+    try {
+      const bytes = await this.source.fetchBytes(artifact, (got, total) => {
+        this.progress = total ? got / total : 0;
+        this.onChange?.(this);
+      });
+      this.message = `decoding ${artifact.name}`;
+      this.onChange?.(this);
+      const geometry = await decodeDraco(bytes, this.sidecar, artifact.name);
+      await this.show(geometry);
+      this.status = 'shown';
+      this.message = '';
+    } catch (e) {
+      this.status = 'error';
+      this.message = e.message || String(e);
+    }
+    this.onChange?.(this);
+  }
+
+  async show(geometry) {
+    const count = geometry.getAttribute('position')?.count || 0;
+    if (count === 0) throw new Error(`${this.name}: the map has no points`);
+    this.decodedPoints = count;
+    this.decoded = count <= this.budget ? geometry : null;  // tests read values back
+    const coarse = await thinGeometry(geometry, strideFor(count, COARSE_POINTS));
+    const detail = count <= COARSE_POINTS ? coarse : await thinGeometry(geometry, strideFor(count, this.budget));
+    this.disposeObjects();
+    this.coarse = new THREE.Points(coarse, this.material);
+    this.detail = detail === coarse ? this.coarse : new THREE.Points(detail, this.material);
+    this.coarse.frustumCulled = false;
+    this.detail.frustumCulled = false;
+    this.object3d.add(this.coarse);
+    if (this.detail !== this.coarse) this.object3d.add(this.detail);
+    this.drawnPoints = this.detail.geometry.getAttribute('position').count;
+    this.applyColor();
+    this.setInteracting(true);  // the coarse copy first; the caller switches after a frame
+  }
+
+  // While the camera moves (or before the first picture), draw the coarse copy only.
+  setInteracting(moving) {
+    if (!this.coarse) return;
+    this.coarse.visible = moving || this.detail === this.coarse;
+    if (this.detail !== this.coarse) this.detail.visible = !moving;
+  }
+
+  boundingBox() {
+    const s = this.sidecar;
+    if (s?.bbox_min && s?.bbox_max) return new THREE.Box3(new THREE.Vector3(...s.bbox_min), new THREE.Vector3(...s.bbox_max));
+    if (!this.coarse) return null;
+    this.coarse.geometry.computeBoundingBox();
+    return this.coarse.geometry.boundingBox;
+  }
+
+  // The legend of the current colouring: range = the attribute's min/max from the sidecar
+  // (the values stored in the file), height = the map's z extent.
+  legend() {
+    const mode = this.colorMode;
+    if (mode === 'height') {
+      const box = this.boundingBox();
+      return {title: `${this.name}: height (z, m)`, min: box ? box.min.z : NaN, max: box ? box.max.z : NaN, ramp: 'viridis', mode};
+    }
+    const info = this.sidecar.attributes[mode];
+    if (mode === 'sensor')
+      return {title: `${this.name}: sensor`, min: info.min, max: info.max, ramp: 'categorical', labels: info.labels || [], mode};
+    const unit = {intensity: '', density: ' (points/m³)', roughness: ' (m)', planarity: ''}[mode] ?? '';
+    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode};
+  }
+
+  setColorMode(mode) {
+    if (!this.modes().includes(mode)) return false;
+    this.colorMode = mode;
+    this.applyColor();
+    return true;
+  }
+
+  applyColor() {
+    const uniforms = this.material.uniforms;
+    const legend = this.legend();
+    const categories = legend.ramp === 'categorical' ? Math.max(1, Math.round(legend.max - legend.min) + 1) : 0;
+    uniforms.useHeight.value = this.colorMode === 'height' ? 1 : 0;
+    uniforms.vmin.value = categories ? legend.min - 0.5 : legend.min;
+    uniforms.vmax.value = categories ? legend.max + 0.5 : legend.max;
+    uniforms.ramp.value.dispose();
+    uniforms.ramp.value = rampTexture('viridis', categories);
+    for (const points of [this.coarse, this.detail]) {
+      if (!points) continue;
+      const geometry = points.geometry;
+      if (this.colorMode === 'height') geometry.deleteAttribute('value');
+      else geometry.setAttribute('value', geometry.getAttribute(this.colorMode));
+    }
+  }
+
+  setPointSize(size) {
+    this.material.uniforms.pointSize.value = size;
+  }
+
+  disposeObjects() {
+    for (const points of new Set([this.coarse, this.detail])) {
+      if (!points) continue;
+      this.object3d.remove(points);
+      points.geometry.dispose();
+    }
+    this.coarse = null;
+    this.detail = null;
+  }
+
+  dispose() {
+    this.disposeObjects();
+    this.material.dispose();
+    this.decoded = null;
+  }
+}
