@@ -170,6 +170,7 @@ async function checkReportNumbers(id, requiredKeys) {
 }
 
 test('the report view shows report.json\'s figures for refine and map', () => step('report bridge', async () => {
+  assert.equal((await server.waitJob(jobs.bridge)).state, 'succeeded');
   const t = 'stages.refine.evaluation.table';
   const required = [`${t}.map.ate.translation_m.rmse`, `${t}.refined_with_dvl.ate.translation_m.rmse`,
                     `${t}.refined_without_dvl.ate.translation_m.rmse`, `${t}.refined_with_dvl.rpe.translation_m.rmse`,
