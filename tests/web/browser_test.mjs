@@ -31,28 +31,33 @@ const pointMetrics = stageOptions.includes('write_point_metrics');
 
 let server;
 let browser;
+// GET /v1/events and /v1/queue (docs/api.md "Live events and the queue"): the tests of the
+// live list and of the queue page skip, saying so, on a server without them.
+let hasEvents = true;
+let hasQueue = true;
 let page;
 let problems;
 const jobs = {};
 const work = tempDir('keel-web-test-');
 
 // Screenshots of the page when a test fails, named after the test.
-async function step(name, fn) {
+async function step(name, fn, shown = () => page) {
   try {
     await fn();
   } catch (e) {
-    if (page) {
+    const p = shown();
+    if (p && !p.isClosed()) {
       const file = path.join(outDir, `${name.replace(/[^a-z0-9]+/gi, '_')}.png`);
-      await page.screenshot({path: file, fullPage: true}).catch(() => {});
+      await p.screenshot({path: file, fullPage: true}).catch(() => {});
       console.log(`screenshot: ${file}`);
     }
     throw e;
   }
 }
 
-async function signIn(p, token) {
-  await p.goto(`${server.url}/#/signin`);
-  await p.fill('#token', token);
+async function signIn(p, srv) {
+  await p.goto(`${srv.url}/#/signin`);
+  await p.fill('#token', srv.token);
   await p.click('form.signin button[type=submit]');
 }
 
@@ -64,9 +69,13 @@ before(async () => {
   jobs.bridgeMission = bridge;
   jobs.hullMission = hull;
   server = await new Server(binDir, webDir, {workers: 1}).start();
+  hasEvents = (await server.api('v1/events?job_id=none', {raw: true, method: 'HEAD'}).catch(() => ({status: 0}))).status !== 404;
+  hasQueue = (await server.api('v1/queue', {raw: true})).status !== 404;
   browser = await launchChromium();
   page = await browser.context.newPage();
-  problems = watchPage(page);
+  const missingRoute = (r) => r.status() === 404 &&
+      ((!hasEvents && r.url().endsWith('/v1/events')) || (!hasQueue && r.url().endsWith('/v1/queue')));
+  problems = watchPage(page, {allowStatus: missingRoute});
 });
 
 after(async () => {
@@ -88,7 +97,6 @@ test('a refused token shows the sign-in page with the reason', () => step('refus
     // A token the server stops accepting mid-session sends the user back with the reason.
     await p.evaluate(() => sessionStorage.setItem('keel.token', 'revoked-token'));
     await p.goto(`${server.url}/#/queue`);
-    await p.reload();
     const reason = await p.textContent('#signin-status .message', {timeout: 10000});
     assert.match(reason, /refused your token/);
     assert.equal(await p.evaluate(() => sessionStorage.getItem('keel.token')), null);
@@ -97,8 +105,15 @@ test('a refused token shows the sign-in page with the reason', () => step('refus
   }
 }));
 
-test('signed in, the job list follows a job live from queued to succeeded', () => step('live job list', async () => {
-  await signIn(page, server.token);
+test('signed in, the job list follows a job live from queued to succeeded', (t) => step('live job list', async () => {
+  await signIn(page, server);
+  const set = pointMetrics ? ['--set', 'map.write_point_metrics=true'] : [];
+  if (!hasEvents) {
+    jobs.bridge = server.submit(jobs.bridgeMission, 'ingest,refine,map', set);
+    jobs.hull = server.submit(jobs.hullMission, 'ingest,refine,ba,inspect', ['--set', 'ba.mode=proposed']);
+    t.skip('this keel-server has no GET /v1/events yet: the live list is not tested');
+    return;
+  }
   await page.waitForSelector('#jobs-table');
   // Every state a row shows is recorded in the page, without reloading it.
   await page.evaluate(() => {
@@ -113,7 +128,6 @@ test('signed in, the job list follows a job live from queued to succeeded', () =
       }
     }).observe(document.getElementById('jobs-table'), {childList: true, subtree: true});
   });
-  const set = pointMetrics ? ['--set', 'map.write_point_metrics=true'] : [];
   jobs.bridge = server.submit(jobs.bridgeMission, 'ingest,refine,map', set);
   jobs.hull = server.submit(jobs.hullMission, 'ingest,refine,ba,inspect', ['--set', 'ba.mode=proposed']);
   await page.waitForSelector(`tr[data-job-id="${jobs.bridge}"]`, {timeout: 20000});
@@ -161,7 +175,8 @@ async function checkReportNumbers(id, requiredKeys) {
     if (typeof expected === 'number') {
       assert.equal(Number(c.value), expected, c.key);
       const shown = Number(c.text.replace(/,/g, ''));
-      assert.ok(Math.abs(shown - expected) <= 1e-3 * Math.abs(expected) + 1e-12, `${c.key}: shows ${c.text} for ${expected}`);
+      // Printed with 3-4 significant digits.
+      assert.ok(Math.abs(shown - expected) <= 5e-3 * Math.abs(expected) + 1e-12, `${c.key}: shows ${c.text} for ${expected}`);
     } else {
       assert.equal(c.value, typeof expected === 'object' ? JSON.stringify(expected) : String(expected), c.key);
     }
@@ -263,7 +278,7 @@ test('the camera in the URL reopens the same view', () => step('camera url', asy
   await page.mouse.up();
   const moved = await page.evaluate(() => window.keelViewer.camera());
   assert.notEqual(moved, '12.5,-40.25,18,3,4.5,-1');
-  await page.waitForFunction((c) => location.hash.includes(`cam=${c}`), moved);
+  await page.waitForFunction((c) => new URLSearchParams(location.hash.split('?')[1] || '').get('cam') === c, moved);
   await page.reload();
   await page.waitForSelector('body[data-viewer-ready="true"]', {timeout: 120000});
   assert.equal(await page.evaluate(() => window.keelViewer.camera()), moved);
@@ -311,7 +326,11 @@ test('the hull: ba and inspect figures, mesh vertices, deviation legend, a shape
   }
 }));
 
-test('the queue page shows the server\'s own figures', () => step('queue', async () => {
+test('the queue page shows the server\'s own figures', (t) => step('queue', async () => {
+  if (!hasQueue) {
+    t.skip('this keel-server has no GET /v1/queue yet');
+    return;
+  }
   await page.goto(`${server.url}/#/queue`);
   await page.waitForSelector('#count-succeeded');
   const queue = await server.api('v1/queue');
@@ -355,7 +374,19 @@ test('missing and corrupt artifacts are named in messages', () => step('bad arti
 
     const p = await browser.context.newPage();
     try {
-      await signIn(p, bare.token);
+      await step('bad artifacts page', () => badArtifactPages(p, bare, job), () => p);
+    } finally {
+      await p.close();
+    }
+  } finally {
+    await bare.stop();
+  }
+}));
+
+async function badArtifactPages(p, bare, job) {
+  {
+    {
+      await signIn(p, bare);
       await p.waitForSelector('#jobs-table');
       await p.goto(`${bare.url}/#/jobs/${job.id}/viewer`);
       await p.waitForSelector('body[data-viewer-ready="true"]', {timeout: 60000});
@@ -366,11 +397,7 @@ test('missing and corrupt artifacts are named in messages', () => step('bad arti
       assert.match(all, /map_lidar_h\.json is missing/);
       assert.match(all, /trajectories\.json: trajectories\[0\] \(refined\): xyz must be \[x, y, z\] numbers/);
       await p.goto(`${bare.url}/#/jobs/${job.id}/report`);
-      assert.match(await p.textContent('#report .message.error'), /report\.json cannot be read: report\.json is not valid JSON/);
-    } finally {
-      await p.close();
+      assert.match(await p.textContent('#report .message.error'), /report\.json cannot be read.*report\.json is not valid JSON/);
     }
-  } finally {
-    await bare.stop();
   }
-}));
+}

@@ -74,7 +74,8 @@ export class Server {
       {stdio: ['ignore', log, log]});
     const urlFile = path.join(this.dataDir, 'server.url');
     for (let i = 0; i < 300; i += 1) {
-      if (fs.existsSync(urlFile) && fs.existsSync(path.join(this.dataDir, 'token'))) break;
+      const nonEmpty = (f) => fs.existsSync(f) && fs.statSync(f).size > 0;
+      if (nonEmpty(urlFile) && nonEmpty(path.join(this.dataDir, 'token'))) break;
       if (this.process.exitCode !== null) throw new Error(`keel-server exited: ${fs.readFileSync(this.log, 'utf8')}`);
       await sleep(100);
     }
@@ -159,10 +160,15 @@ export async function launchChromium() {
 }
 
 // Records console errors, page errors, failed requests and HTTP errors of a page.
+// `allowStatus(response)` names answers the test expects (Chromium also logs each as a
+// console error, which is then allowed too).
 export function watchPage(page, {allowStatus = () => false} = {}) {
   const problems = [];
+  const allowedUrls = new Set();
   page.on('console', (m) => {
-    if (m.type() === 'error') problems.push(`console error: ${m.text()}`);
+    if (m.type() !== 'error') return;
+    if (m.text().startsWith('Failed to load resource') && allowedUrls.has(m.location()?.url)) return;
+    problems.push(`console error: ${m.text()} (${m.location()?.url || ''})`);
   });
   page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
   page.on('requestfailed', (r) => {
@@ -172,7 +178,8 @@ export function watchPage(page, {allowStatus = () => false} = {}) {
     problems.push(`request failed: ${r.method()} ${r.url()} ${why}`);
   });
   page.on('response', (r) => {
-    if (r.status() >= 400 && !allowStatus(r)) problems.push(`HTTP ${r.status()}: ${r.request().method()} ${r.url()}`);
+    if (r.status() >= 400 && allowStatus(r)) allowedUrls.add(r.url());
+    else if (r.status() >= 400) problems.push(`HTTP ${r.status()}: ${r.request().method()} ${r.url()}`);
   });
   return problems;
 }
