@@ -23,6 +23,7 @@ bool is_terminal(JobState state);
 // What a client sends to create a job (POST /v1/jobs).
 struct JobRequest {
   std::string mission_id;
+  std::string project;  // optional in JSON; the server checks it against the token's project
   std::vector<std::string> stages;
   nlohmann::json options = nlohmann::json::object();  // {"stage": {"option": value}}
 
@@ -45,6 +46,10 @@ struct Job {
   int64_t created_at_ms = 0;
   int64_t started_at_ms = 0;                  // 0 = not yet
   int64_t finished_at_ms = 0;                 // 0 = not yet
+  std::string project;                        // the mission's project
+  std::string batch_id;                       // the reprocess batch that made it, "" = none
+  std::string worker;                         // holds (or last held) its lease, "" = none
+  std::string mission_name;                   // the mission's name, for lists and filters
 
   nlohmann::json to_json() const;
   static Job from_json(const nlohmann::json& body, const std::string& path = "");
@@ -56,9 +61,45 @@ struct ReprocessRequest {
   std::string name_prefix;               // missions whose name starts with this ("" = all)
   std::vector<std::string> stages;
   nlohmann::json options = nlohmann::json::object();
+  std::string project;                   // optional in JSON; the server sets the token's
 
   nlohmann::json to_json() const;
   static ReprocessRequest from_json(const nlohmann::json& body, const std::string& path = "");
+};
+
+// The jobs one reprocess request made, followed as a whole (`keel jobs --batch ID`).
+struct Batch {
+  std::string id;  // "b_..."
+  std::string project;
+  int64_t created_at_ms = 0;
+  int64_t jobs = 0;                              // jobs made
+  std::map<std::string, int64_t> jobs_by_state;  // every state, 0 included
+  // Seconds of the batch's finished jobs (finished - started), for an ETA.
+  double mean_job_seconds = 0.0;
+  int64_t finished_jobs_timed = 0;
+
+  nlohmann::json to_json() const;
+  static Batch from_json(const nlohmann::json& body, const std::string& path = "");
+};
+
+// GET /v1/queue (docs/api.md "Live events and the queue").
+struct WorkerInfo {
+  std::string id;      // the worker's name from its lease requests (unique per process start)
+  std::string job_id;  // the job it holds, "" when idle
+  int64_t last_seen_ms = 0;
+  bool alive = false;  // called the worker protocol within the last 60 s
+
+  nlohmann::json to_json() const;
+};
+struct QueueSummary {
+  std::map<std::string, int64_t> jobs_by_state;  // every state, 0 included
+  int64_t workers_alive = 0;
+  std::vector<WorkerInfo> workers;
+  int64_t finished_last_hour = 0;  // succeeded or failed in the last hour
+  int64_t failed_last_hour = 0;
+  double mean_job_seconds_last_hour = 0.0;
+
+  nlohmann::json to_json() const;
 };
 
 }  // namespace keel::proto

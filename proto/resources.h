@@ -16,6 +16,7 @@ struct Upload {
   int64_t size = 0;    // total bytes announced at creation
   int64_t offset = 0;  // bytes committed so far
   std::string blob;    // SHA-256 hex once completed, else ""
+  std::string project;
 
   nlohmann::json to_json() const;
   static Upload from_json(const nlohmann::json& body, const std::string& path = "");
@@ -25,6 +26,7 @@ struct Upload {
 struct UploadRequest {
   std::string name;
   int64_t size = 0;
+  std::string project;  // optional in JSON; the server checks it against the token's project
 
   nlohmann::json to_json() const;
   static UploadRequest from_json(const nlohmann::json& body, const std::string& path = "");
@@ -38,6 +40,7 @@ struct Mission {
   std::string cad_blob;     // SHA-256 hex of the CAD mesh, "" when none
   std::string cad_name;     // file name of the CAD mesh (its extension tells the format)
   int64_t created_at_ms = 0;
+  std::string project;
 
   nlohmann::json to_json() const;
   static Mission from_json(const nlohmann::json& body, const std::string& path = "");
@@ -49,6 +52,7 @@ struct MissionRequest {
   std::string bundle_blob;
   std::string cad_blob;
   std::string cad_name;
+  std::string project;  // optional in JSON; the server checks it against the token's project
 
   nlohmann::json to_json() const;
   static MissionRequest from_json(const nlohmann::json& body, const std::string& path = "");
@@ -63,6 +67,7 @@ struct Artifact {
   std::string sha256;  // blob id
   int64_t size = 0;
   int64_t created_at_ms = 0;
+  std::string project;  // the job's project
 
   nlohmann::json to_json() const;
   static Artifact from_json(const nlohmann::json& body, const std::string& path = "");

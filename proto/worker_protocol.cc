@@ -33,15 +33,20 @@ nlohmann::json object_field(const FieldReader& r, const char* field) {
 }  // namespace
 
 nlohmann::json LeaseRequest::to_json() const {
-  return {{"worker", worker}, {"lease_seconds", lease_seconds}};
+  return {{"worker", worker}, {"lease_seconds", lease_seconds}, {"wait_seconds", wait_seconds}};
 }
 
 LeaseRequest LeaseRequest::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
-  r.reject_unknown({"worker", "lease_seconds"});
-  LeaseRequest out{r.required<std::string>("worker"), r.optional<int>("lease_seconds", 30)};
+  r.reject_unknown({"worker", "lease_seconds", "wait_seconds"});
+  LeaseRequest out;
+  out.worker = r.required<std::string>("worker");
+  out.lease_seconds = r.optional<int>("lease_seconds", 30);
+  out.wait_seconds = r.optional<int>("wait_seconds", 0);
   if (out.lease_seconds < 1 || out.lease_seconds > 3600)
     throw ContractError(r.child("lease_seconds") + ": expected 1..3600 seconds");
+  if (out.wait_seconds < 0 || out.wait_seconds > 30)
+    throw ContractError(r.child("wait_seconds") + ": expected 0..30 seconds");
   return out;
 }
 

@@ -15,8 +15,17 @@ namespace keel::proto {
 
 // POST /v1/worker/lease
 struct LeaseRequest {
-  std::string worker;       // a name for logs and /metrics ("host:pid")
+  LeaseRequest() = default;
+  LeaseRequest(std::string worker_name, int seconds)
+      : worker(std::move(worker_name)), lease_seconds(seconds) {}
+
+  std::string worker;       // a name for logs and /metrics ("host:pid:start"), unique per process
   int lease_seconds = 30;   // the lease expires unless a heartbeat extends it
+  // Long poll: when nothing is queued, wait up to this long for a job (0..30 s) before the
+  // 204 answer. The server wakes the waiter as soon as a job is queued on any replica.
+  int wait_seconds = 0;
+  // Not in JSON: set by the server from the worker's token (kAllProjects = any project).
+  std::string project;
 
   nlohmann::json to_json() const;
   static LeaseRequest from_json(const nlohmann::json& body, const std::string& path = "");

@@ -60,7 +60,7 @@ bool ensure_initial_token(storage::Store& store, const std::filesystem::path& da
   const std::string token = random_token();
   // The file first: a crash between the two steps leaves an unused file, not a lost token.
   write_file_atomically(data_dir / "token", token, 0600);
-  store.add_token(token, "initial");
+  store.add_token(token, storage::admin_token("initial"));
   return true;
 }
 

@@ -46,7 +46,11 @@ const Route kRoutes[] = {
     {"GET", "v1/jobs/*/artifacts", routes::list_job_artifacts},
     {"POST", "v1/reprocess", routes::reprocess},
     {"GET", "v1/artifacts/*", routes::get_artifact},
+    {"GET", "v1/batches/*", routes::get_batch},
+    {"GET", "v1/events", routes::job_events},
+    {"GET", "v1/queue", routes::queue_summary},
     {"POST", "v1/worker/lease", routes::worker_lease},
+    {"POST", "v1/worker/jobs/*/release", routes::worker_release_job},
     {"POST", "v1/worker/jobs/*/heartbeat", routes::worker_heartbeat},
     {"POST", "v1/worker/jobs/*/artifacts", routes::worker_add_artifact},
     {"POST", "v1/worker/jobs/*/stages/*/complete", routes::worker_complete_stage},
@@ -116,17 +120,23 @@ Response HttpHandler::dispatch(const Request& request) {
   if (!target)
     throw ApiException(400, "bad_request",
                        "request target '" + request.target + "' is not a valid path");
-  if (starts_with_v1(target->segments) && !authorized(request)) {
-    Headers challenge;
-    challenge.set("WWW-Authenticate", "Bearer");
-    throw ApiException(401, "unauthorized", "missing or unknown bearer token", challenge);
+  proto::TokenInfo principal;
+  if (starts_with_v1(target->segments)) {
+    std::optional<proto::TokenInfo> token = authorized(request);
+    if (!token) {
+      Headers challenge;
+      challenge.set("WWW-Authenticate", "Bearer");
+      throw ApiException(401, "unauthorized", "missing, unknown, expired or revoked bearer token",
+                         challenge);
+    }
+    principal = std::move(*token);
   }
   std::vector<std::string> params;
   std::string allowed;
   for (const Route& route : kRoutes) {
     if (!match(route.pattern, target->segments, params)) continue;
     if (request.method == route.method) {
-      routes::Call call{store_, request, *target, params, options_, counters_};
+      routes::Call call{store_, request, *target, params, options_, counters_, principal};
       return route.fn(call);
     }
     allowed += (allowed.empty() ? "" : ", ") + std::string(route.method);
@@ -146,16 +156,16 @@ Response HttpHandler::dispatch(const Request& request) {
   throw ApiException(404, "not_found", "no route " + request.method + " " + target->path);
 }
 
-bool HttpHandler::authorized(const Request& request) {
+std::optional<proto::TokenInfo> HttpHandler::authorized(const Request& request) {
   auto header = request.headers.get("Authorization");
-  if (!header) return false;
+  if (!header) return std::nullopt;
   std::string_view value(*header);
   constexpr std::string_view kScheme = "Bearer ";
   if (value.size() <= kScheme.size() || !iequals(value.substr(0, kScheme.size()), kScheme))
-    return false;
+    return std::nullopt;
   std::string token(value.substr(kScheme.size()));
   while (!token.empty() && token.back() == ' ') token.pop_back();
-  if (token.empty()) return false;
+  if (token.empty()) return std::nullopt;
   return store_.check_token(token);
 }
 
@@ -184,6 +194,20 @@ int64_t query_int(const Call& call, const std::string& name, int64_t fallback, i
                            std::to_string(min) + ", " + std::to_string(max) + "]");
   return value;
 }
+
+void require_reach(const Call& call, const std::string& project,
+                   const std::string& not_found_message) {
+  if (!call.principal.reaches(project)) throw ApiException(404, "not_found", not_found_message);
+}
+
+std::string request_project(const Call& call, const std::string& requested) {
+  if (call.principal.all_projects()) return requested;
+  if (!requested.empty() && requested != call.principal.project)
+    throw ApiException(404, "not_found", "project " + requested + " not found");
+  return call.principal.project;
+}
+
+std::string listing_project(const Call& call) { return call.principal.project; }
 
 std::string query_string(const Call& call, const std::string& name) {
   auto it = call.target.query.find(name);

@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 
+#include "proto/auth.h"
 #include "server/http_types.h"
 #include "server/request_counters.h"
 #include "server/static_files.h"
@@ -26,6 +27,7 @@ struct HandlerOptions {
   std::string version = "0.1.0";           // shown by /healthz
   std::function<int()> workers_alive;      // for /metrics; empty = 0
   std::shared_ptr<const StaticFiles> web;  // the dashboard at "/"; null = none (404)
+  std::function<int64_t()> wall_clock_ms;  // for event timestamps; empty = the system clock
 };
 
 class HttpHandler {
@@ -48,7 +50,8 @@ class HttpHandler {
 
  private:
   Response dispatch(const Request& request);
-  bool authorized(const Request& request);
+  // The bearer token's record, or nullopt when missing, unknown, expired or revoked.
+  std::optional<proto::TokenInfo> authorized(const Request& request);
 
   storage::Store& store_;
   HandlerOptions options_;

@@ -10,8 +10,10 @@
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <sys/socket.h>
 
 #include <array>
+#include <cerrno>
 #include <atomic>
 #include <condition_variable>
 #include <map>
@@ -75,9 +77,15 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   // Called on the session's strand when the server stops: an idle connection (waiting for
-  // a request) closes now; a request in flight finishes and then closes.
+  // a request) closes now; a request in flight finishes and then closes; a long poll
+  // answers now and an event stream ends.
   void on_server_stop() {
     if (idle_) stream_.cancel();
+    if (pending_) on_pending_wake(true);
+    if (event_stream_) {
+      stream_final_ = true;
+      pump_stream();
+    }
   }
 
   net::any_io_executor executor() { return stream_.get_executor(); }
@@ -163,7 +171,127 @@ class Session : public std::enable_shared_from_this<Session> {
     const bool head = message.method() == http::verb::head;
 
     Response response = core_.handler.handle(request);
+    if (response.pending)
+      return begin_pending(std::move(response.pending), version, keep_alive, head);
+    if (response.stream) return begin_stream(std::move(response), version);
     write_response(std::move(response), version, keep_alive && !core_.stopping, head);
+  }
+
+  // --- long polls (PendingResponse) ---
+  // Nothing is read or written while waiting; the answer is written like any other.
+  std::function<void()> waker(void (Session::*method)()) {
+    std::weak_ptr<Session> weak = weak_from_this();
+    return [weak, method] {
+      if (auto self = weak.lock()) net::post(self->executor(), [self, method] { ((*self).*method)(); });
+    };
+  }
+
+  void begin_pending(std::shared_ptr<PendingResponse> pending, unsigned version, bool keep_alive,
+                     bool head) {
+    pending_ = std::move(pending);
+    pending_version_ = version;
+    pending_keep_alive_ = keep_alive;
+    pending_head_ = head;
+    timer_.emplace(stream_.get_executor());
+    pending_->start(waker(&Session::on_pending_notified));
+    arm_pending_timer();
+  }
+
+  void on_pending_notified() { on_pending_wake(false); }
+
+  void arm_pending_timer() {
+    const auto now = std::chrono::steady_clock::now();
+    timer_->expires_at(std::min(pending_->deadline(), now + pending_->tick()));
+    timer_->async_wait([self = shared_from_this()](error_code ec) {
+      if (ec == net::error::operation_aborted || !self->pending_) return;
+      self->on_pending_wake(std::chrono::steady_clock::now() >= self->pending_->deadline());
+    });
+  }
+
+  // True when the client closed its side (or the socket failed): peeking never consumes
+  // a byte, so a pipelined next request stays for the parser.
+  bool peer_gone() {
+    char byte;
+    const ssize_t n = ::recv(stream_.socket().native_handle(), &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+    return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+  }
+
+  void on_pending_wake(bool final) {
+    if (!pending_) return;
+    // A worker that hung up must not be handed a lease it will never run.
+    if (peer_gone()) {
+      pending_.reset();
+      timer_->cancel();
+      return close();
+    }
+    std::optional<Response> answer = pending_->poll(final || core_.stopping);
+    if (!answer) return arm_pending_timer();
+    pending_.reset();
+    timer_->cancel();
+    core_.handler.count_response(answer->status);
+    write_response(std::move(*answer), pending_version_, pending_keep_alive_ && !core_.stopping,
+                   pending_head_);
+  }
+
+  // --- event streams (EventStream, server-sent events) ---
+  void begin_stream(Response response, unsigned version) {
+    event_stream_ = std::move(response.stream);
+    auto header = std::make_shared<http::response<http::empty_body>>();
+    header->version(version);
+    set_common(*header, response, false);
+    header->chunked(true);
+    auto serializer = std::make_shared<http::response_serializer<http::empty_body>>(*header);
+    stream_.expires_after(core_.options.write_timeout);
+    http::async_write_header(
+        stream_, *serializer, [self = shared_from_this(), header, serializer](error_code ec, size_t) {
+          if (ec) return self->end_stream(false);
+          self->timer_.emplace(self->stream_.get_executor());
+          self->event_stream_->start(self->waker(&Session::pump_stream));
+          self->pump_stream();
+        });
+  }
+
+  void pump_stream() {
+    if (!event_stream_ || !timer_) return;
+    if (stream_writing_) {
+      stream_dirty_ = true;
+      return;
+    }
+    bool ended = false;
+    std::string data = event_stream_->take(stream_final_ || core_.stopping, ended);
+    if (data.empty() && !ended) {
+      if (peer_gone()) return end_stream(false);
+      timer_->expires_after(event_stream_->tick());
+      timer_->async_wait([self = shared_from_this()](error_code ec) {
+        if (ec == net::error::operation_aborted) return;
+        self->pump_stream();
+      });
+      return;
+    }
+    stream_writing_ = true;
+    stream_dirty_ = false;
+    auto bytes = std::make_shared<std::string>(std::move(data));
+    auto after = [self = shared_from_this(), bytes, ended](error_code ec, size_t) {
+      self->stream_writing_ = false;
+      if (ec) return self->end_stream(false);
+      if (ended) return self->end_stream(true);
+      self->pump_stream();
+    };
+    stream_.expires_after(core_.options.write_timeout);
+    if (bytes->empty())
+      after(error_code(), 0);
+    else
+      net::async_write(stream_, http::make_chunk(net::buffer(*bytes)), std::move(after));
+  }
+
+  // Ends the event stream: with `clean`, the last chunk tells the client it is complete.
+  void end_stream(bool clean) {
+    if (timer_) timer_->cancel();
+    event_stream_.reset();
+    if (!clean) return close();
+    stream_.expires_after(core_.options.write_timeout);
+    net::async_write(stream_, http::make_chunk_last(),
+                     [self = shared_from_this()](error_code, size_t) { self->close(); });
   }
 
   void send_error(int status, const std::string& code, const std::string& message) {
@@ -277,6 +405,15 @@ class Session : public std::enable_shared_from_this<Session> {
   std::chrono::steady_clock::time_point drain_deadline_;
   size_t drained_ = 0;
   std::array<char, 16 * 1024> drain_buffer_;
+  std::optional<net::steady_timer> timer_;  // long-poll deadline / event-stream tick
+  std::shared_ptr<PendingResponse> pending_;
+  unsigned pending_version_ = 11;
+  bool pending_keep_alive_ = true;
+  bool pending_head_ = false;
+  std::shared_ptr<EventStream> event_stream_;
+  bool stream_writing_ = false;
+  bool stream_dirty_ = false;
+  bool stream_final_ = false;
 };
 
 struct HttpServer::Impl {

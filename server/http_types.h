@@ -4,8 +4,11 @@
 // socket-side files: http_server.cc and file_region_body.h).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -44,11 +47,45 @@ struct FileRegion {
   uint64_t length = 0;
 };
 
+struct Response;
+
+// Answers that are not complete when the route returns. The socket side drives them on the
+// connection's strand: start() once, then poll()/take() whenever `wake` is called (from any
+// thread, any number of times), every tick(), and (PendingResponse) at deadline(). Tests
+// drive them the same way without sockets.
+//
+// A long poll (POST /v1/worker/lease with wait_seconds): the answer is one whole Response,
+// ready later.
+class PendingResponse {
+ public:
+  virtual ~PendingResponse() = default;
+  virtual void start(std::function<void()> wake) = 0;
+  // The answer when ready, else nullopt. With `final` (the deadline passed, or the server is
+  // stopping) it must answer.
+  virtual std::optional<Response> poll(bool final) = 0;
+  virtual std::chrono::steady_clock::time_point deadline() const = 0;
+  virtual std::chrono::milliseconds tick() const { return std::chrono::seconds(2); }
+};
+
+// A body that keeps coming (server-sent events): the socket side sends the Response's status
+// and headers with chunked transfer coding, then each piece take() gives.
+class EventStream {
+ public:
+  virtual ~EventStream() = default;
+  virtual void start(std::function<void()> wake) = 0;
+  // The bytes to send now ("" = nothing yet); sets `ended` when the stream is over. With
+  // `final` (the server is stopping) the stream must end.
+  virtual std::string take(bool final, bool& ended) = 0;
+  virtual std::chrono::milliseconds tick() const { return std::chrono::seconds(5); }
+};
+
 struct Response {
   int status = 200;
   Headers headers;
   std::string body;                // used when `file` is empty
   std::optional<FileRegion> file;  // a file region to stream instead of `body`
+  std::shared_ptr<PendingResponse> pending;  // set: the real answer comes later
+  std::shared_ptr<EventStream> stream;       // set: status + headers now, body as it comes
 };
 
 }  // namespace keel::server

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "proto/auth.h"
 #include "server/http_handler.h"
 #include "server/http_types.h"
 #include "server/url.h"
@@ -19,6 +20,7 @@ struct Call {
   const std::vector<std::string>& params;  // path parameters ("{id}", "{stage}") in order
   const HandlerOptions& options;
   const RequestCounters& counters;
+  const proto::TokenInfo& principal;  // the bearer token's record (empty for open routes)
 };
 
 using RouteFn = Response (*)(const Call&);
@@ -52,8 +54,13 @@ Response reprocess(const Call& call);
 Response list_job_artifacts(const Call& call);
 Response get_artifact(const Call& call);
 
+Response get_batch(const Call& call);
+Response job_events(const Call& call);
+Response queue_summary(const Call& call);
+
 // routes_worker.cc
 Response worker_lease(const Call& call);
+Response worker_release_job(const Call& call);
 Response worker_heartbeat(const Call& call);
 Response worker_add_artifact(const Call& call);
 Response worker_complete_stage(const Call& call);
@@ -62,6 +69,16 @@ Response worker_fail_job(const Call& call);
 
 // routes_web.cc: the dashboard's files for any GET/HEAD outside /v1 that no route above takes.
 Response web_file(const Call& call);
+
+// Projects (storage/store.h): another project's object answers 404 with the same message
+// as an unknown id, so ids leak nothing. `not_found_message` is that message.
+void require_reach(const Call& call, const std::string& project,
+                   const std::string& not_found_message);
+// The project a create request lands in: the token's, or for a token of every project the
+// one the request names ("" = default). 404 when a project token names another project.
+std::string request_project(const Call& call, const std::string& requested);
+// The project filter for listings: the token's ("*" = every project).
+std::string listing_project(const Call& call);
 
 // Query helpers shared by route files: ApiException 400 `invalid_field` on bad values.
 int64_t query_int(const Call& call, const std::string& name, int64_t fallback, int64_t min,

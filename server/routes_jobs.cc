@@ -1,8 +1,12 @@
 // Jobs: create (Idempotency-Key), list, get, log, cancel, retry, reprocess, artifacts.
+#include <algorithm>
+#include <chrono>
+
 #include "proto/job.h"
 #include "proto/worker_protocol.h"
 #include "server/api_response.h"
 #include "server/file_response.h"
+#include "server/job_events.h"
 #include "server/routes.h"
 
 namespace keel::server::routes {
@@ -43,10 +47,18 @@ std::string content_type_for(const std::string& name) {
   return "application/octet-stream";
 }
 
+// The job, when the token reaches its project (404 otherwise, as for an unknown id).
+proto::Job reachable_job(const Call& call, const std::string& job_id) {
+  proto::Job job = call.store.get_job(job_id);
+  require_reach(call, job.project, "job " + job_id + " not found");
+  return job;
+}
+
 }  // namespace
 
 Response create_job(const Call& call) {
   proto::JobRequest request = proto::JobRequest::from_json(parse_json_body(call.request));
+  request.project = request_project(call, request.project);
   const std::string key = idempotency_key(call.request);
   bool created = true;
   proto::Job job = call.store.create_job(request, key, &created);
@@ -58,61 +70,82 @@ Response list_jobs(const Call& call) {
   std::string state = query_string(call, "state");
   if (!state.empty()) filter.state = proto::job_state_from_string(state, "query parameter state");
   filter.mission_id = query_string(call, "mission_id");
+  filter.batch_id = query_string(call, "batch_id");
+  filter.mission_name = query_string(call, "mission_name");
+  filter.project = listing_project(call);
   filter.limit = static_cast<int>(query_int(call, "limit", filter.limit, 1, 10000));
   return json_response(200, {{"jobs", jobs_json(call.store.list_jobs(filter))}});
 }
 
 Response get_job(const Call& call) {
-  return json_response(200, call.store.get_job(call.params[0]).to_json());
+  return json_response(200, reachable_job(call, call.params[0]).to_json());
 }
 
 Response read_job_log(const Call& call) {
   const std::string& id = call.params[0];
   int64_t from = query_int(call, "from", 0, 0, INT64_MAX);
   int limit = static_cast<int>(query_int(call, "limit", 1000, 1, 10000));
-  call.store.get_job(id);  // 404 for an unknown job rather than an empty page
+  reachable_job(call, id);  // 404 for an unknown job rather than an empty page
   return json_response(200, call.store.read_log(id, from, limit).to_json());
 }
 
 Response cancel_job(const Call& call) {
+  reachable_job(call, call.params[0]);
   return json_response(200, call.store.cancel_job(call.params[0]).to_json());
 }
 
 Response retry_job(const Call& call) {
+  reachable_job(call, call.params[0]);
   return json_response(200, call.store.retry_job(call.params[0]).to_json());
 }
 
-// One new job per matching stored mission; every listed id is checked before any job is made.
+// One new job per matching stored mission of the token's project, made in one transaction
+// (storage: create_batch); every listed id is checked before any job is made.
 Response reprocess(const Call& call) {
   proto::ReprocessRequest request =
       proto::ReprocessRequest::from_json(parse_json_body(call.request));
   if (!request.mission_ids.empty() && !request.name_prefix.empty())
     throw ApiException(400, "invalid_field", "give mission_ids or name_prefix, not both");
-  std::vector<proto::Mission> missions;
-  if (!request.mission_ids.empty()) {
-    for (size_t i = 0; i < request.mission_ids.size(); ++i) {
-      try {
-        missions.push_back(call.store.get_mission(request.mission_ids[i]));
-      } catch (const storage::NotFound&) {
-        throw ApiException(
-            404, "not_found",
-            "mission_ids[" + std::to_string(i) + "]: no mission '" + request.mission_ids[i] + "'");
-      }
-    }
-  } else {
-    missions = call.store.list_missions(request.name_prefix);
-  }
+  request.project = request_project(call, request.project);
+  const proto::Batch batch = call.store.create_batch(request);
+  storage::JobFilter filter;
+  filter.batch_id = batch.id;
+  filter.limit = 10000;
   std::vector<proto::Job> jobs;
-  for (const auto& mission : missions) {
-    proto::JobRequest job_request{mission.id, request.stages, request.options};
-    jobs.push_back(call.store.create_job(job_request, ""));
-  }
-  return json_response(201, {{"jobs", jobs_json(jobs)}});
+  if (batch.jobs <= filter.limit) jobs = call.store.list_jobs(filter);
+  // Oldest first, as the missions were given; a batch over 10,000 jobs lists none here
+  // (GET /v1/jobs?batch_id= pages through them).
+  std::reverse(jobs.begin(), jobs.end());
+  return json_response(201, {{"batch", batch.to_json()}, {"jobs", jobs_json(jobs)}});
+}
+
+Response get_batch(const Call& call) {
+  const proto::Batch batch = call.store.get_batch(call.params[0]);
+  require_reach(call, batch.project, "batch " + call.params[0] + " not found");
+  return json_response(200, batch.to_json());
+}
+
+Response job_events(const Call& call) {
+  JobEventsOptions options;
+  options.job_id = query_string(call, "job_id");
+  if (!options.job_id.empty()) reachable_job(call, options.job_id);
+  options.now_ms = call.options.wall_clock_ms ? call.options.wall_clock_ms : storage::system_clock_ms;
+  Response response;
+  response.status = 200;
+  response.headers.set("Content-Type", "text/event-stream");
+  response.headers.set("Cache-Control", "no-store");
+  response.headers.set("X-Accel-Buffering", "no");  // nginx: pass events through at once
+  response.stream = std::make_shared<JobEvents>(call.store, call.principal, options);
+  return response;
+}
+
+Response queue_summary(const Call& call) {
+  return json_response(200, call.store.queue_summary().to_json());
 }
 
 Response list_job_artifacts(const Call& call) {
   const std::string& id = call.params[0];
-  call.store.get_job(id);  // 404 for an unknown job rather than an empty list
+  reachable_job(call, id);  // 404 for an unknown job rather than an empty list
   nlohmann::json artifacts = nlohmann::json::array();
   for (const auto& artifact : call.store.list_artifacts(id))
     artifacts.push_back(artifact.to_json());
@@ -121,6 +154,7 @@ Response list_job_artifacts(const Call& call) {
 
 Response get_artifact(const Call& call) {
   proto::Artifact artifact = call.store.get_artifact(call.params[0]);
+  require_reach(call, artifact.project, "artifact " + call.params[0] + " not found");
   StoredFile file;
   file.path = call.store.blob_path(artifact.sha256);
   file.size = static_cast<uint64_t>(call.store.blob_size(artifact.sha256));

@@ -18,6 +18,7 @@ void require_blob(storage::Store& store, const std::string& field, const std::st
 
 Response create_mission(const Call& call) {
   proto::MissionRequest request = proto::MissionRequest::from_json(parse_json_body(call.request));
+  request.project = request_project(call, request.project);
   require_blob(call.store, "bundle_blob", request.bundle_blob);
   if (!request.cad_blob.empty()) require_blob(call.store, "cad_blob", request.cad_blob);
   try {
@@ -30,13 +31,16 @@ Response create_mission(const Call& call) {
 
 Response list_missions(const Call& call) {
   nlohmann::json missions = nlohmann::json::array();
-  for (const auto& mission : call.store.list_missions(query_string(call, "prefix")))
+  for (const auto& mission :
+       call.store.list_missions(query_string(call, "prefix"), listing_project(call)))
     missions.push_back(mission.to_json());
   return json_response(200, {{"missions", missions}});
 }
 
 Response get_mission(const Call& call) {
-  return json_response(200, call.store.get_mission(call.params[0]).to_json());
+  const proto::Mission mission = call.store.get_mission(call.params[0]);
+  require_reach(call, mission.project, "mission " + mission.id + " not found");
+  return json_response(200, mission.to_json());
 }
 
 }  // namespace keel::server::routes

@@ -21,17 +21,25 @@ ApiException bad_range(const std::string& message) {
   return ApiException(416, "bad_range", message);
 }
 
+// The upload, when the token reaches its project (404 otherwise, as for an unknown id).
+proto::Upload reachable_upload(const Call& call, const std::string& upload_id) {
+  proto::Upload upload = call.store.get_upload(upload_id);
+  require_reach(call, upload.project, "upload " + upload_id + " not found");
+  return upload;
+}
+
 }  // namespace
 
 Response create_upload(const Call& call) {
   proto::UploadRequest request = proto::UploadRequest::from_json(parse_json_body(call.request));
   if (request.size < 0)
     throw ApiException(400, "invalid_field", "size: expected a byte count >= 0");
+  request.project = request_project(call, request.project);
   return json_response(201, call.store.create_upload(request).to_json());
 }
 
 Response head_upload(const Call& call) {
-  proto::Upload upload = call.store.get_upload(call.params[0]);
+  proto::Upload upload = reachable_upload(call, call.params[0]);
   Response response = empty_response(200);
   response.headers.set("Upload-Offset", std::to_string(upload.offset));
   response.headers.set("Upload-Length", std::to_string(upload.size));
@@ -40,7 +48,7 @@ Response head_upload(const Call& call) {
 }
 
 Response get_upload(const Call& call) {
-  return json_response(200, call.store.get_upload(call.params[0]).to_json());
+  return json_response(200, reachable_upload(call, call.params[0]).to_json());
 }
 
 // A chunk is `Content-Range: bytes a-b/N` with exactly b-a+1 body bytes, N the announced
@@ -56,7 +64,7 @@ Response put_upload_chunk(const Call& call) {
   if (range->length() != body_size)
     throw bad_range("Content-Range '" + *header + "' announces " + std::to_string(range->length()) +
                     " bytes but the body has " + std::to_string(body_size));
-  proto::Upload upload = call.store.get_upload(id);
+  proto::Upload upload = reachable_upload(call, id);
   if (range->total != upload.size)
     throw bad_range("Content-Range '" + *header + "': total " + std::to_string(range->total) +
                     " differs from the upload's announced size " + std::to_string(upload.size));
@@ -85,7 +93,7 @@ Response complete_upload(const Call& call) {
   std::string sha256 = reader.required<std::string>("sha256");
   if (!proto::is_sha256_hex(sha256))
     throw ApiException(400, "invalid_field", "sha256: expected 64 lowercase hex digits");
-  proto::Upload upload = call.store.get_upload(call.params[0]);
+  proto::Upload upload = reachable_upload(call, call.params[0]);
   std::string blob;
   try {
     blob = call.store.complete_upload(upload.id, sha256);
@@ -98,6 +106,7 @@ Response complete_upload(const Call& call) {
 }
 
 Response delete_upload(const Call& call) {
+  reachable_upload(call, call.params[0]);
   call.store.delete_upload(call.params[0]);
   return empty_response(204);
 }

@@ -13,6 +13,8 @@ inline constexpr const char* kJobPrefix = "j_";
 inline constexpr const char* kUploadPrefix = "u_";
 inline constexpr const char* kArtifactPrefix = "a_";
 inline constexpr const char* kLeasePrefix = "l_";
+inline constexpr const char* kTokenPrefix = "t_";
+inline constexpr const char* kBatchPrefix = "b_";
 
 // `bytes` random bytes as 2*bytes lowercase hex digits. Throws if the RNG fails.
 std::string random_hex(size_t bytes);

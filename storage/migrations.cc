@@ -94,6 +94,48 @@ CREATE INDEX missions_by_name ON missions (name);
 CREATE INDEX artifacts_by_job ON artifacts (job_id, seq);
 )sql";
 
+// Version 3: projects and roles (every object in a project; tokens with a role, a project,
+// an expiry and revocation; existing data moves into 'default' and existing tokens become
+// admin tokens of every project), reprocess batches, and the workers seen by the queue.
+// Columns are added with defaults rather than REFERENCES: SQLite refuses a REFERENCES
+// column with a non-NULL default when foreign keys are on; the store checks projects itself.
+const char* const kProjectsAndRoles = R"sql(
+CREATE TABLE projects (
+  name          TEXT PRIMARY KEY,
+  created_at_ms INTEGER NOT NULL,
+  quota_bytes   INTEGER NOT NULL DEFAULT 0 CHECK (quota_bytes >= 0)
+);
+INSERT INTO projects (name, created_at_ms) VALUES ('default', 0);
+ALTER TABLE uploads ADD COLUMN project TEXT NOT NULL DEFAULT 'default';
+ALTER TABLE missions ADD COLUMN project TEXT NOT NULL DEFAULT 'default';
+ALTER TABLE jobs ADD COLUMN project TEXT NOT NULL DEFAULT 'default';
+ALTER TABLE jobs ADD COLUMN batch_id TEXT NOT NULL DEFAULT '';
+CREATE TABLE batches (
+  seq           INTEGER PRIMARY KEY,
+  id            TEXT NOT NULL UNIQUE,
+  project       TEXT NOT NULL,
+  jobs          INTEGER NOT NULL,
+  created_at_ms INTEGER NOT NULL
+);
+ALTER TABLE api_tokens ADD COLUMN id TEXT;
+ALTER TABLE api_tokens ADD COLUMN role TEXT NOT NULL DEFAULT 'admin'
+  CHECK (role IN ('admin', 'submitter', 'viewer', 'worker'));
+ALTER TABLE api_tokens ADD COLUMN project TEXT NOT NULL DEFAULT '*';
+ALTER TABLE api_tokens ADD COLUMN expires_at_ms INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE api_tokens ADD COLUMN revoked_at_ms INTEGER NOT NULL DEFAULT 0;
+UPDATE api_tokens SET id = 't_' || substr(token_sha256, 1, 16);
+CREATE UNIQUE INDEX api_tokens_by_id ON api_tokens (id);
+CREATE TABLE workers (
+  id            TEXT PRIMARY KEY,
+  job_id        TEXT NOT NULL DEFAULT '',
+  last_seen_ms  INTEGER NOT NULL
+);
+CREATE INDEX jobs_by_project ON jobs (project, seq);
+CREATE INDEX jobs_by_batch ON jobs (batch_id, seq);
+CREATE INDEX jobs_by_finished ON jobs (finished_at_ms);
+CREATE INDEX missions_by_project ON missions (project, seq);
+)sql";
+
 void record_version(Database& db, int version) {
   auto statement = db.cached("UPDATE schema_version SET version = ?1");
   statement->bind_int64(1, version).run();
@@ -105,6 +147,7 @@ const std::vector<Migration>& sqlite_migrations() {
   static const std::vector<Migration> migrations = {
       {1, "core tables", kCoreTables},
       {2, "listing indexes", kListingIndexes},
+      {3, "projects, roles, batches and workers", kProjectsAndRoles},
   };
   return migrations;
 }

@@ -8,7 +8,7 @@ namespace {
 
 // --- column lists and their decoders (keep each pair in step) ---
 
-constexpr const char* kUploadSelect = "SELECT id, name, size, committed FROM uploads";
+constexpr const char* kUploadSelect = "SELECT id, name, size, committed, project FROM uploads";
 
 proto::Upload read_upload(const Statement& row) {
   proto::Upload upload;
@@ -16,11 +16,12 @@ proto::Upload read_upload(const Statement& row) {
   upload.name = row.column_text(1);
   upload.size = row.column_int64(2);
   upload.offset = row.column_int64(3);
+  upload.project = row.column_text(4);
   return upload;
 }
 
 constexpr const char* kMissionSelect =
-    "SELECT id, name, bundle_blob, cad_blob, cad_name, created_at_ms FROM missions";
+    "SELECT id, name, bundle_blob, cad_blob, cad_name, created_at_ms, project FROM missions";
 
 proto::Mission read_mission(const Statement& row) {
   proto::Mission mission;
@@ -30,6 +31,7 @@ proto::Mission read_mission(const Statement& row) {
   mission.cad_blob = row.column_text(3);
   mission.cad_name = row.column_text(4);
   mission.created_at_ms = row.column_int64(5);
+  mission.project = row.column_text(6);
   return mission;
 }
 
@@ -38,7 +40,8 @@ constexpr const char* kJobSelect =
     "SELECT j.id, j.mission_id, j.state, j.stages, j.options, j.stage, j.progress, j.error, "
     "j.attempts, j.created_at_ms, j.started_at_ms, j.finished_at_ms, "
     "(SELECT json_group_array(json_array(o.stage, o.seconds)) FROM stage_outputs o "
-    "WHERE o.job_id = j.id) FROM jobs j";
+    "WHERE o.job_id = j.id), j.project, j.batch_id, j.worker, m.name "
+    "FROM jobs j JOIN missions m ON m.id = j.mission_id";
 
 proto::Job read_job(const Statement& row) {
   proto::Job job;
@@ -58,6 +61,10 @@ proto::Job read_job(const Statement& row) {
     job.completed_stages.push_back(done[0].get<std::string>());
     job.stage_seconds[done[0].get<std::string>()] = done[1].get<double>();
   }
+  job.project = row.column_text(13);
+  job.batch_id = row.column_text(14);
+  job.worker = row.column_text(15);
+  job.mission_name = row.column_text(16);
   std::stable_sort(job.completed_stages.begin(), job.completed_stages.end(),
                    [&](const std::string& a, const std::string& b) {
                      return pipeline_index(job.stages, a) < pipeline_index(job.stages, b);
@@ -66,7 +73,8 @@ proto::Job read_job(const Statement& row) {
 }
 
 constexpr const char* kArtifactSelect =
-    "SELECT id, job_id, stage, name, sha256, size, created_at_ms FROM artifacts";
+    "SELECT a.id, a.job_id, a.stage, a.name, a.sha256, a.size, a.created_at_ms, j.project "
+    "FROM artifacts a JOIN jobs j ON j.id = a.job_id";
 
 proto::Artifact read_artifact(const Statement& row) {
   proto::Artifact artifact;
@@ -77,6 +85,7 @@ proto::Artifact read_artifact(const Statement& row) {
   artifact.sha256 = row.column_text(4);
   artifact.size = row.column_int64(5);
   artifact.created_at_ms = row.column_int64(6);
+  artifact.project = row.column_text(7);
   return artifact;
 }
 
@@ -110,7 +119,7 @@ std::optional<proto::Job> find_job(Database& db, const std::string& job_id) {
 }
 
 std::optional<proto::Artifact> find_artifact(Database& db, const std::string& artifact_id) {
-  static const std::string sql = std::string(kArtifactSelect) + " WHERE id = ?1";
+  static const std::string sql = std::string(kArtifactSelect) + " WHERE a.id = ?1";
   return find_one<proto::Artifact>(db, sql, artifact_id, read_artifact);
 }
 
@@ -121,36 +130,46 @@ std::optional<int64_t> find_blob_size(Database& db, const std::string& sha256) {
   return statement->column_int64(0);
 }
 
-std::vector<proto::Job> query_jobs(Database& db, const std::optional<proto::JobState>& state,
-                                   const std::string& mission_id, int limit) {
-  // ?1 / ?2 are NULL for "any"; the planner still uses jobs_by_state or jobs_by_mission.
+std::vector<proto::Job> query_jobs(Database& db, const JobFilter& filter) {
+  // NULL parameters mean "any"; the planner still uses one of the jobs_by_* indexes.
   static const std::string sql =
       std::string(kJobSelect) +
       " WHERE (?1 IS NULL OR j.state = ?1) AND (?2 IS NULL OR j.mission_id = ?2) "
+      "AND (?4 IS NULL OR j.project = ?4) AND (?5 IS NULL OR j.batch_id = ?5) "
+      "AND (?6 IS NULL OR instr(m.name, ?6) > 0) "
       "ORDER BY j.seq DESC LIMIT ?3";
   auto statement = db.cached(sql);
-  if (state)
-    statement->bind_text(1, proto::to_string(*state));
+  if (filter.state)
+    statement->bind_text(1, proto::to_string(*filter.state));
   else
     statement->bind_null(1);
-  statement->bind_text_or_null(2, mission_id).bind_int64(3, limit);
+  const bool any_project = filter.project.empty() || filter.project == proto::kAllProjects;
+  statement->bind_text_or_null(2, filter.mission_id)
+      .bind_int64(3, filter.limit)
+      .bind_text_or_null(4, any_project ? std::string() : filter.project)
+      .bind_text_or_null(5, filter.batch_id)
+      .bind_text_or_null(6, filter.mission_name);
   std::vector<proto::Job> jobs;
   while (statement->step()) jobs.push_back(read_job(*statement));
   return jobs;
 }
 
-std::vector<proto::Mission> query_missions(Database& db, const std::string& name_prefix) {
-  static const std::string sql =
-      std::string(kMissionSelect) + " WHERE (?1 = '' OR instr(name, ?1) = 1) ORDER BY seq DESC";
+std::vector<proto::Mission> query_missions(Database& db, const std::string& name_prefix,
+                                           const std::string& project) {
+  static const std::string sql = std::string(kMissionSelect) +
+                                 " WHERE (?1 = '' OR instr(name, ?1) = 1) "
+                                 "AND (?2 IS NULL OR project = ?2) ORDER BY seq DESC";
   auto statement = db.cached(sql);
-  statement->bind_text(1, name_prefix);
+  const bool any_project = project.empty() || project == proto::kAllProjects;
+  statement->bind_text(1, name_prefix).bind_text_or_null(2, any_project ? std::string() : project);
   std::vector<proto::Mission> missions;
   while (statement->step()) missions.push_back(read_mission(*statement));
   return missions;
 }
 
 std::vector<proto::Artifact> job_artifacts(Database& db, const std::string& job_id) {
-  static const std::string sql = std::string(kArtifactSelect) + " WHERE job_id = ?1 ORDER BY seq";
+  static const std::string sql =
+      std::string(kArtifactSelect) + " WHERE a.job_id = ?1 ORDER BY a.seq";
   auto statement = db.cached(sql);
   statement->bind_text(1, job_id);
   std::vector<proto::Artifact> artifacts;

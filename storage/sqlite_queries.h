@@ -11,6 +11,7 @@
 #include "proto/resources.h"
 #include "proto/worker_protocol.h"
 #include "storage/sqlite_db.h"
+#include "storage/store.h"
 
 namespace keel::storage {
 
@@ -20,11 +21,12 @@ std::optional<proto::Job> find_job(Database& db, const std::string& job_id);
 std::optional<proto::Artifact> find_artifact(Database& db, const std::string& artifact_id);
 std::optional<int64_t> find_blob_size(Database& db, const std::string& sha256);
 
-// The newest jobs first, optionally only one state and/or one mission.
-std::vector<proto::Job> query_jobs(Database& db, const std::optional<proto::JobState>& state,
-                                   const std::string& mission_id, int limit);
-// The newest missions first whose name starts with `name_prefix`.
-std::vector<proto::Mission> query_missions(Database& db, const std::string& name_prefix);
+// The newest jobs first that pass `filter`.
+std::vector<proto::Job> query_jobs(Database& db, const JobFilter& filter);
+// The newest missions first whose name starts with `name_prefix`, of `project` ("" or "*" =
+// every project).
+std::vector<proto::Mission> query_missions(Database& db, const std::string& name_prefix,
+                                           const std::string& project);
 // A job's artifacts in the order they were registered.
 std::vector<proto::Artifact> job_artifacts(Database& db, const std::string& job_id);
 // The job's finished stages with their reports and artifacts, in the job's pipeline order.

@@ -98,13 +98,15 @@ proto::Upload SqliteStore::create_upload(const proto::UploadRequest& request) {
   uploads_.create(upload.id);  // the file first: a crash before the row leaves an orphan
   try {
     write([&](Database& db) {
+      upload.project = project_of_request(db, request.project);
       auto statement = db.cached(
-          "INSERT INTO uploads (id, name, size, committed, created_at_ms) "
-          "VALUES (?1, ?2, ?3, 0, ?4)");
+          "INSERT INTO uploads (id, name, size, committed, created_at_ms, project) "
+          "VALUES (?1, ?2, ?3, 0, ?4, ?5)");
       statement->bind_text(1, upload.id)
           .bind_text(2, upload.name)
           .bind_int64(3, upload.size)
           .bind_int64(4, clock_())
+          .bind_text(5, upload.project)
           .run();
     });
   } catch (...) {
@@ -260,19 +262,21 @@ proto::Mission SqliteStore::create_mission(const proto::MissionRequest& request)
   mission.cad_name = request.cad_name;
   mission.created_at_ms = clock_();
   write([&](Database& db) {
+    mission.project = project_of_request(db, request.project);
     if (!find_blob_size(db, mission.bundle_blob))
       throw NotFound("bundle_blob: blob " + mission.bundle_blob + " not found (upload it first)");
     if (!mission.cad_blob.empty() && !find_blob_size(db, mission.cad_blob))
       throw NotFound("cad_blob: blob " + mission.cad_blob + " not found (upload it first)");
     auto statement = db.cached(
-        "INSERT INTO missions (id, name, bundle_blob, cad_blob, cad_name, created_at_ms) "
-        "VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+        "INSERT INTO missions (id, name, bundle_blob, cad_blob, cad_name, created_at_ms, "
+        "project) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
     statement->bind_text(1, mission.id)
         .bind_text(2, mission.name)
         .bind_text(3, mission.bundle_blob)
         .bind_text_or_null(4, mission.cad_blob)
         .bind_text(5, mission.cad_name)
         .bind_int64(6, mission.created_at_ms)
+        .bind_text(7, mission.project)
         .run();
   });
   return mission;
@@ -284,30 +288,120 @@ proto::Mission SqliteStore::get_mission(const std::string& mission_id) {
   return *mission;
 }
 
-std::vector<proto::Mission> SqliteStore::list_missions(const std::string& name_prefix) {
-  return read([&](Database& db) { return query_missions(db, name_prefix); });
+std::vector<proto::Mission> SqliteStore::list_missions(const std::string& name_prefix,
+                                                       const std::string& project) {
+  return read([&](Database& db) { return query_missions(db, name_prefix, project); });
 }
 
 // --- tokens ---
 
-void SqliteStore::add_token(const std::string& token, const std::string& label) {
+namespace {
+
+constexpr const char* kTokenSelect =
+    "SELECT id, label, role, project, created_at_ms, expires_at_ms, revoked_at_ms "
+    "FROM api_tokens";
+
+proto::TokenInfo read_token(const Statement& row) {
+  proto::TokenInfo token;
+  token.id = row.column_text(0);
+  token.label = row.column_text(1);
+  token.role = proto::role_from_string(row.column_text(2), "api_tokens.role of " + token.id);
+  token.project = row.column_text(3);
+  token.created_at_ms = row.column_int64(4);
+  token.expires_at_ms = row.column_int64(5);
+  token.revoked_at_ms = row.column_int64(6);
+  return token;
+}
+
+void require_project_name(const std::string& name, const std::string& field) {
+  if (!proto::is_project_name(name))
+    throw Invalid(field + ": project name '" + name +
+                  "' must be 1..64 characters of a-z, 0-9, '.', '_' or '-', starting with a "
+                  "letter or digit");
+}
+
+void insert_project(Database& db, const std::string& name, int64_t now_ms) {
+  auto statement = db.cached(
+      "INSERT INTO projects (name, created_at_ms) VALUES (?1, ?2) ON CONFLICT (name) DO NOTHING");
+  statement->bind_text(1, name).bind_int64(2, now_ms).run();
+}
+
+}  // namespace
+
+std::string SqliteStore::project_of_request(Database& db, const std::string& project) {
+  if (project.empty()) return proto::kDefaultProject;
+  require_project_name(project, "project");
+  insert_project(db, project, clock_());
+  return project;
+}
+
+proto::TokenInfo SqliteStore::add_token(const std::string& token, const TokenSpec& spec) {
   if (token.empty()) throw Invalid("token: expected a non-empty token");
+  if (spec.project == proto::kAllProjects) {
+    if (spec.role != proto::Role::kAdmin && spec.role != proto::Role::kWorker)
+      throw Invalid("project: '*' (every project) is only for admin and worker tokens");
+  } else {
+    require_project_name(spec.project, "project");
+  }
   const std::string hash = sha256_bytes(token);  // the clear token is never stored
-  write([&](Database& db) {
-    auto statement = db.cached(
-        "INSERT INTO api_tokens (token_sha256, label, created_at_ms) VALUES (?1, ?2, ?3) "
+  return write([&](Database& db) {
+    const int64_t now_ms = clock_();
+    if (spec.project != proto::kAllProjects) insert_project(db, spec.project, now_ms);
+    auto insert = db.cached(
+        "INSERT INTO api_tokens (token_sha256, label, created_at_ms, id, role, project, "
+        "expires_at_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) "
         "ON CONFLICT (token_sha256) DO NOTHING");
-    statement->bind_text(1, hash).bind_text(2, label).bind_int64(3, clock_()).run();
+    insert->bind_text(1, hash)
+        .bind_text(2, spec.label)
+        .bind_int64(3, now_ms)
+        .bind_text(4, new_id(kTokenPrefix))
+        .bind_text(5, proto::to_string(spec.role))
+        .bind_text(6, spec.project)
+        .bind_int64(7, spec.expires_at_ms)
+        .run();
+    static const std::string sql = std::string(kTokenSelect) + " WHERE token_sha256 = ?1";
+    auto select = db.cached(sql);
+    select->bind_text(1, hash);
+    select->step();
+    return read_token(*select);
   });
 }
 
-bool SqliteStore::check_token(const std::string& token) {
-  if (token.empty()) return false;
+std::optional<proto::TokenInfo> SqliteStore::check_token(const std::string& token) {
+  if (token.empty()) return std::nullopt;
   const std::string hash = sha256_bytes(token);
-  return read([&](Database& db) {
-    auto statement = db.cached("SELECT 1 FROM api_tokens WHERE token_sha256 = ?1");
+  auto info = read([&](Database& db) -> std::optional<proto::TokenInfo> {
+    static const std::string sql = std::string(kTokenSelect) + " WHERE token_sha256 = ?1";
+    auto statement = db.cached(sql);
     statement->bind_text(1, hash);
-    return statement->step();
+    if (!statement->step()) return std::nullopt;
+    return read_token(*statement);
+  });
+  if (!info || info->revoked_at_ms != 0) return std::nullopt;
+  if (info->expires_at_ms != 0 && clock_() >= info->expires_at_ms) return std::nullopt;
+  return info;
+}
+
+std::vector<proto::TokenInfo> SqliteStore::list_tokens() {
+  return read([&](Database& db) {
+    static const std::string sql = std::string(kTokenSelect) + " ORDER BY created_at_ms, id";
+    auto statement = db.cached(sql);
+    std::vector<proto::TokenInfo> tokens;
+    while (statement->step()) tokens.push_back(read_token(*statement));
+    return tokens;
+  });
+}
+
+proto::TokenInfo SqliteStore::revoke_token(const std::string& token_id) {
+  return write([&](Database& db) {
+    auto update = db.cached(
+        "UPDATE api_tokens SET revoked_at_ms = ?2 WHERE id = ?1 AND revoked_at_ms = 0");
+    update->bind_text(1, token_id).bind_int64(2, clock_()).run();
+    static const std::string sql = std::string(kTokenSelect) + " WHERE id = ?1";
+    auto select = db.cached(sql);
+    select->bind_text(1, token_id);
+    if (!select->step()) throw NotFound("token " + token_id + " not found");
+    return read_token(*select);
   });
 }
 
@@ -317,6 +411,72 @@ int64_t SqliteStore::token_count() {
     statement->step();
     return statement->column_int64(0);
   });
+}
+
+// --- projects ---
+
+std::vector<proto::Project> SqliteStore::list_projects() {
+  return read([&](Database& db) {
+    auto statement =
+        db.cached("SELECT name, created_at_ms, quota_bytes FROM projects ORDER BY name");
+    std::vector<proto::Project> projects;
+    while (statement->step())
+      projects.push_back(
+          {statement->column_text(0), statement->column_int64(1), statement->column_int64(2)});
+    return projects;
+  });
+}
+
+proto::Project SqliteStore::ensure_project(const std::string& name) {
+  require_project_name(name, "project");
+  return write([&](Database& db) {
+    insert_project(db, name, clock_());
+    auto statement =
+        db.cached("SELECT name, created_at_ms, quota_bytes FROM projects WHERE name = ?1");
+    statement->bind_text(1, name);
+    statement->step();
+    return proto::Project{statement->column_text(0), statement->column_int64(1),
+                          statement->column_int64(2)};
+  });
+}
+
+// --- live changes ---
+
+std::unique_ptr<Subscription> SqliteStore::subscribe(ChangeListener listener) {
+  return changes_.subscribe(std::move(listener));
+}
+
+void SqliteStore::note_job(Database& db, const std::string& job_id) {
+  auto statement = db.cached("SELECT project, state FROM jobs WHERE id = ?1");
+  statement->bind_text(1, job_id);
+  if (!statement->step()) return;
+  Change change;
+  change.kind = Change::Kind::kJob;
+  change.job_id = job_id;
+  change.project = statement->column_text(0);
+  change.state = proto::job_state_from_string(statement->column_text(1));
+  pending_changes_.push_back(std::move(change));
+}
+
+void SqliteStore::note_log(Database& db, const std::string& job_id) {
+  auto statement = db.cached("SELECT project FROM jobs WHERE id = ?1");
+  statement->bind_text(1, job_id);
+  if (!statement->step()) return;
+  Change change;
+  change.kind = Change::Kind::kLog;
+  change.job_id = job_id;
+  change.project = statement->column_text(0);
+  pending_changes_.push_back(std::move(change));
+}
+
+void SqliteStore::note_worker(Database& db, const std::string& worker, const std::string& job_id,
+                              int64_t now_ms) {
+  if (worker.empty()) return;
+  auto statement = db.cached(
+      "INSERT INTO workers (id, job_id, last_seen_ms) VALUES (?1, ?2, ?3) "
+      "ON CONFLICT (id) DO UPDATE SET job_id = excluded.job_id, "
+      "last_seen_ms = excluded.last_seen_ms");
+  statement->bind_text(1, worker).bind_text(2, job_id).bind_int64(3, now_ms).run();
 }
 
 // --- metrics ---

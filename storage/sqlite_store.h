@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "storage/blob_store.h"
+#include "storage/change_hub.h"
 #include "storage/connection_pool.h"
 #include "storage/sqlite_db.h"
 #include "storage/store.h"
@@ -45,7 +46,8 @@ class SqliteStore : public Store {
 
   proto::Mission create_mission(const proto::MissionRequest& request) override;
   proto::Mission get_mission(const std::string& mission_id) override;
-  std::vector<proto::Mission> list_missions(const std::string& name_prefix) override;
+  std::vector<proto::Mission> list_missions(const std::string& name_prefix,
+                                            const std::string& project) override;
 
   proto::Job create_job(const proto::JobRequest& request, const std::string& idempotency_key,
                         bool* created) override;
@@ -54,7 +56,12 @@ class SqliteStore : public Store {
   proto::Job cancel_job(const std::string& job_id) override;
   proto::Job retry_job(const std::string& job_id) override;
 
+  proto::Batch create_batch(const proto::ReprocessRequest& request) override;
+  proto::Batch get_batch(const std::string& batch_id) override;
+
   std::optional<proto::Lease> lease_job(const proto::LeaseRequest& request) override;
+  proto::Job release_job(const std::string& job_id, const std::string& lease_id) override;
+  int requeue_expired_leases() override;
   proto::HeartbeatReply heartbeat(const std::string& job_id, const proto::Heartbeat& beat) override;
   proto::Artifact add_artifact(const std::string& job_id,
                                const proto::ArtifactRegistration& registration) override;
@@ -68,27 +75,59 @@ class SqliteStore : public Store {
   void append_log(const std::string& job_id, const std::vector<std::string>& lines) override;
   proto::LogPage read_log(const std::string& job_id, int64_t from, int limit) override;
 
-  void add_token(const std::string& token, const std::string& label) override;
-  bool check_token(const std::string& token) override;
+  proto::TokenInfo add_token(const std::string& token, const TokenSpec& spec) override;
+  std::optional<proto::TokenInfo> check_token(const std::string& token) override;
+  std::vector<proto::TokenInfo> list_tokens() override;
+  proto::TokenInfo revoke_token(const std::string& token_id) override;
   int64_t token_count() override;
+
+  std::vector<proto::Project> list_projects() override;
+  proto::Project ensure_project(const std::string& name) override;
+
+  std::unique_ptr<Subscription> subscribe(ChangeListener listener) override;
+  proto::QueueSummary queue_summary() override;
 
   Metrics metrics() override;
 
  private:
-  // Runs `work(db)` in one write transaction on the writer connection and commits.
+  // Runs `work(db)` in one write transaction on the writer connection and commits; then,
+  // outside the lock, publishes the changes `work` noted (note_job / note_log).
   template <typename Work>
   auto write(Work work) {
-    std::lock_guard<std::mutex> lock(write_mutex_);
-    Transaction transaction(*writer_);
+    std::vector<Change> changes;
     if constexpr (std::is_void_v<decltype(work(*writer_))>) {
-      work(*writer_);
-      transaction.commit();
+      {
+        std::lock_guard<std::mutex> lock(write_mutex_);
+        pending_changes_.clear();
+        Transaction transaction(*writer_);
+        work(*writer_);
+        transaction.commit();
+        changes.swap(pending_changes_);
+      }
+      changes_.publish(changes);
     } else {
-      auto result = work(*writer_);
-      transaction.commit();
+      auto result = [&] {
+        std::lock_guard<std::mutex> lock(write_mutex_);
+        pending_changes_.clear();
+        Transaction transaction(*writer_);
+        auto value = work(*writer_);
+        transaction.commit();
+        changes.swap(pending_changes_);
+        return value;
+      }();
+      changes_.publish(changes);
       return result;
     }
   }
+  // Inside write(): the job's row changed (state, stage, progress, ...) / got log lines.
+  void note_job(Database& db, const std::string& job_id);
+  void note_log(Database& db, const std::string& job_id);
+  // Inside write(): the worker called the worker protocol now, holding `job_id` ("" = none).
+  void note_worker(Database& db, const std::string& worker, const std::string& job_id,
+                   int64_t now_ms);
+  // The job's worker was heard from now (heartbeat) / no longer holds the job.
+  void touch_worker_of(Database& db, const std::string& job_id, int64_t now_ms);
+  void release_worker_of(Database& db, const std::string& job_id, int64_t now_ms);
   // Runs `work(db)` on a pooled reader connection (each statement sees committed data).
   template <typename Work>
   auto read(Work work) {
@@ -107,7 +146,9 @@ class SqliteStore : public Store {
   proto::Job require_running_lease(Database& db, const std::string& job_id,
                                    const std::string& lease_id);
   // Requeues (or fails, at the third expiry) running jobs whose lease has expired.
-  void expire_leases(Database& db, int64_t now_ms);
+  int expire_leases(Database& db, int64_t now_ms);
+  // The project a request names ("" = default), created when new; Invalid for a bad name.
+  std::string project_of_request(Database& db, const std::string& project);
   void insert_log_lines(Database& db, const std::string& job_id,
                         const std::vector<std::string>& lines, int64_t now_ms);
 
@@ -119,6 +160,8 @@ class SqliteStore : public Store {
   std::unique_ptr<Database> writer_;
   ConnectionPool readers_;
   std::array<std::mutex, 64> upload_locks_;
+  std::vector<Change> pending_changes_;  // guarded by write_mutex_
+  ChangeHub changes_;
 };
 
 }  // namespace keel::storage

@@ -78,20 +78,24 @@ proto::Job SqliteStore::create_job(const proto::JobRequest& request,
         return job;
       }
     }
-    if (!find_mission(db, request.mission_id))
+    const auto mission = find_mission(db, request.mission_id);
+    // Another project's mission is "not found": ids leak nothing across projects.
+    if (!mission || (!request.project.empty() && mission->project != request.project))
       throw NotFound("mission_id: mission " + request.mission_id + " not found");
     const std::string job_id = new_id(kJobPrefix);
     auto insert = db.cached(
         "INSERT INTO jobs (id, mission_id, state, stages, options, idempotency_key, "
-        "created_at_ms) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6)");
+        "created_at_ms, project) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)");
     insert->bind_text(1, job_id)
         .bind_text(2, request.mission_id)
         .bind_text(3, nlohmann::json(request.stages).dump())
         .bind_text(4, request.options.dump())
         .bind_text_or_null(5, idempotency_key)
         .bind_int64(6, clock_())
+        .bind_text(7, mission->project)
         .run();
     if (created) *created = true;
+    note_job(db, job_id);
     return require_job(db, job_id);
   });
 }
@@ -104,8 +108,7 @@ std::vector<proto::Job> SqliteStore::list_jobs(const JobFilter& filter) {
   if (filter.limit < 1 || filter.limit > kMaxListLimit)
     throw Invalid("limit: expected 1.." + std::to_string(kMaxListLimit) + ", got " +
                   std::to_string(filter.limit));
-  return read(
-      [&](Database& db) { return query_jobs(db, filter.state, filter.mission_id, filter.limit); });
+  return read([&](Database& db) { return query_jobs(db, filter); });
 }
 
 proto::Job SqliteStore::cancel_job(const std::string& job_id) {
@@ -118,6 +121,7 @@ proto::Job SqliteStore::cancel_job(const std::string& job_id) {
     auto statement =
         db.cached("UPDATE jobs SET state = 'canceled', finished_at_ms = ?2 WHERE id = ?1");
     statement->bind_text(1, job_id).bind_int64(2, clock_()).run();
+    note_job(db, job_id);
     return require_job(db, job_id);
   });
 }
@@ -135,13 +139,14 @@ proto::Job SqliteStore::retry_job(const std::string& job_id) {
         "lease_id = NULL, lease_expires_at_ms = NULL, lease_expiries = 0, worker = '', "
         "started_at_ms = 0, finished_at_ms = 0 WHERE id = ?1");
     statement->bind_text(1, job_id).run();
+    note_job(db, job_id);
     return require_job(db, job_id);
   });
 }
 
 // --- worker protocol ---
 
-void SqliteStore::expire_leases(Database& db, int64_t now_ms) {
+int SqliteStore::expire_leases(Database& db, int64_t now_ms) {
   struct Expired {
     std::string job_id, lease_id, worker;
     int expiries;
@@ -174,7 +179,13 @@ void SqliteStore::expire_leases(Database& db, int64_t now_ms) {
                      {"lease " + job.lease_id + " of worker " + job.worker + " expired" +
                       (give_up ? "; the job failed" : "; the job is queued again")},
                      now_ms);
+    note_job(db, job.job_id);
   }
+  return static_cast<int>(expired.size());
+}
+
+int SqliteStore::requeue_expired_leases() {
+  return write([&](Database& db) { return expire_leases(db, clock_()); });
 }
 
 std::optional<proto::Lease> SqliteStore::lease_job(const proto::LeaseRequest& request) {
@@ -185,8 +196,16 @@ std::optional<proto::Lease> SqliteStore::lease_job(const proto::LeaseRequest& re
     expire_leases(db, now_ms);
     std::string job_id;
     {
-      auto oldest = db.cached("SELECT id FROM jobs WHERE state = 'queued' ORDER BY seq LIMIT 1");
-      if (!oldest->step()) return std::nullopt;
+      const bool any_project =
+          request.project.empty() || request.project == proto::kAllProjects;
+      auto oldest = db.cached(
+          "SELECT id FROM jobs WHERE state = 'queued' AND (?1 IS NULL OR project = ?1) "
+          "ORDER BY seq LIMIT 1");
+      oldest->bind_text_or_null(1, any_project ? std::string() : request.project);
+      if (!oldest->step()) {
+        note_worker(db, request.worker, "", now_ms);
+        return std::nullopt;
+      }
       job_id = oldest->column_text(0);
     }
     proto::Lease lease;
@@ -205,6 +224,8 @@ std::optional<proto::Lease> SqliteStore::lease_job(const proto::LeaseRequest& re
         .bind_text(5, request.worker)
         .bind_int64(6, now_ms)
         .run();
+    note_worker(db, request.worker, job_id, now_ms);
+    note_job(db, job_id);
     lease.job = require_job(db, job_id);
     auto mission = find_mission(db, lease.job.mission_id);
     if (!mission) throw NotFound("mission " + lease.job.mission_id + " of job " + job_id);
@@ -263,6 +284,8 @@ proto::HeartbeatReply SqliteStore::heartbeat(const std::string& job_id,
         .bind_double(4, beat.progress)
         .run();
     insert_log_lines(db, job_id, beat.log, now_ms);
+    note_job(db, job_id);
+    touch_worker_of(db, job_id, now_ms);
     return reply;
   });
 }
@@ -322,6 +345,7 @@ void SqliteStore::complete_stage(const std::string& job_id, const std::string& s
         .bind_double(4, completion.seconds)
         .bind_int64(5, clock_())
         .run();
+    note_job(db, job_id);
   });
 }
 
@@ -341,8 +365,44 @@ proto::Job SqliteStore::finish_job(const std::string& job_id, const proto::JobFi
         .bind_text(3, error)
         .bind_int64(4, clock_())
         .run();
+    note_job(db, job_id);
+    release_worker_of(db, job_id, clock_());
     return require_job(db, job_id);
   });
+}
+
+proto::Job SqliteStore::release_job(const std::string& job_id, const std::string& lease_id) {
+  return write([&](Database& db) {
+    const proto::Job job = require_running_lease(db, job_id, lease_id);
+    const int64_t now_ms = clock_();
+    // attempts stays: it counts leases taken. A release is not an expiry, so the job does
+    // not move toward the "lease expired 3 times" failure.
+    auto statement = db.cached(
+        "UPDATE jobs SET state = 'queued', stage = '', progress = 0, lease_id = NULL, "
+        "lease_expires_at_ms = NULL WHERE id = ?1");
+    statement->bind_text(1, job_id).run();
+    insert_log_lines(db, job_id,
+                     {"worker " + job.worker + " gave lease " + lease_id +
+                      " back; the job is queued again"},
+                     now_ms);
+    release_worker_of(db, job_id, now_ms);
+    note_job(db, job_id);
+    return require_job(db, job_id);
+  });
+}
+
+void SqliteStore::touch_worker_of(Database& db, const std::string& job_id, int64_t now_ms) {
+  auto statement = db.cached(
+      "UPDATE workers SET last_seen_ms = ?2, job_id = ?1 "
+      "WHERE id = (SELECT worker FROM jobs WHERE id = ?1)");
+  statement->bind_text(1, job_id).bind_int64(2, now_ms).run();
+}
+
+void SqliteStore::release_worker_of(Database& db, const std::string& job_id, int64_t now_ms) {
+  auto statement = db.cached(
+      "UPDATE workers SET last_seen_ms = ?2, job_id = '' "
+      "WHERE id = (SELECT worker FROM jobs WHERE id = ?1) AND job_id = ?1");
+  statement->bind_text(1, job_id).bind_int64(2, now_ms).run();
 }
 
 // --- artifacts and logs ---
@@ -379,6 +439,7 @@ void SqliteStore::insert_log_lines(Database& db, const std::string& job_id,
     insert->run();
     insert->reset();
   }
+  note_log(db, job_id);
 }
 
 void SqliteStore::append_log(const std::string& job_id, const std::vector<std::string>& lines) {

@@ -1,6 +1,13 @@
 // Keel's durable state behind one interface: uploads, blobs, missions, jobs with leases,
-// stage outputs, artifacts, job logs and API tokens. The server calls only this interface,
-// so a PostgreSQL implementation can be added later without changing callers.
+// stage outputs, artifacts, job logs, API tokens with roles, projects and reprocess batches.
+// The server calls only this interface: SQLite (one machine, the default) and PostgreSQL
+// (several replicas) implement it, and one typed test suite runs against both.
+//
+// Projects: every upload, mission, job (and so artifact and batch) belongs to a project.
+// Requests carry it (`project`; "" means kDefaultProject); a job takes its mission's project.
+// Reads return the object with its `project` and do NOT check it: the server compares it
+// with the token's project and answers 404 for another project's object. Listings take a
+// project filter ("" or kAllProjects = every project).
 //
 // Every method is atomic (one transaction) and thread-safe. Errors:
 //   NotFound  - the id names nothing,
@@ -17,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "proto/auth.h"
 #include "proto/job.h"
 #include "proto/resources.h"
 #include "proto/worker_protocol.h"
@@ -46,8 +54,48 @@ int64_t system_clock_ms();
 
 struct JobFilter {
   std::optional<proto::JobState> state;
-  std::string mission_id;  // "" = any
+  std::string mission_id;    // "" = any
   int limit = 1000;
+  std::string project;       // "" or "*" = any
+  std::string batch_id;      // "" = any
+  std::string mission_name;  // "" = any; else jobs whose mission name contains it (bytes)
+};
+
+// What a new token may do (the clear token is chosen by the caller, stored hashed).
+struct TokenSpec {
+  std::string label;
+  proto::Role role = proto::Role::kViewer;
+  std::string project = proto::kDefaultProject;  // or proto::kAllProjects
+  int64_t expires_at_ms = 0;                     // 0 = never
+};
+
+// An admin token of every project (the first token a server makes; tests).
+inline TokenSpec admin_token(std::string label) {
+  TokenSpec spec;
+  spec.label = std::move(label);
+  spec.role = proto::Role::kAdmin;
+  spec.project = proto::kAllProjects;
+  return spec;
+}
+
+// A change committed to the store, for live views (GET /v1/events) and lease wake-ups.
+// Delivered after the commit, on a thread of the store's choosing (the committing thread for
+// SQLite; a listener thread for PostgreSQL, for changes made by any replica). Deliveries may
+// be coalesced or repeated: a listener re-reads what it needs. Listeners must be quick and
+// must not throw; they may call the store.
+struct Change {
+  enum class Kind { kJob, kLog };
+  Kind kind = Kind::kJob;
+  std::string job_id;
+  std::string project;
+  proto::JobState state = proto::JobState::kQueued;  // kJob: the state after the change
+};
+using ChangeListener = std::function<void(const Change&)>;
+
+// Ends the subscription when destroyed (no call of its listener starts after that).
+class Subscription {
+ public:
+  virtual ~Subscription() = default;
 };
 
 struct Metrics {
@@ -63,6 +111,7 @@ class Store {
   virtual ~Store() = default;
 
   // --- uploads (bytes go to a partial file next to the blob folder) ---
+  // The upload belongs to request.project ("" = default).
   virtual proto::Upload create_upload(const proto::UploadRequest& request) = 0;
   virtual proto::Upload get_upload(const std::string& upload_id) = 0;
   // Appends `size` bytes at `offset`. Conflict unless offset == committed offset; Invalid if
@@ -84,14 +133,18 @@ class Store {
   virtual std::string put_blob(const std::string& bytes) = 0;
 
   // --- missions ---
-  virtual proto::Mission create_mission(const proto::MissionRequest& request) = 0;  // NotFound for blobs
+  // In request.project ("" = default). NotFound for blobs.
+  virtual proto::Mission create_mission(const proto::MissionRequest& request) = 0;
   virtual proto::Mission get_mission(const std::string& mission_id) = 0;
-  // Newest first; the prefix matches names byte for byte (case-sensitive).
-  virtual std::vector<proto::Mission> list_missions(const std::string& name_prefix = "") = 0;
+  // Newest first; the prefix matches names byte for byte (case-sensitive); project "" or "*"
+  // = every project.
+  virtual std::vector<proto::Mission> list_missions(const std::string& name_prefix = "",
+                                                    const std::string& project = "") = 0;
 
   // --- jobs ---
   // With a non-empty idempotency key, a second call with the same key returns the first job
-  // (and `created` false) instead of making a new one.
+  // (and `created` false) instead of making a new one. The job takes its mission's project;
+  // NotFound when the mission is unknown or request.project is set and differs from it.
   virtual proto::Job create_job(const proto::JobRequest& request, const std::string& idempotency_key,
                                 bool* created = nullptr) = 0;
   virtual proto::Job get_job(const std::string& job_id) = 0;
@@ -102,9 +155,25 @@ class Store {
   // failed | canceled -> queued, keeping completed stages. Conflict otherwise.
   virtual proto::Job retry_job(const std::string& job_id) = 0;
 
+  // --- reprocess batches ---
+  // One job per matching mission of request.project (explicit ids, or names starting with
+  // name_prefix; none = all), made in ONE transaction with one batch id. NotFound naming
+  // `mission_ids[i]` for an id that is unknown or of another project, and then nothing is
+  // made. Invalid when both ids and a prefix are given. The returned batch has `jobs` set.
+  virtual proto::Batch create_batch(const proto::ReprocessRequest& request) = 0;
+  virtual proto::Batch get_batch(const std::string& batch_id) = 0;  // counts by state now
+
   // --- worker protocol ---
-  // Takes the oldest queued job, or a running job whose lease expired (attempts counts both).
+  // Takes the oldest queued job of request.project ("" or "*" = any project), after
+  // requeueing expired leases (attempts counts every lease). Never waits: the server's long
+  // poll waits for a kJob change to kQueued and calls again. Records the worker as seen.
   virtual std::optional<proto::Lease> lease_job(const proto::LeaseRequest& request) = 0;
+  // The worker gives its lease back (SIGTERM, shutdown): running -> queued at once, keeping
+  // completed stages; this lease is not counted as an expiry. LeaseLost as for heartbeats.
+  virtual proto::Job release_job(const std::string& job_id, const std::string& lease_id) = 0;
+  // Requeues (or fails, at the third expiry) every running job whose lease expired, in one
+  // statement any replica may run at any time. Returns how many jobs it changed.
+  virtual int requeue_expired_leases() = 0;
   // Conflict when the lease is not the job's current one or has expired and was re-leased.
   virtual proto::HeartbeatReply heartbeat(const std::string& job_id, const proto::Heartbeat& beat) = 0;
   virtual proto::Artifact add_artifact(const std::string& job_id,
@@ -121,9 +190,24 @@ class Store {
   virtual proto::LogPage read_log(const std::string& job_id, int64_t from, int limit = 1000) = 0;
 
   // --- API tokens (stored as SHA-256 hashes, never in clear) ---
-  virtual void add_token(const std::string& token, const std::string& label) = 0;
-  virtual bool check_token(const std::string& token) = 0;
+  // Invalid for an empty token, a bad project name, or "*" for a submitter/viewer; the
+  // token's project is created when new. Adding the same token twice keeps the first.
+  virtual proto::TokenInfo add_token(const std::string& token, const TokenSpec& spec) = 0;
+  // The token's record, or nullopt when it is unknown, revoked or expired.
+  virtual std::optional<proto::TokenInfo> check_token(const std::string& token) = 0;
+  virtual std::vector<proto::TokenInfo> list_tokens() = 0;  // oldest first, revoked included
+  virtual proto::TokenInfo revoke_token(const std::string& token_id) = 0;  // NotFound
   virtual int64_t token_count() = 0;
+
+  // --- projects ---
+  virtual std::vector<proto::Project> list_projects() = 0;  // by name
+  virtual proto::Project ensure_project(const std::string& name) = 0;  // Invalid for a bad name
+
+  // --- live changes and the queue ---
+  virtual std::unique_ptr<Subscription> subscribe(ChangeListener listener) = 0;
+  // Counts by state, workers seen in the last hour (alive = seen in the last 60 s), and the
+  // last hour's throughput.
+  virtual proto::QueueSummary queue_summary() = 0;
 
   virtual Metrics metrics() = 0;
 };

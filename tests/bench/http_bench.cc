@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
   {
     auto store = keel::storage::open_sqlite_store(dir);
     const std::string token = "bench-token";
-    store->add_token(token, "bench");
+    store->add_token(token, keel::storage::admin_token("bench"));
     keel::proto::MissionRequest mission_request;
     mission_request.name = "bench";
     mission_request.bundle_blob = store->put_blob("bench bundle");

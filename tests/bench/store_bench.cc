@@ -60,7 +60,7 @@ BENCHMARK(BM_GetJob)->Threads(1)->Threads(2)->UseRealTime();
 
 void BM_CheckToken(benchmark::State& state) {
   Fixture& f = fixture();
-  if (state.thread_index() == 0) f.store->add_token("bench-token-0123456789abcdef", "bench");
+  if (state.thread_index() == 0) f.store->add_token("bench-token-0123456789abcdef", keel::storage::admin_token("bench"));
   for (auto _ : state)
     benchmark::DoNotOptimize(f.store->check_token("bench-token-0123456789abcdef"));
   state.SetItemsProcessed(state.iterations());

@@ -46,7 +46,7 @@ class HandlerTest : public ::testing::Test {
   void SetUp() override {
     store_ = storage::open_sqlite_store(dir_.path());
     token_ = "test-token-0123456789";
-    store_->add_token(token_, "tests");
+    store_->add_token(token_, storage::admin_token("tests"));
     HandlerOptions options;
     options.max_chunk_bytes = 1 << 20;
     options.workers_alive = [] { return 3; };

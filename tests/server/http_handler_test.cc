@@ -101,7 +101,9 @@ class ThrowingStore : public storage::Store {
     if (id == "boom") throw std::runtime_error("disk on fire");
     return inner_.get_job(id);
   }
-  bool check_token(const std::string& token) override { return inner_.check_token(token); }
+  std::optional<proto::TokenInfo> check_token(const std::string& token) override {
+    return inner_.check_token(token);
+  }
   // Everything else is not reached by this test.
   proto::Upload create_upload(const proto::UploadRequest& r) override {
     return inner_.create_upload(r);
@@ -122,8 +124,8 @@ class ThrowingStore : public storage::Store {
     return inner_.create_mission(r);
   }
   proto::Mission get_mission(const std::string& id) override { return inner_.get_mission(id); }
-  std::vector<proto::Mission> list_missions(const std::string& p) override {
-    return inner_.list_missions(p);
+  std::vector<proto::Mission> list_missions(const std::string& p, const std::string& pr) override {
+    return inner_.list_missions(p, pr);
   }
   proto::Job create_job(const proto::JobRequest& r, const std::string& k, bool* c) override {
     return inner_.create_job(r, k, c);
@@ -133,6 +135,14 @@ class ThrowingStore : public storage::Store {
   }
   proto::Job cancel_job(const std::string& id) override { return inner_.cancel_job(id); }
   proto::Job retry_job(const std::string& id) override { return inner_.retry_job(id); }
+  proto::Batch create_batch(const proto::ReprocessRequest& r) override {
+    return inner_.create_batch(r);
+  }
+  proto::Batch get_batch(const std::string& id) override { return inner_.get_batch(id); }
+  proto::Job release_job(const std::string& id, const std::string& l) override {
+    return inner_.release_job(id, l);
+  }
+  int requeue_expired_leases() override { return inner_.requeue_expired_leases(); }
   std::optional<proto::Lease> lease_job(const proto::LeaseRequest& r) override {
     return inner_.lease_job(r);
   }
@@ -160,8 +170,18 @@ class ThrowingStore : public storage::Store {
   proto::LogPage read_log(const std::string& id, int64_t from, int limit) override {
     return inner_.read_log(id, from, limit);
   }
-  void add_token(const std::string& t, const std::string& l) override { inner_.add_token(t, l); }
+  proto::TokenInfo add_token(const std::string& t, const storage::TokenSpec& s) override {
+    return inner_.add_token(t, s);
+  }
+  std::vector<proto::TokenInfo> list_tokens() override { return inner_.list_tokens(); }
+  proto::TokenInfo revoke_token(const std::string& id) override { return inner_.revoke_token(id); }
   int64_t token_count() override { return inner_.token_count(); }
+  std::vector<proto::Project> list_projects() override { return inner_.list_projects(); }
+  proto::Project ensure_project(const std::string& n) override { return inner_.ensure_project(n); }
+  std::unique_ptr<storage::Subscription> subscribe(storage::ChangeListener l) override {
+    return inner_.subscribe(std::move(l));
+  }
+  proto::QueueSummary queue_summary() override { return inner_.queue_summary(); }
   storage::Metrics metrics() override { return inner_.metrics(); }
 
  private:

@@ -21,7 +21,7 @@ class HttpServerTest : public ::testing::Test {
  protected:
   void SetUp() override {
     store_ = storage::open_sqlite_store(dir_.path());
-    store_->add_token(token_, "tests");
+    store_->add_token(token_, storage::admin_token("tests"));
     HandlerOptions handler_options;
     handler_options.max_chunk_bytes = 1 << 20;
     handler_ = std::make_unique<HttpHandler>(*store_, handler_options);

@@ -119,6 +119,17 @@ class RawClient {
     return read_reply(head);
   }
 
+  // Raw bytes up to and including the first `needle` (a streamed body, chunk framing and
+  // all); nullopt when the connection ends or times out first.
+  std::optional<std::string> read_until(const std::string& needle) {
+    size_t at;
+    while ((at = buffer_.find(needle)) == std::string::npos)
+      if (!fill()) return std::nullopt;
+    std::string out = buffer_.substr(0, at + needle.size());
+    buffer_.erase(0, at + needle.size());
+    return out;
+  }
+
   // True when the server closes the connection (EOF or reset) before the read timeout.
   bool wait_closed() {
     char byte;

@@ -151,7 +151,9 @@ TEST_F(JobTest, ListNewestFirstWithFilters) {
   const auto canceled = store_->list_jobs({proto::JobState::kCanceled, ""});
   ASSERT_EQ(canceled.size(), 1u);
   EXPECT_EQ(canceled[0].id, ids[1]);
-  EXPECT_EQ(store_->list_jobs({std::nullopt, "", 2}).size(), 2u);
+  JobFilter two;
+  two.limit = 2;
+  EXPECT_EQ(store_->list_jobs(two).size(), 2u);
   EXPECT_THROW(store_->list_jobs({std::nullopt, "", 0}), Invalid);
   const Metrics metrics = store_->metrics();
   EXPECT_EQ(metrics.jobs_by_state[static_cast<int>(proto::JobState::kQueued)], 4);
@@ -199,13 +201,13 @@ TEST_F(JobTest, LogsInPagesWithSeq) {
 TEST_F(JobTest, TokensStoredAsHashOnly) {
   const std::string token = "kt_5f2b9c0d1e4a7788aa01bb02cc03dd04";
   EXPECT_EQ(store_->token_count(), 0);
-  store_->add_token(token, "first");
-  store_->add_token(token, "first");  // idempotent
+  store_->add_token(token, admin_token("first"));
+  store_->add_token(token, admin_token("first"));  // idempotent
   EXPECT_EQ(store_->token_count(), 1);
   EXPECT_TRUE(store_->check_token(token));
   EXPECT_FALSE(store_->check_token(token + "x"));
   EXPECT_FALSE(store_->check_token(""));
-  EXPECT_THROW(store_->add_token("", "empty"), Invalid);
+  EXPECT_THROW(store_->add_token("", admin_token("empty")), Invalid);
   store_.reset();  // close, so the WAL is checkpointed into keel.db
   std::string bytes;
   for (const char* file : {"keel.db", "keel.db-wal"})
