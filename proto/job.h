@@ -23,9 +23,9 @@ bool is_terminal(JobState state);
 // What a client sends to create a job (POST /v1/jobs).
 struct JobRequest {
   std::string mission_id;
-  std::string project;  // optional in JSON; the server checks it against the token's project
   std::vector<std::string> stages;
   nlohmann::json options = nlohmann::json::object();  // {"stage": {"option": value}}
+  std::string project;  // optional in JSON; the server checks it against the token's project
 
   nlohmann::json to_json() const;
   static JobRequest from_json(const nlohmann::json& body, const std::string& path = "");
