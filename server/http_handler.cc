@@ -150,7 +150,7 @@ Response HttpHandler::dispatch(const Request& request) {
   }
   const bool reads = request.method == "GET" || request.method == "HEAD";
   if (reads && !starts_with_v1(target->segments)) {
-    routes::Call call{store_, request, *target, params, options_, counters_};
+    routes::Call call{store_, request, *target, params, options_, counters_, principal};
     return routes::web_file(call);
   }
   throw ApiException(404, "not_found", "no route " + request.method + " " + target->path);
