@@ -21,9 +21,12 @@ packages=(
   python3-tf2-msgs python3-numpy curl
   # reference tool for the C2C distance test (compare/cloudcompare_c2c)
   cloudcompare
-  # the web dashboard: its npm packages (web/package-lock.json) and the browser tests
-  nodejs npm chromium
+  # the web dashboard's browser tests
+  chromium
 )
+# Node.js and npm for web/'s packages: Debian's, unless the machine already has a Node.js with
+# npm (e.g. NodeSource's nodejs, which bundles npm and conflicts with Debian's npm package).
+command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
