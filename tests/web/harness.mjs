@@ -68,6 +68,7 @@ export class Server {
   }
 
   async start() {
+    fs.rmSync(path.join(this.dataDir, 'server.url'), {force: true});  // a reused folder's old one
     const log = fs.openSync(this.log, 'a');
     this.process = spawn(path.join(this.binDir, 'keel-server'),
       ['--data-dir', this.dataDir, '--listen', '127.0.0.1:0', '--workers', String(this.workers), '--web-dir', this.webDir],

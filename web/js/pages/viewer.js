@@ -149,8 +149,17 @@ export function mount(container, {id, query}) {
             state.firstPictureMs = performance.now();
             performance.mark('keel:first-picture');
           }
-          layer.setInteracting(state.interacting);
-          scene.requestRender(() => settle());
+          // Then the budgeted copy, one piece per frame.
+          const more = () => {
+            if (!layer.revealMore()) {
+              layer.setInteracting(state.interacting);
+              scene.requestRender(() => settle());
+              return;
+            }
+            layer.setInteracting(state.interacting);
+            scene.requestRender(more);
+          };
+          more();
         });
       } else {
         scene.requestRender(() => settle());
@@ -481,7 +490,8 @@ export function mount(container, {id, query}) {
     const objects = [];
     for (const layer of layers.values()) {
       if (!layer.object3d.visible || layer.status !== 'shown') continue;
-      if (layer instanceof PointCloudLayer && layer.detail) objects.push(state.interacting ? layer.coarse : layer.detail);
+      if (layer instanceof PointCloudLayer && layer.coarse)
+        objects.push(...(state.interacting || !layer.details.length ? [layer.coarse] : layer.details));
       if (layer instanceof MeshLayer && layer.mesh && layer.kind !== 'cad') objects.push(layer.mesh);
       if (layer instanceof ResidualLayer) objects.push(layer.points);
     }

@@ -8,6 +8,23 @@ import {pointMaterial, rampTexture} from './materials.js';
 import {strideFor, thinGeometry} from './thinning.js';
 
 export const COARSE_POINTS = 250000;
+// The budgeted copy is drawn in pieces of at most this many points, one more piece per
+// frame, so no single frame uploads millions of points to the GPU.
+export const PIECE_POINTS = 400000;
+
+// Views (no copies) of consecutive ranges of a geometry's points.
+function pieces(geometry, size) {
+  const count = geometry.getAttribute('position').count;
+  const out = [];
+  for (let start = 0; start < count; start += size) {
+    const end = Math.min(count, start + size);
+    const piece = new THREE.BufferGeometry();
+    for (const [name, a] of Object.entries(geometry.attributes))
+      piece.setAttribute(name, new THREE.BufferAttribute(a.array.subarray(start * a.itemSize, end * a.itemSize), a.itemSize));
+    out.push(piece);
+  }
+  return out;
+}
 
 // What a map can be coloured by: height always; the rest when the sidecar lists them.
 export const COLOR_MODES = ['height', 'intensity', 'sensor', 'density', 'roughness', 'planarity'];
@@ -25,7 +42,7 @@ export class PointCloudLayer {
     this.object3d.name = source.name;
     this.material = pointMaterial();
     this.coarse = null;  // THREE.Points
-    this.detail = null;  // THREE.Points
+    this.details = [];   // THREE.Points pieces of the budgeted copy
     this.level = '';     // 'preview' | 'full'
     this.status = 'idle';
     this.message = '';
@@ -53,14 +70,21 @@ export class PointCloudLayer {
     this.message = `downloading ${artifact.name}`;
     this.onChange?.(this);
     try {
+      let shownAt = 0;
       const bytes = await this.source.fetchBytes(artifact, (got, total) => {
         this.progress = total ? got / total : 0;
+        const now = performance.now();
+        if (now - shownAt < 100) return;  // at most ten progress updates a second
+        shownAt = now;
         this.onChange?.(this);
       });
+      performance.mark(`keel:${this.name}:downloaded`);
       this.message = `decoding ${artifact.name}`;
       this.onChange?.(this);
       const geometry = await decodeDraco(bytes, this.sidecar, artifact.name);
+      performance.mark(`keel:${this.name}:decoded`);
       await this.show(geometry);
+      performance.mark(`keel:${this.name}:thinned`);
       this.status = 'shown';
       this.message = '';
     } catch (e) {
@@ -76,24 +100,42 @@ export class PointCloudLayer {
     this.decodedPoints = count;
     this.decoded = count <= this.budget ? geometry : null;  // tests read values back
     const coarse = await thinGeometry(geometry, strideFor(count, COARSE_POINTS));
-    const detail = count <= COARSE_POINTS ? coarse : await thinGeometry(geometry, strideFor(count, this.budget));
+    const detail = count <= COARSE_POINTS ? null : await thinGeometry(geometry, strideFor(count, this.budget));
     this.disposeObjects();
     this.coarse = new THREE.Points(coarse, this.material);
-    this.detail = detail === coarse ? this.coarse : new THREE.Points(detail, this.material);
     this.coarse.frustumCulled = false;
-    this.detail.frustumCulled = false;
     this.object3d.add(this.coarse);
-    if (this.detail !== this.coarse) this.object3d.add(this.detail);
-    this.drawnPoints = this.detail.geometry.getAttribute('position').count;
+    this.details = (detail ? pieces(detail, PIECE_POINTS) : []).map((g) => {
+      const points = new THREE.Points(g, this.material);
+      points.frustumCulled = false;
+      points.visible = false;
+      this.object3d.add(points);
+      return points;
+    });
+    this.revealed = 0;
+    this.drawnPoints = (detail || coarse).getAttribute('position').count;
     this.applyColor();
     this.setInteracting(true);  // the coarse copy first; the caller switches after a frame
   }
 
-  // While the camera moves (or before the first picture), draw the coarse copy only.
+  // While the camera moves (or before the first picture), draw the coarse copy only; at
+  // rest the budgeted pieces revealed so far (revealMore adds one per frame).
   setInteracting(moving) {
     if (!this.coarse) return;
-    this.coarse.visible = moving || this.detail === this.coarse;
-    if (this.detail !== this.coarse) this.detail.visible = !moving;
+    const detailed = !moving && this.details.length > 0 && this.revealed === this.details.length;
+    this.coarse.visible = !detailed;
+    this.details.forEach((points, i) => { points.visible = !moving && i < this.revealed; });
+  }
+
+  // Shows one more piece of the budgeted copy; false when all are shown.
+  revealMore() {
+    if (this.revealed >= this.details.length) return false;
+    this.revealed += 1;
+    return true;
+  }
+
+  get detail() {
+    return this.details?.length ? this.details : null;
   }
 
   boundingBox() {
@@ -135,7 +177,7 @@ export class PointCloudLayer {
     uniforms.vmax.value = categories ? legend.max + 0.5 : legend.max;
     uniforms.ramp.value.dispose();
     uniforms.ramp.value = rampTexture('viridis', categories);
-    for (const points of [this.coarse, this.detail]) {
+    for (const points of [this.coarse, ...(this.details || [])]) {
       if (!points) continue;
       const geometry = points.geometry;
       if (this.colorMode === 'height') geometry.deleteAttribute('value');
@@ -148,13 +190,13 @@ export class PointCloudLayer {
   }
 
   disposeObjects() {
-    for (const points of new Set([this.coarse, this.detail])) {
+    for (const points of [this.coarse, ...(this.details || [])]) {
       if (!points) continue;
       this.object3d.remove(points);
       points.geometry.dispose();
     }
     this.coarse = null;
-    this.detail = null;
+    this.details = [];
   }
 
   dispose() {
