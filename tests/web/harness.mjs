@@ -58,6 +58,12 @@ export function simulate(binDir, out, {scenario = 'usv-bridge', duration = 20, s
 
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
+// Servers this process started, stopped even when a test or benchmark dies with an error.
+const started = new Set();
+process.on('exit', () => {
+  for (const child of started) if (child.exitCode === null) child.kill('SIGKILL');
+});
+
 export class Server {
   constructor(binDir, webDir, {workers = 1, dataDir = tempDir('keel-web-data-')} = {}) {
     this.binDir = binDir;
@@ -73,6 +79,7 @@ export class Server {
     this.process = spawn(path.join(this.binDir, 'keel-server'),
       ['--data-dir', this.dataDir, '--listen', '127.0.0.1:0', '--workers', String(this.workers), '--web-dir', this.webDir],
       {stdio: ['ignore', log, log]});
+    started.add(this.process);
     const urlFile = path.join(this.dataDir, 'server.url');
     for (let i = 0; i < 300; i += 1) {
       const nonEmpty = (f) => fs.existsSync(f) && fs.statSync(f).size > 0;
