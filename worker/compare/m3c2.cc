@@ -81,6 +81,15 @@ void validate(const M3c2Options& o) {
   require(std::isfinite(o.confidence_z) && o.confidence_z > 0, "confidence_z", "> 0");
 }
 
+void apply_registration_error(std::vector<CoreChange>* cores, double registration_error_m,
+                              double confidence_z) {
+  for (CoreChange& c : *cores) {
+    if (!c.defined()) continue;
+    c.lod95_m = float(confidence_z * (c.statistical_m + registration_error_m));
+    c.significant = std::abs(c.distance_m) > c.lod95_m;
+  }
+}
+
 std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::Vector3f>& cores,
                              const std::vector<Eigen::Vector3f>& viewpoints,
                              const M3c2Options& options) {
@@ -132,9 +141,10 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
       // Steps 3-4.
       const double sigma_a = sample_sigma(a), sigma_b = sample_sigma(b);
       const double distance = b.sum / b.count - a.sum / a.count;
-      const double lod = options.confidence_z *
-                         (std::sqrt(sigma_a * sigma_a / a.count + sigma_b * sigma_b / b.count) +
-                          options.registration_error_m);
+      const double statistical =
+          std::sqrt(sigma_a * sigma_a / a.count + sigma_b * sigma_b / b.count);
+      const double lod = options.confidence_z * (statistical + options.registration_error_m);
+      c.statistical_m = float(statistical);
       c.sigma_a_m = float(sigma_a);
       c.sigma_b_m = float(sigma_b);
       c.distance_m = float(distance);

@@ -54,6 +54,7 @@ struct CoreChange {
   float distance_m = kUndefined;  // L_M3C2; NaN when a cylinder holds < min_points of a cloud
   float lod95_m = kUndefined;
   float sigma_a_m = kUndefined, sigma_b_m = kUndefined;
+  float statistical_m = kUndefined;  // sqrt(sigma1^2 / n1 + sigma2^2 / n2) of Eq. (1)
   uint32_t count_a = 0, count_b = 0;
   bool significant = false;
   // Surface area the core point stands for: a plane of unit normal n cuts |n|_1 / s^2 voxels of
@@ -69,6 +70,10 @@ struct M3c2Clouds {
   const VoxelMoments* reference_voxels = nullptr;
   const VoxelMoments* compared_voxels = nullptr;  // B's, the fallback for normals
 };
+
+// Recomputes every defined core's LoD95 and significance for another registration error.
+void apply_registration_error(std::vector<CoreChange>* cores, double registration_error_m,
+                              double confidence_z = 1.96);
 
 // Orients each normal towards the nearest viewpoint (the sensor positions that saw the surface,
 // so a positive change is material added towards the sensor); with no viewpoints, upwards

@@ -9,8 +9,10 @@
 #include <stdexcept>
 
 #include "worker/compare/c2c_distance.h"
+#include "worker/compare/local_registration.h"
 #include "worker/compare/nearest_index.h"
 #include "worker/compare/voxel_moments.h"
+#include "worker/core/robust_spread.h"
 #include "worker/io/draco_codec.h"
 #include "worker/io/ply_cloud_writer.h"
 #include "worker/io/tum.h"
@@ -150,7 +152,7 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
   report["normals_face"] =
       views.empty() ? "+z (job A has no trajectory_refined.tum)" : "job A's refined trajectory";
   Pose3 T_a_b = Pose3::Identity();
-  double reg = std::max(0.0, options.registration_error_m);
+  double reg = std::max(0.0, options.registration_error_m);  // per map when < 0
   bool registered = false;
 
   for (size_t m = 0; m < maps.size(); ++m) {
@@ -173,7 +175,6 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
                                 {"identical_maps", true},
                                 {"T_a_b", pose_json(Pose3::Identity())},
                                 {"rms_stable_m", 0.0}};
-      if (options.registration_error_m < 0) reg = 0.0;
       registered = true;
     }
     if (options.register_maps && !registered) {
@@ -188,7 +189,6 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
       rj["map"] = map;
       rj["seconds"] = seconds_since(t);
       report["registration"] = rj;
-      if (options.registration_error_m < 0) reg = result.rms_stable_m;
       registered = true;
       context.log("registered B onto A on " + map + ": " +
                   std::to_string(result.T_a_b.translation().norm()) + " m, rms " +
@@ -197,6 +197,23 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     }
     if (registered)
       for (auto& p : b) p = (T_a_b * p.cast<double>()).cast<float>();
+    if (options.register_maps && options.local_registration_tile_m > 0 && !(a == b)) {
+      t = std::chrono::steady_clock::now();
+      compare::LocalRegistrationOptions lo;
+      lo.tile_m = options.local_registration_tile_m;
+      lo.margin_m = std::min(1.0, lo.tile_m);
+      lo.registration = options.registration;
+      lo.registration.threads = options.threads;
+      const compare::LocalRegistration local = compare::register_tiles(a, &b, lo);
+      const RobustSpread shift = robust_spread(local.correction_m);
+      r["local_registration"] = {{"tile_m", lo.tile_m},
+                                 {"tiles", local.tiles},
+                                 {"adjusted_tiles", local.adjusted},
+                                 {"median_correction_m", shift.median},
+                                 {"seconds", seconds_since(t)}};
+      context.log(map + ": " + std::to_string(local.adjusted) + " of " +
+                  std::to_string(local.tiles) + " tiles registered on their own");
+    }
     progress(0.2);
 
     t = std::chrono::steady_clock::now();
@@ -220,8 +237,18 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     mo.registration_error_m = reg;
     mo.threads = options.threads;
     mo.check_canceled = [&] { context.check_canceled(); };
-    const std::vector<compare::CoreChange> changes =
+    std::vector<compare::CoreChange> changes =
         compare::m3c2({&index_a, &index_b, &normals_a, &normals_b}, cores.means, views, mo);
+    if (options.registration_error_m < 0) {
+      // reg from the spread of the change itself (see CompareStageOptions).
+      std::vector<double> d;
+      for (const auto& c : changes)
+        if (c.defined()) d.push_back(c.distance_m);
+      std::vector<double> deviation;
+      for (double x : d) deviation.push_back(std::abs(x));
+      reg = 1.4826 * median_of(deviation);
+      compare::apply_registration_error(&changes, reg, mo.confidence_z);
+    }
     seconds["m3c2"] = seconds_since(t);
     progress(0.8);
 
@@ -298,7 +325,8 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
                        {"core_spacing_m", options.m3c2.core_spacing_m},
                        {"min_points", options.m3c2.min_points},
                        {"confidence_z", options.m3c2.confidence_z},
-                       {"registration_error_m", reg}};
+                       {"registration_error_m", options.registration_error_m},
+                       {"local_registration_tile_m", options.local_registration_tile_m}};
   return report;
 }
 

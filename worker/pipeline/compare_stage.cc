@@ -113,6 +113,8 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
       r.optional<double>("registration_max_correspondence_m", g.max_correspondence_m);
   g.stable_sigmas = r.optional<double>("registration_stable_sigmas", g.stable_sigmas);
   g.max_iterations = r.optional<int>("registration_max_iterations", g.max_iterations);
+  o.local_registration_tile_m =
+      r.optional<double>("local_registration_tile_m", o.local_registration_tile_m);
   auto& m = o.m3c2;
   m.normal_scale_m = r.optional<double>("normal_scale_m", m.normal_scale_m);
   m.projection_scale_m = r.optional<double>("projection_scale_m", m.projection_scale_m);
@@ -135,6 +137,8 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   } catch (const std::invalid_argument& e) {
     throw ContractError(std::string("options.compare.") + e.what());
   }
+  require(std::isfinite(o.local_registration_tile_m) && o.local_registration_tile_m >= 0,
+          "local_registration_tile_m", "a number >= 0 (0: off)");
   require(std::isfinite(o.registration_error_m), "registration_error_m",
           "a number (< 0: from the registration)");
   require(o.histogram_bins >= 1 && o.histogram_bins <= 1000, "histogram_bins",

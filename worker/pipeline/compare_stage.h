@@ -39,9 +39,14 @@ struct CompareStageOptions {
   std::vector<std::string> sensors;
   bool register_maps = true;  // false: B's maps are taken as already in A's frame
   compare::StableRegistrationOptions registration;
+  // Piecewise registration after the global one (compare/local_registration.h): tiles of this
+  // side; 0 turns it off.
+  double local_registration_tile_m = 10.0;
   compare::M3c2Options m3c2;
-  // reg of Lague et al.'s Eq. (1): < 0 (the default) takes the registration's RMS residual on
-  // stable structure, as they do; a number >= 0 overrides it.
+  // reg of Lague et al.'s Eq. (1), assumed uniform over the structure as they do: < 0 (the
+  // default) takes 1.4826 x the median absolute M3C2 distance of all core points after
+  // registration, the spread of the measured change over the whole structure, which real
+  // changes (a small part of a structure) do not move; a number >= 0 overrides it.
   double registration_error_m = -1.0;
   int histogram_bins = 40;
   double histogram_range_m = 0.2;  // the change histogram spans +-this
