@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -54,12 +55,29 @@ double sample_sigma(const Projection& p) {
   return std::sqrt(std::max(0.0, (p.sum_squares - p.count * mean * mean) / (p.count - 1)));
 }
 
+// Faces n towards the sensor that saw the surface: the nearest viewpoint within kViewRadiusM
+// that looks at it within 60 degrees of its normal (|n . u| >= 0.5), as a range sensor sees a
+// surface; a grazing view through a gap between piers, nearer but sideways, does not decide.
+// Failing that the nearest viewpoint decides.
+constexpr double kViewRadiusM = 30.0;
+
 Eigen::Vector3d oriented(Eigen::Vector3d n, const Eigen::Vector3d& core,
-                         const NearestIndex* viewpoints) {
+                         const NearestIndex* viewpoints, std::vector<uint32_t>* scratch) {
   if (viewpoints) {
-    const Neighbour v = viewpoints->nearest(core.cast<float>());
-    if (n.dot(viewpoints->point(v.index).cast<double>() - core) < 0.0) n = -n;
-    return n;
+    viewpoints->within(core.cast<float>(), kViewRadiusM, scratch);
+    double best = std::numeric_limits<double>::infinity(), side = 0.0;
+    for (const uint32_t v : *scratch) {
+      const Eigen::Vector3d to = viewpoints->point(v).cast<double>() - core;
+      const double d = to.norm();
+      if (d <= 0.0 || std::abs(n.dot(to)) < 0.5 * d || d >= best) continue;
+      best = d;
+      side = n.dot(to);
+    }
+    if (side == 0.0) {
+      const Neighbour v = viewpoints->nearest(core.cast<float>());
+      side = n.dot(viewpoints->point(v.index).cast<double>() - core);
+    }
+    return side < 0.0 ? Eigen::Vector3d(-n) : n;
   }
   for (int axis : {2, 0, 1}) {
     if (std::abs(n[axis]) > 1e-9) return n[axis] < 0.0 ? Eigen::Vector3d(-n) : n;
@@ -98,8 +116,9 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
     throw std::invalid_argument("m3c2: both clouds and their voxel moments are needed");
   const NearestIndex reference_voxels(clouds.reference_voxels->means);
   const NearestIndex compared_voxels(clouds.compared_voxels->means);
+  // Viewpoints thinned to one per metre: a trajectory's thousands of poses vote as places.
   std::unique_ptr<NearestIndex> views;
-  if (!viewpoints.empty()) views = std::make_unique<NearestIndex>(viewpoints);
+  if (!viewpoints.empty()) views = std::make_unique<NearestIndex>(voxelize(viewpoints, 1.0).means);
 
   const double normal_radius = 0.5 * options.normal_scale_m;
   const double radius = 0.5 * options.projection_scale_m;
@@ -123,7 +142,7 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
         plane = fit_plane(
             gather(*clouds.compared_voxels, compared_voxels, cores[i], normal_radius, &scratch));
       if (!plane.valid) continue;
-      const Eigen::Vector3d n = oriented(plane.normal, core, views.get());
+      const Eigen::Vector3d n = oriented(plane.normal, core, views.get(), &scratch);
       c.normal = n.cast<float>();
       c.area_m2 = float(s2 / n.lpNorm<1>());
       // Step 2: the cylinders.

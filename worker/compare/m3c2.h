@@ -75,9 +75,10 @@ struct M3c2Clouds {
 void apply_registration_error(std::vector<CoreChange>* cores, double registration_error_m,
                               double confidence_z = 1.96);
 
-// Orients each normal towards the nearest viewpoint (the sensor positions that saw the surface,
-// so a positive change is material added towards the sensor); with no viewpoints, upwards
-// (+z, CloudCompare's default preferred orientation), then +x, then +y on a tie.
+// Orients each normal towards the viewpoints (the sensor positions that saw the surface, so a
+// positive change is material added towards the sensor): the nearest within 30 m that looks
+// at the surface within 60 degrees of its normal, else the nearest; with no viewpoints,
+// upwards (+z, CloudCompare's default preferred orientation), then +x, then +y on a tie.
 std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::Vector3f>& cores,
                              const std::vector<Eigen::Vector3f>& viewpoints,
                              const M3c2Options& options);

@@ -97,6 +97,9 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   CompareStageOptions o;
   if (options.is_null()) return o;
   StageOptionReader r(options, "compare");
+  // Set by the server on a compare job (POST /v1/comparisons); the jobs come as input_jobs.
+  r.optional<std::string>("job_a", "");
+  r.optional<std::string>("job_b", "");
   if (r.has("sensors")) {
     const json& list = r.at("sensors");
     require(list.is_array(), "sensors", "a list of map names");

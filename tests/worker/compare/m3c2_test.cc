@@ -91,14 +91,15 @@ TEST(M3c2, SphereGrownByOneCentimetre) {
   std::vector<Eigen::Vector3f> a, b;
   sample_sphere({1, 2, 3}, 1.0, 4000, 0.002, rng, &a);
   sample_sphere({1, 2, 3}, 1.01, 4000, 0.002, rng, &b);
-  // Viewpoints outside the sphere on its six axes: normals face outwards.
+  // Viewpoints on a 5 m shell around the sphere (a Fibonacci lattice): normals face outwards.
   std::vector<Eigen::Vector3f> views;
-  for (int axis = 0; axis < 3; ++axis)
-    for (double s : {-10.0, 10.0}) {
-      Eigen::Vector3d v(1, 2, 3);
-      v[axis] += s;
-      views.push_back(v.cast<float>());
-    }
+  for (int k = 0; k < 400; ++k) {
+    const double z = 1.0 - (2.0 * k + 1.0) / 400.0, r = std::sqrt(1.0 - z * z);
+    const double phi = k * M_PI * (3.0 - std::sqrt(5.0));
+    views.push_back(
+        (Eigen::Vector3d(1, 2, 3) + 5.0 * Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z))
+            .cast<float>());
+  }
   M3c2Options options;
   const M3c2Run run = run_m3c2(a, b, views, options, 0.01);
   ASSERT_GT(run.defined, 1000u);
