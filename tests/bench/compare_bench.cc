@@ -8,7 +8,8 @@
 //   the new and the removed object found.
 // Usage: bench_compare --a DIR --b DIR --truth B/ground_truth/truth.yaml --out DIR
 //                      [--runs N] [--set compare.x=v ...]
-// tests/bench/compare_sim_bench.sh runs it on 3 seeds of both scenarios.
+// The surveys: keel-sim --scenario S --seed N --survey 1|2 --out DIR, then
+// keel-worker run --mission DIR --stages ingest,refine,map (hulls: ingest,refine,ba,inspect).
 #include <yaml-cpp/yaml.h>
 #include <CLI/CLI.hpp>
 
