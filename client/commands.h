@@ -13,5 +13,6 @@ void add_job_commands(CLI::App& app, CliContext& context);      // jobs, status,
 void add_watch_commands(CLI::App& app, CliContext& context);    // watch, log
 void add_fetch_command(CLI::App& app, CliContext& context);     // fetch
 void add_mission_commands(CLI::App& app, CliContext& context);  // missions, reprocess
+void add_compare_command(CLI::App& app, CliContext& context);   // compare (issue 16)
 
 }  // namespace keel::client

@@ -7,10 +7,11 @@
 namespace keel::proto {
 
 namespace {
-constexpr std::pair<JobState, const char*> kStateNames[] = {
-    {JobState::kQueued, "queued"},       {JobState::kRunning, "running"},
-    {JobState::kSucceeded, "succeeded"}, {JobState::kFailed, "failed"},
-    {JobState::kCanceled, "canceled"}};
+constexpr std::pair<JobState, const char*> kStateNames[] = {{JobState::kQueued, "queued"},
+                                                            {JobState::kRunning, "running"},
+                                                            {JobState::kSucceeded, "succeeded"},
+                                                            {JobState::kFailed, "failed"},
+                                                            {JobState::kCanceled, "canceled"}};
 }  // namespace
 
 std::string to_string(JobState state) {
@@ -27,7 +28,8 @@ JobState job_state_from_string(std::string_view text, const std::string& path) {
 }
 
 bool is_terminal(JobState state) {
-  return state == JobState::kSucceeded || state == JobState::kFailed || state == JobState::kCanceled;
+  return state == JobState::kSucceeded || state == JobState::kFailed ||
+         state == JobState::kCanceled;
 }
 
 nlohmann::json JobRequest::to_json() const {
@@ -105,10 +107,11 @@ Job Job::from_json(const nlohmann::json& body, const std::string& path) {
   if (r.has("stage_seconds")) {
     const auto& seconds = r.at("stage_seconds");
     if (!seconds.is_object())
-      throw ContractError(r.child("stage_seconds") + ": expected object, got " + json_type_name(seconds));
+      throw ContractError(r.child("stage_seconds") + ": expected object, got " +
+                          json_type_name(seconds));
     for (const auto& item : seconds.items())
-      job.stage_seconds[item.key()] = FieldReader::convert<double>(
-          item.value(), r.child("stage_seconds") + "." + item.key());
+      job.stage_seconds[item.key()] =
+          FieldReader::convert<double>(item.value(), r.child("stage_seconds") + "." + item.key());
   }
   job.error = r.optional<std::string>("error", "");
   job.attempts = r.optional<int>("attempts", 0);
@@ -123,8 +126,10 @@ Job Job::from_json(const nlohmann::json& body, const std::string& path) {
 }
 
 nlohmann::json ReprocessRequest::to_json() const {
-  nlohmann::json out = {{"mission_ids", mission_ids}, {"name_prefix", name_prefix},
-                        {"stages", stages}, {"options", options}};
+  nlohmann::json out = {{"mission_ids", mission_ids},
+                        {"name_prefix", name_prefix},
+                        {"stages", stages},
+                        {"options", options}};
   if (!project.empty()) out["project"] = project;
   return out;
 }
@@ -155,8 +160,8 @@ nlohmann::json Batch::to_json() const {
 
 Batch Batch::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
-  r.reject_unknown({"id", "project", "created_at_ms", "jobs", "jobs_by_state",
-                    "mean_job_seconds", "finished_jobs_timed"});
+  r.reject_unknown({"id", "project", "created_at_ms", "jobs", "jobs_by_state", "mean_job_seconds",
+                    "finished_jobs_timed"});
   Batch out;
   out.id = r.required<std::string>("id");
   out.project = r.optional<std::string>("project", "");
@@ -169,8 +174,8 @@ Batch Batch::from_json(const nlohmann::json& body, const std::string& path) {
                           json_type_name(counts));
     for (const auto& item : counts.items()) {
       job_state_from_string(item.key(), r.child("jobs_by_state"));
-      out.jobs_by_state[item.key()] = FieldReader::convert<int64_t>(
-          item.value(), r.child("jobs_by_state") + "." + item.key());
+      out.jobs_by_state[item.key()] =
+          FieldReader::convert<int64_t>(item.value(), r.child("jobs_by_state") + "." + item.key());
     }
   }
   out.mean_job_seconds = r.optional<double>("mean_job_seconds", 0.0);
@@ -191,6 +196,31 @@ nlohmann::json QueueSummary::to_json() const {
           {"finished_last_hour", finished_last_hour},
           {"failed_last_hour", failed_last_hour},
           {"mean_job_seconds_last_hour", mean_job_seconds_last_hour}};
+}
+
+nlohmann::json ComparisonRequest::to_json() const {
+  return {{"job_a", job_a}, {"job_b", job_b}, {"options", options}};
+}
+
+ComparisonRequest ComparisonRequest::from_json(const nlohmann::json& body,
+                                               const std::string& path) {
+  FieldReader r(body, path);
+  r.reject_unknown({"job_a", "job_b", "options"});
+  ComparisonRequest out;
+  out.job_a = r.required<std::string>("job_a");
+  out.job_b = r.required<std::string>("job_b");
+  if (out.job_a.empty()) throw ContractError(r.child("job_a") + ": expected a job id");
+  if (out.job_b.empty()) throw ContractError(r.child("job_b") + ": expected a job id");
+  if (r.has("options")) {
+    out.options = r.at("options");
+    if (!out.options.is_object())
+      throw ContractError(r.child("options") + ": expected an object of compare stage options");
+    for (const char* reserved : {"job_a", "job_b"})
+      if (out.options.contains(reserved))
+        throw ContractError(r.child("options") + "." + reserved + ": give it as " + reserved +
+                            " of the request, not as an option");
+  }
+  return out;
 }
 
 }  // namespace keel::proto

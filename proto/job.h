@@ -55,6 +55,16 @@ struct Job {
   static Job from_json(const nlohmann::json& body, const std::string& path = "");
 };
 
+// POST /v1/comparisons (issue 16): a `compare` job over two finished jobs of one project, A the
+// earlier and B the later; `options` are the compare stage's ({"core_spacing_m": 0.05, ...}).
+struct ComparisonRequest {
+  std::string job_a, job_b;
+  nlohmann::json options = nlohmann::json::object();
+
+  nlohmann::json to_json() const;
+  static ComparisonRequest from_json(const nlohmann::json& body, const std::string& path = "");
+};
+
 // POST /v1/reprocess: a filter over stored missions and the pipeline to run on each.
 struct ReprocessRequest {
   std::vector<std::string> mission_ids;  // explicit ids, or

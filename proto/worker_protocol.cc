@@ -51,33 +51,52 @@ LeaseRequest LeaseRequest::from_json(const nlohmann::json& body, const std::stri
 }
 
 nlohmann::json StageOutput::to_json() const {
-  return {{"stage", stage}, {"report", report}, {"artifacts", json_array(artifacts)}, {"seconds", seconds}};
+  return {{"stage", stage},
+          {"report", report},
+          {"artifacts", json_array(artifacts)},
+          {"seconds", seconds}};
 }
 
 StageOutput StageOutput::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
   r.reject_unknown({"stage", "report", "artifacts", "seconds"});
-  return {r.required<std::string>("stage"), object_field(r, "report"), array_of<Artifact>(r, "artifacts"),
-          r.optional<double>("seconds", 0.0)};
+  return {r.required<std::string>("stage"), object_field(r, "report"),
+          array_of<Artifact>(r, "artifacts"), r.optional<double>("seconds", 0.0)};
+}
+
+nlohmann::json LeaseInput::to_json() const {
+  return {{"job", job.to_json()}, {"artifacts", json_array(artifacts)}};
+}
+
+LeaseInput LeaseInput::from_json(const nlohmann::json& body, const std::string& path) {
+  FieldReader r(body, path);
+  r.reject_unknown({"job", "artifacts"});
+  LeaseInput out;
+  out.job = Job::from_json(r.at("job"), r.child("job"));
+  out.artifacts = array_of<Artifact>(r, "artifacts");
+  return out;
 }
 
 nlohmann::json Lease::to_json() const {
-  return {{"lease_id", lease_id},
-          {"expires_at_ms", expires_at_ms},
-          {"job", job.to_json()},
-          {"mission", mission.to_json()},
-          {"completed", json_array(completed)}};
+  nlohmann::json out = {{"lease_id", lease_id},
+                        {"expires_at_ms", expires_at_ms},
+                        {"job", job.to_json()},
+                        {"mission", mission.to_json()},
+                        {"completed", json_array(completed)}};
+  if (!inputs.empty()) out["inputs"] = json_array(inputs);
+  return out;
 }
 
 Lease Lease::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
-  r.reject_unknown({"lease_id", "expires_at_ms", "job", "mission", "completed"});
+  r.reject_unknown({"lease_id", "expires_at_ms", "job", "mission", "completed", "inputs"});
   Lease out;
   out.lease_id = r.required<std::string>("lease_id");
   out.expires_at_ms = r.required<int64_t>("expires_at_ms");
   out.job = Job::from_json(r.at("job"), r.child("job"));
   out.mission = Mission::from_json(r.at("mission"), r.child("mission"));
   out.completed = array_of<StageOutput>(r, "completed");
+  if (r.has("inputs")) out.inputs = array_of<LeaseInput>(r, "inputs");
   return out;
 }
 
@@ -89,7 +108,8 @@ Heartbeat Heartbeat::from_json(const nlohmann::json& body, const std::string& pa
   FieldReader r(body, path);
   r.reject_unknown({"lease_id", "stage", "progress", "log"});
   Heartbeat out{r.required<std::string>("lease_id"), r.optional<std::string>("stage", ""),
-                r.optional<double>("progress", 0.0), r.optional<std::vector<std::string>>("log", {})};
+                r.optional<double>("progress", 0.0),
+                r.optional<std::vector<std::string>>("log", {})};
   if (!(out.progress >= 0.0 && out.progress <= 1.0))
     throw ContractError(r.child("progress") + ": expected a fraction in [0, 1]");
   return out;
@@ -109,13 +129,16 @@ nlohmann::json ArtifactRegistration::to_json() const {
   return {{"lease_id", lease_id}, {"stage", stage}, {"name", name}, {"blob", blob}};
 }
 
-ArtifactRegistration ArtifactRegistration::from_json(const nlohmann::json& body, const std::string& path) {
+ArtifactRegistration ArtifactRegistration::from_json(const nlohmann::json& body,
+                                                     const std::string& path) {
   FieldReader r(body, path);
   r.reject_unknown({"lease_id", "stage", "name", "blob"});
   ArtifactRegistration out{r.required<std::string>("lease_id"), r.required<std::string>("stage"),
                            r.required<std::string>("name"), r.required<std::string>("blob")};
-  if (!is_sha256_hex(out.blob)) throw ContractError(r.child("blob") + ": expected 64 lowercase hex digits");
-  if (out.name.empty() || out.name.find('/') != std::string::npos || out.name.find("..") != std::string::npos)
+  if (!is_sha256_hex(out.blob))
+    throw ContractError(r.child("blob") + ": expected 64 lowercase hex digits");
+  if (out.name.empty() || out.name.find('/') != std::string::npos ||
+      out.name.find("..") != std::string::npos)
     throw ContractError(r.child("name") + ": expected a plain file name without '/' or '..'");
   return out;
 }
@@ -127,7 +150,8 @@ nlohmann::json StageCompletion::to_json() const {
 StageCompletion StageCompletion::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
   r.reject_unknown({"lease_id", "report", "seconds"});
-  return {r.required<std::string>("lease_id"), object_field(r, "report"), r.optional<double>("seconds", 0.0)};
+  return {r.required<std::string>("lease_id"), object_field(r, "report"),
+          r.optional<double>("seconds", 0.0)};
 }
 
 nlohmann::json JobFinish::to_json() const { return {{"lease_id", lease_id}, {"error", error}}; }
@@ -140,7 +164,8 @@ JobFinish JobFinish::from_json(const nlohmann::json& body, const std::string& pa
 
 nlohmann::json LogPage::to_json() const {
   nlohmann::json lines_json = nlohmann::json::array();
-  for (const auto& line : lines) lines_json.push_back({{"seq", line.seq}, {"t_ms", line.t_ms}, {"text", line.text}});
+  for (const auto& line : lines)
+    lines_json.push_back({{"seq", line.seq}, {"t_ms", line.t_ms}, {"text", line.text}});
   return {{"lines", lines_json}, {"next", next}};
 }
 

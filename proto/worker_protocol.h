@@ -42,6 +42,15 @@ struct StageOutput {
   static StageOutput from_json(const nlohmann::json& body, const std::string& path = "");
 };
 
+// A finished job that a `compare` job reads (issue 16): its record and its artifacts.
+struct LeaseInput {
+  Job job;
+  std::vector<Artifact> artifacts;
+
+  nlohmann::json to_json() const;
+  static LeaseInput from_json(const nlohmann::json& body, const std::string& path = "");
+};
+
 // 200 answer to a lease (204 when no job is queued).
 struct Lease {
   std::string lease_id;
@@ -49,6 +58,7 @@ struct Lease {
   Job job;
   Mission mission;
   std::vector<StageOutput> completed;  // stages finished by earlier attempts, in order
+  std::vector<LeaseInput> inputs;      // a compare job's jobs A then B; absent otherwise
 
   nlohmann::json to_json() const;
   static Lease from_json(const nlohmann::json& body, const std::string& path = "");

@@ -38,6 +38,7 @@ const Route kRoutes[] = {
     {"GET", "v1/missions", routes::list_missions},
     {"GET", "v1/missions/*", routes::get_mission},
     {"POST", "v1/jobs", routes::create_job},
+    {"POST", "v1/comparisons", routes::create_comparison},
     {"GET", "v1/jobs", routes::list_jobs},
     {"GET", "v1/jobs/*", routes::get_job},
     {"GET", "v1/jobs/*/log", routes::read_job_log},

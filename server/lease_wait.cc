@@ -1,5 +1,7 @@
 #include "server/lease_wait.h"
 
+#include "server/routes.h"
+
 #include "server/api_response.h"
 
 namespace keel::server {
@@ -7,6 +9,7 @@ namespace keel::server {
 std::optional<Response> try_lease(storage::Store& store, const proto::LeaseRequest& request) {
   std::optional<proto::Lease> lease = store.lease_job(request);
   if (!lease) return std::nullopt;
+  routes::compare_lease_inputs(store, &*lease);  // a compare job's jobs A and B
   return json_response(200, lease->to_json());
 }
 

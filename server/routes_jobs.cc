@@ -15,6 +15,8 @@ namespace {
 
 constexpr size_t kMaxIdempotencyKey = 200;
 
+}  // namespace
+
 std::string idempotency_key(const Request& request) {
   std::string key = request.headers.get("Idempotency-Key").value_or("");
   if (key.size() > kMaxIdempotencyKey)
@@ -27,6 +29,8 @@ std::string idempotency_key(const Request& request) {
                          "Idempotency-Key: only visible ASCII characters are allowed");
   return key;
 }
+
+namespace {
 
 nlohmann::json jobs_json(const std::vector<proto::Job>& jobs) {
   nlohmann::json out = nlohmann::json::array();

@@ -139,21 +139,41 @@ pipeline::JobSpec LeasedJob::prepare() {
   pipeline::JobSpec spec;
   const proto::Mission& mission = lease_.mission;
 
-  log("fetching mission bundle " + mission.bundle_blob);
-  const fs::path bundle = blobs_.fetch(api_, mission.bundle_blob);
-  check_stop("bundle download");
-  try {
-    spec.mission_dir = pipeline::unpack_bundle(bundle, job_dir_ / "mission");
-  } catch (const pipeline::BundleError& e) {
-    // Name the bundle by its blob id, not by this worker's cache path.
-    std::string message = e.what();
-    const std::string prefix = bundle.string() + ": ";
-    if (message.rfind(prefix, 0) == 0) message = message.substr(prefix.size());
-    throw std::runtime_error("mission bundle " + mission.bundle_blob + ": " + message);
+  // A compare job reads two finished jobs' artifacts, not the mission (issue 16).
+  const bool compare_only =
+      std::all_of(lease_.job.stages.begin(), lease_.job.stages.end(),
+                  [](const std::string& stage) { return stage == "compare"; });
+  for (size_t i = 0; i < lease_.inputs.size(); ++i) {
+    const proto::LeaseInput& input = lease_.inputs[i];
+    pipeline::InputJob job;
+    job.dir = job_dir_ / (i == 0 ? "input_a" : "input_b");
+    job.job = input.job.to_json();
+    fs::create_directories(job.dir);
+    log("fetching " + std::to_string(input.artifacts.size()) + " artifacts of job " + input.job.id);
+    for (const auto& artifact : input.artifacts)
+      api_.download("/v1/artifacts/" + artifact.id,
+                    job.dir / plain_file_name(artifact.name, "artifact name"), artifact.sha256);
+    check_stop("input download");
+    spec.input_jobs.push_back(std::move(job));
   }
-  check_stop("bundle unpack");
 
-  if (!mission.cad_blob.empty()) {
+  if (!compare_only) {
+    log("fetching mission bundle " + mission.bundle_blob);
+    const fs::path bundle = blobs_.fetch(api_, mission.bundle_blob);
+    check_stop("bundle download");
+    try {
+      spec.mission_dir = pipeline::unpack_bundle(bundle, job_dir_ / "mission");
+    } catch (const pipeline::BundleError& e) {
+      // Name the bundle by its blob id, not by this worker's cache path.
+      std::string message = e.what();
+      const std::string prefix = bundle.string() + ": ";
+      if (message.rfind(prefix, 0) == 0) message = message.substr(prefix.size());
+      throw std::runtime_error("mission bundle " + mission.bundle_blob + ": " + message);
+    }
+    check_stop("bundle unpack");
+  }
+
+  if (!compare_only && !mission.cad_blob.empty()) {
     log("fetching CAD mesh " + mission.cad_blob);
     const fs::path cad = blobs_.fetch(api_, mission.cad_blob);
     const std::string name =
