@@ -1,6 +1,7 @@
 #include "server/http_server.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/socket.h>
 #include <boost/asio/bind_executor.hpp>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/io_context.hpp>
@@ -10,11 +11,10 @@
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
-#include <sys/socket.h>
 
 #include <array>
-#include <cerrno>
 #include <atomic>
+#include <cerrno>
 #include <condition_variable>
 #include <map>
 #include <mutex>
@@ -182,7 +182,8 @@ class Session : public std::enable_shared_from_this<Session> {
   std::function<void()> waker(void (Session::*method)()) {
     std::weak_ptr<Session> weak = weak_from_this();
     return [weak, method] {
-      if (auto self = weak.lock()) net::post(self->executor(), [self, method] { ((*self).*method)(); });
+      if (auto self = weak.lock())
+        net::post(self->executor(), [self, method] { ((*self).*method)(); });
     };
   }
 
@@ -243,7 +244,8 @@ class Session : public std::enable_shared_from_this<Session> {
     auto serializer = std::make_shared<http::response_serializer<http::empty_body>>(*header);
     stream_.expires_after(core_.options.write_timeout);
     http::async_write_header(
-        stream_, *serializer, [self = shared_from_this(), header, serializer](error_code ec, size_t) {
+        stream_, *serializer,
+        [self = shared_from_this(), header, serializer](error_code ec, size_t) {
           if (ec) return self->end_stream(false);
           self->timer_.emplace(self->stream_.get_executor());
           self->event_stream_->start(self->waker(&Session::pump_stream));
@@ -517,6 +519,10 @@ void HttpServer::stop() {
   impl.io_context.stop();
   for (auto& thread : impl.threads) thread.join();
   impl.threads.clear();
+  // The close posted above may not have run before io_context.stop(); with no thread left
+  // the acceptor is ours to close, so the port refuses connections once stop() returns.
+  error_code ignored;
+  impl.acceptor.close(ignored);
 }
 
 }  // namespace keel::server

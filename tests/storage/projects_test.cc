@@ -62,8 +62,11 @@ TEST_F(ProjectTest, TokensCarryRoleProjectExpiryAndRevocation) {
 
   const auto tokens = store_->list_tokens();
   ASSERT_EQ(tokens.size(), 2u);
-  EXPECT_EQ(tokens[0].id, submitter.id);
-  EXPECT_EQ(tokens[0].revoked_at_ms, clock_.now_ms());
+  // Both were made in the same millisecond, so their order is by random id: find by id.
+  const auto listed = std::find_if(tokens.begin(), tokens.end(),
+                                   [&](const proto::TokenInfo& t) { return t.id == submitter.id; });
+  ASSERT_NE(listed, tokens.end());
+  EXPECT_EQ(listed->revoked_at_ms, clock_.now_ms());
 
   EXPECT_THROW(store_->add_token("x", spec(proto::Role::kViewer, "*")), Invalid);
   EXPECT_THROW(store_->add_token("y", spec(proto::Role::kSubmitter, "Bad Name")), Invalid);
@@ -302,10 +305,13 @@ TEST(ProjectMigration, VersionTwoDataMovesIntoDefault) {
     ASSERT_EQ(apply_migrations(db, v2), 2);
     const std::string sha(64, 'a');
     db.exec("INSERT INTO blobs VALUES ('" + sha + "', 3, 0)");
-    db.exec("INSERT INTO missions (id, name, bundle_blob, created_at_ms) VALUES "
-            "('m_0000000000000001', 'old', '" + sha + "', 1)");
-    db.exec("INSERT INTO jobs (id, mission_id, state, stages, options, created_at_ms) VALUES "
-            "('j_0000000000000001', 'm_0000000000000001', 'queued', '[\"ingest\"]', '{}', 2)");
+    db.exec(
+        "INSERT INTO missions (id, name, bundle_blob, created_at_ms) VALUES "
+        "('m_0000000000000001', 'old', '" +
+        sha + "', 1)");
+    db.exec(
+        "INSERT INTO jobs (id, mission_id, state, stages, options, created_at_ms) VALUES "
+        "('j_0000000000000001', 'm_0000000000000001', 'queued', '[\"ingest\"]', '{}', 2)");
     db.exec("INSERT INTO api_tokens VALUES ('" + sha256_bytes(token) + "', 'initial', 3)");
   }
   auto store = open_sqlite_store(dir.path());
