@@ -70,7 +70,7 @@ Response file_response(const Request& request, const StoredFile& file) {
   if (is_token_safe(file.download_name))
     response.headers.set("Content-Disposition",
                          "attachment; filename=\"" + file.download_name + "\"");
-  response.file = FileRegion{file.path, span.offset, span.length};
+  response.file = FileRegion{file.path, file.offset + span.offset, span.length};
   return response;
 }
 

@@ -13,7 +13,8 @@ namespace keel::server {
 struct StoredFile {
   std::filesystem::path path;
   uint64_t size = 0;
-  std::string sha256;
+  uint64_t offset = 0;  // where the served bytes start in `path` (a member of a tar)
+  std::string sha256;   // the ETag's value
   std::string content_type = "application/octet-stream";
   std::string download_name;  // for Content-Disposition, "" = none
 };

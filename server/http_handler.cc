@@ -23,7 +23,8 @@ struct Route {
   routes::RouteFn fn;
 };
 
-// Order matters only for readability: patterns do not overlap.
+// Order matters only for readability: patterns do not overlap. "**" (last) matches the rest of
+// the path, one segment or more, joined by '/'.
 const Route kRoutes[] = {
     {"GET", "healthz", routes::healthz},
     {"GET", "metrics", routes::metrics},
@@ -47,6 +48,7 @@ const Route kRoutes[] = {
     {"GET", "v1/jobs/*/artifacts", routes::list_job_artifacts},
     {"POST", "v1/reprocess", routes::reprocess},
     {"GET", "v1/artifacts/*", routes::get_artifact},
+    {"GET", "v1/artifacts/*/files/**", routes::get_artifact_file},
     {"GET", "v1/batches/*", routes::get_batch},
     {"GET", "v1/events", routes::job_events},
     {"GET", "v1/queue", routes::queue_summary},
@@ -70,6 +72,12 @@ bool match(const char* pattern, const std::vector<std::string>& segments,
     std::string_view part = rest.substr(0, slash);
     rest = slash == std::string_view::npos ? std::string_view() : rest.substr(slash + 1);
     if (index >= segments.size()) return false;
+    if (part == "**") {
+      std::string tail = segments[index];
+      for (size_t k = index + 1; k < segments.size(); ++k) tail += "/" + segments[k];
+      params.push_back(tail);
+      return true;
+    }
     if (part == "*")
       params.push_back(segments[index]);
     else if (part != segments[index])

@@ -53,6 +53,7 @@ Response retry_job(const Call& call);
 Response reprocess(const Call& call);
 Response list_job_artifacts(const Call& call);
 Response get_artifact(const Call& call);
+Response get_artifact_file(const Call& call);  // a member of a tar artifact
 
 Response get_batch(const Call& call);
 Response job_events(const Call& call);

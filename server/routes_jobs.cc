@@ -1,4 +1,5 @@
-// Jobs: create (Idempotency-Key), list, get, log, cancel, retry, reprocess, artifacts.
+// Jobs: create (Idempotency-Key), list, get, log, cancel, retry, reprocess, artifacts (and the
+// members of tar artifacts).
 #include <algorithm>
 #include <chrono>
 
@@ -8,6 +9,7 @@
 #include "server/file_response.h"
 #include "server/job_events.h"
 #include "server/routes.h"
+#include "server/tar_index.h"
 
 namespace keel::server::routes {
 
@@ -154,6 +156,33 @@ Response list_job_artifacts(const Call& call) {
   for (const auto& artifact : call.store.list_artifacts(id))
     artifacts.push_back(artifact.to_json());
   return json_response(200, {{"artifacts", artifacts}});
+}
+
+Response get_artifact_file(const Call& call) {
+  proto::Artifact artifact = call.store.get_artifact(call.params[0]);
+  require_reach(call, artifact.project, "artifact " + call.params[0] + " not found");
+  const std::string& member = call.params[1];
+  const auto path = call.store.blob_path(artifact.sha256);
+  const auto size = static_cast<uint64_t>(call.store.blob_size(artifact.sha256));
+  std::shared_ptr<const TarIndex> index;
+  try {
+    index = cached_tar_index(artifact.sha256, path, size, "artifact '" + artifact.name + "'");
+  } catch (const TarIndexError& e) {
+    throw ApiException(404, "not_found", std::string(e.what()) + ": it has no files to serve");
+  }
+  const auto found = index->find(member);
+  if (found == index->end())
+    throw ApiException(404, "not_found",
+                       "artifact '" + artifact.name + "' has no member '" + member + "'");
+  StoredFile file;
+  file.path = path;
+  file.offset = found->second.offset;
+  file.size = found->second.size;
+  // Unique per member of this content (the tar never changes), and free of quotes.
+  file.sha256 = artifact.sha256 + ":" + std::to_string(found->second.offset);
+  file.content_type = content_type_for(member);
+  file.download_name = member.substr(member.find_last_of('/') + 1);
+  return file_response(call.request, file);
 }
 
 Response get_artifact(const Call& call) {

@@ -58,18 +58,13 @@ void write_parts(const std::filesystem::path& path, const std::vector<const Poin
   const Properties has = properties_of(parts);
   check_scalar_fields(point_fields, n, {"x", "y", "z", "intensity", "ring", "time"});
 
-  std::string header = "element vertex " + std::to_string(n) + "\n";
-  header += "property float x\nproperty float y\nproperty float z\n";
-  if (has.intensity) header += "property float intensity\n";
-  if (has.ring) header += "property ushort ring\n";
-  if (has.time) header += "property float time\n";
-  for (const auto& field : point_fields) header += "property float " + field.name + "\n";
+  std::vector<std::string> field_names;
+  for (const auto& field : point_fields) field_names.push_back(field.name);
+  const std::string header = ply_cloud_header(n, has.intensity, has.ring, has.time, field_names);
 
   const size_t point_bytes = 12 + (has.intensity ? 4 : 0) + (has.ring ? 2 : 0) +
                              (has.time ? 4 : 0) + 4 * point_fields.size();
   ReplacedFile file(path);
-  header =
-      "ply\nformat binary_little_endian 1.0\ncomment written by keel\n" + header + "end_header\n";
   file.append(header.data(), header.size());
   std::vector<char> chunk(kChunkPoints * point_bytes);
   char* at = chunk.data();
@@ -92,6 +87,18 @@ void write_parts(const std::filesystem::path& path, const std::vector<const Poin
 }
 
 }  // namespace
+
+std::string ply_cloud_header(uint64_t points, bool intensity, bool ring, bool time,
+                             const std::vector<std::string>& fields) {
+  std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by keel\n";
+  header += "element vertex " + std::to_string(points) + "\n";
+  header += "property float x\nproperty float y\nproperty float z\n";
+  if (intensity) header += "property float intensity\n";
+  if (ring) header += "property ushort ring\n";
+  if (time) header += "property float time\n";
+  for (const auto& field : fields) header += "property float " + field + "\n";
+  return header + "end_header\n";
+}
 
 void write_ply_cloud(const std::filesystem::path& path, const PointCloud& cloud,
                      const std::vector<ScalarField>& point_fields) {

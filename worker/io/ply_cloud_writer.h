@@ -2,7 +2,9 @@
 // `density`, ...), for tools without Draco.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "worker/core/point_cloud.h"
@@ -21,5 +23,10 @@ void write_ply_cloud(const std::filesystem::path& path, const PointCloud& cloud,
 // time written when every non-empty part has them).
 void write_ply_cloud(const std::filesystem::path& path,
                      const std::vector<const PointCloud*>& parts);
+
+// The header write_ply_cloud writes for `points` points with those properties, for writers
+// that stream a cloud in parts.
+std::string ply_cloud_header(uint64_t points, bool intensity, bool ring, bool time,
+                             const std::vector<std::string>& fields = {});
 
 }  // namespace keel::io

@@ -4,7 +4,9 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "worker/core/point_cloud.h"
 
@@ -58,5 +60,15 @@ size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads = 2);
 
 // DROR's search radius for a point at horizontal range r_xy_m.
 double dror_search_radius(const DrorFilter& filter, double r_xy_m);
+
+// The same decisions as masks over `points` (1: kept), for callers that carry other per-point
+// data along (the tiled filters' ownership flags).
+std::vector<uint8_t> crop_box_keep(const CropBoxFilter& filter,
+                                   const std::vector<Eigen::Vector3f>& points);
+std::vector<uint8_t> radius_outlier_keep(const RadiusOutlierFilter& filter,
+                                         const std::vector<Eigen::Vector3f>& points,
+                                         int threads = 2);
+std::vector<uint8_t> dror_keep(const DrorFilter& filter, const std::vector<Eigen::Vector3f>& points,
+                               int threads = 2);
 
 }  // namespace keel::mapping

@@ -15,6 +15,7 @@
 namespace keel::mapping {
 
 struct MapBuilder::SensorState {
+  std::string name;
   SensorMapOptions options;
   SensorMapStats stats;
   PointCloud batch;  // the current intermediary map, in W (Eq. (22))
@@ -110,9 +111,10 @@ MapBuilder::SensorState& MapBuilder::state_for(const std::string& sensor) {
   auto found = states_.find(sensor);
   if (found != states_.end()) return *found->second;
   auto state = std::make_unique<SensorState>();
+  state->name = sensor;
   const auto listed = options_.sensors.find(sensor);
   state->options = listed != options_.sensors.end() ? listed->second : options_.default_sensor;
-  if (starts_with_voxel_grid(state->options.final_filters)) {
+  if (starts_with_voxel_grid(state->options.final_filters) && !options_.final_sink) {
     const double leaf_m =
         std::get<VoxelGridFilter>(state->options.final_filters.filters.front()).leaf_m;
     state->voxel_map.emplace(leaf_m, leaf_m * options_.final_voxel_merge_radius_leaves);
@@ -309,7 +311,9 @@ void MapBuilder::flush_intermediary(SensorState& state) {
   add_steps(state.stats.intermediary_stage,
             apply_filter_chain(state.options.intermediary_filters, state.batch, options_.threads));
   ++state.stats.intermediary_maps;
-  if (state.voxel_map) {
+  if (options_.final_sink) {
+    options_.final_sink(state.name, state.batch);
+  } else if (state.voxel_map) {
     state.voxel_map->add(state.batch);
   } else {
     append_points(state.map, state.batch);
@@ -324,6 +328,7 @@ void MapBuilder::finish() {
   for (auto& [sensor, state_ptr] : states_) {
     SensorState& state = *state_ptr;
     flush_intermediary(state);  // the last, partial intermediary map
+    if (options_.final_sink) continue;  // stage 3 runs on the sink's side
     // Stage 3 on the sensor's map.
     FilterChain rest = state.options.final_filters;
     std::vector<FilterStep> steps;

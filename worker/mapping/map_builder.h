@@ -57,6 +57,10 @@ struct MapBuilderOptions {
   // VoxelAccumulator::kMaxMergeLeaves.
   double final_voxel_merge_radius_leaves = 0.0;
   int threads = 2;
+  // When set, each intermediary map, filtered, goes here (in feed order, from the committing
+  // thread) instead of into the sensor's map: the final filters then run elsewhere (the map
+  // stage's tiles, out of core), and sensor_map() stays empty.
+  std::function<void(const std::string& sensor, const PointCloud& points)> final_sink;
 };
 
 // Per-filter counts of one stage, summed over every application (same order as the chain).

@@ -315,8 +315,10 @@ double quantile(std::vector<float>* values, double p, size_t* selected) {
 
 }  // namespace
 
-PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
-                                   const MapMetricsOptions& options) {
+namespace {
+
+void check_metrics_input(const std::vector<Eigen::Vector3f>& points,
+                         const MapMetricsOptions& options) {
   if (!std::isfinite(options.radius_m) || options.radius_m <= 0.0 ||
       options.radius_m > kMaxMetricsRadiusM) {
     throw std::invalid_argument("map metrics: radius must lie in (0, " +
@@ -328,16 +330,18 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
       throw std::invalid_argument("map metrics: point " + std::to_string(k) + " is not finite");
     }
   }
-  PointMetrics out;
-  const size_t queries = options.max_query_points > 0
-                             ? std::min(options.max_query_points, points.size())
-                             : points.size();
-  out.query_index.resize(queries);
-  for (size_t q = 0; q < queries; ++q) out.query_index[q] = q * points.size() / queries;  // strided
+}
+
+// The metrics of out.query_index's points, `query_of(input)` giving the query reading input
+// point `input` (kNotQueried if none).
+template <typename QueryOf>
+void compute_queries(const std::vector<Eigen::Vector3f>& points, const QueryOf& query_of,
+                     const MapMetricsOptions& options, PointMetrics& out) {
+  const size_t queries = out.query_index.size();
   out.surface_density.assign(queries, kUndefined);
   out.roughness.assign(queries, kUndefined);
   out.planarity.assign(queries, kUndefined);
-  if (queries == 0) return out;
+  if (queries == 0) return;
 
   // Cells of side r: every neighbour of a point of cell c lies in the 3 x 3 x 3 block around
   // c, gathered once for all of c's queries.
@@ -351,7 +355,7 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
     Scratch* s = &scratches[worker];
     bool any_query = false;
     for (uint32_t i = grid.begin(c); !any_query && i < grid.end(c); ++i) {
-      any_query = query_of(grid.input_index()[i], points.size(), queries) != kNotQueried;
+      any_query = query_of(grid.input_index()[i]) != kNotQueried;
     }
     if (!any_query) return;
     if (options.check_canceled) options.check_canceled();
@@ -359,7 +363,7 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
     gather_block(grid, *s);
     for (uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
       const uint32_t input = grid.input_index()[i];
-      const uint32_t q = query_of(input, points.size(), queries);
+      const uint32_t q = query_of(input);
       if (q == kNotQueried) continue;
       const size_t n = select_neighbours(grid.x()[i], grid.y()[i], grid.z()[i], squared_radius, *s);
       out.surface_density[q] = static_cast<float>(n / area);  // Eq. (23)
@@ -368,6 +372,40 @@ PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
       out.planarity[q] = metrics.planarity;
     }
   });
+}
+
+}  // namespace
+
+PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
+                                   const MapMetricsOptions& options) {
+  check_metrics_input(points, options);
+  PointMetrics out;
+  const size_t queries = options.max_query_points > 0
+                             ? std::min(options.max_query_points, points.size())
+                             : points.size();
+  out.query_index.resize(queries);
+  for (size_t q = 0; q < queries; ++q) out.query_index[q] = q * points.size() / queries;  // strided
+  compute_queries(
+      points, [&](uint64_t input) { return query_of(input, points.size(), queries); }, options,
+      out);
+  return out;
+}
+
+PointMetrics compute_point_metrics_at(const std::vector<Eigen::Vector3f>& points,
+                                      const std::vector<size_t>& queries,
+                                      const MapMetricsOptions& options) {
+  check_metrics_input(points, options);
+  std::vector<uint32_t> query_of_input(points.size(), kNotQueried);
+  for (size_t q = 0; q < queries.size(); ++q) {
+    if (queries[q] >= points.size() || (q > 0 && queries[q] <= queries[q - 1]))
+      throw std::invalid_argument("map metrics: query indices must be ascending and below " +
+                                  std::to_string(points.size()));
+    query_of_input[queries[q]] = static_cast<uint32_t>(q);
+  }
+  PointMetrics out;
+  out.query_index = queries;
+  compute_queries(
+      points, [&](uint32_t input) { return query_of_input[input]; }, options, out);
   return out;
 }
 

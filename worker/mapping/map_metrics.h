@@ -73,6 +73,12 @@ struct MapMetrics {
 // Throws std::invalid_argument for a non-positive radius or non-finite points.
 PointMetrics compute_point_metrics(const std::vector<Eigen::Vector3f>& points,
                                    const MapMetricsOptions& options = {});
+// The same for the given query points only (indices into `points`, ascending); every point is
+// a neighbour (a tile's points and its halo, with the tile's queries). max_query_points is
+// ignored.
+PointMetrics compute_point_metrics_at(const std::vector<Eigen::Vector3f>& points,
+                                      const std::vector<size_t>& queries,
+                                      const MapMetricsOptions& options = {});
 Distribution summarize(const std::vector<float>& values, int histogram_bins);
 MapMetrics compute_map_metrics(const PointCloud& map, const MapMetricsOptions& options = {});
 

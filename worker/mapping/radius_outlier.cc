@@ -29,36 +29,43 @@ double dror_search_radius(const DrorFilter& filter, double r_xy_m) {
   return std::max(filter.beta * alpha_rad * r_xy_m, filter.sr_min_m);
 }
 
-size_t apply_radius_outlier(const RadiusOutlierFilter& filter, PointCloud& cloud, int threads) {
+std::vector<uint8_t> radius_outlier_keep(const RadiusOutlierFilter& filter,
+                                         const std::vector<Eigen::Vector3f>& points, int threads) {
   check_positive(filter.radius_m, "ror.radius");
   if (filter.min_neighbors < 0) throw std::invalid_argument("ror.min_neighbors: expected >= 0");
-  if (cloud.empty() || filter.min_neighbors == 0) return 0;
-  const RadiusSearch search(cloud.xyz);
+  if (points.empty() || filter.min_neighbors == 0) return std::vector<uint8_t>(points.size(), 1);
+  const RadiusSearch search(points);
   // The count includes the point itself, hence min_neighbors + 1 (PCL's k = min_pts + 1).
   const int needed = filter.min_neighbors + 1;
-  std::vector<uint8_t> keep(cloud.size());
+  std::vector<uint8_t> keep(points.size());
   const std::vector<uint32_t>& order = search.spatial_order();  // cache-friendly query order
-  parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
+  parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       keep[order[i]] = search.count_around(i, filter.radius_m, needed) >= needed;
     }
   });
-  return keep_points(cloud, keep);
+  return keep;
 }
 
-size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads) {
+size_t apply_radius_outlier(const RadiusOutlierFilter& filter, PointCloud& cloud, int threads) {
+  return keep_points(cloud, radius_outlier_keep(filter, cloud.xyz, threads));
+}
+
+std::vector<uint8_t> dror_keep(const DrorFilter& filter, const std::vector<Eigen::Vector3f>& points,
+                               int threads) {
   check_positive(filter.beta, "dror.beta");
   check_positive(filter.alpha_deg, "dror.alpha");
   check_positive(filter.sr_min_m, "dror.sr_min");
   if (filter.k_min < 0) throw std::invalid_argument("dror.k_min: expected >= 0");
-  if (cloud.empty() || filter.k_min <= 1) return 0;  // every point counts itself
-  const RadiusSearch search(cloud.xyz);
-  std::vector<uint8_t> keep(cloud.size());
+  // Every point counts itself.
+  if (points.empty() || filter.k_min <= 1) return std::vector<uint8_t>(points.size(), 1);
+  const RadiusSearch search(points);
+  std::vector<uint8_t> keep(points.size());
   const std::vector<uint32_t>& order = search.spatial_order();
-  parallel_for(cloud.size(), threads, [&](size_t begin, size_t end) {
+  parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const uint32_t n = order[i];
-      const Eigen::Vector3f& p = cloud.xyz[n];
+      const Eigen::Vector3f& p = points[n];
       // sqrt of the (exact) double squares rather than std::hypot: hypot was 8 % of DROR's time;
       // the two differ by at most an ulp (the tests' ambiguity margin is 1e-5 m).
       const double x = p.x(), y = p.y();
@@ -67,7 +74,11 @@ size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads) {
       keep[n] = search.count_around(i, radius, filter.k_min) >= filter.k_min;
     }
   });
-  return keep_points(cloud, keep);
+  return keep;
+}
+
+size_t apply_dror(const DrorFilter& filter, PointCloud& cloud, int threads) {
+  return keep_points(cloud, dror_keep(filter, cloud.xyz, threads));
 }
 
 }  // namespace keel::mapping

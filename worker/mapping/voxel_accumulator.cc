@@ -204,6 +204,16 @@ PointCloud VoxelAccumulator::centroids(uint32_t min_hits) const {
   return out;
 }
 
+std::vector<VoxelKey> VoxelAccumulator::voxels() const {
+  std::vector<VoxelKey> keys;
+  keys.reserve(size_);
+  for (size_t index = 0; index < size_; ++index) {
+    const Entry& e = entry(index);
+    keys.push_back(VoxelKey{e.i, e.j, e.k});
+  }
+  return keys;
+}
+
 size_t VoxelAccumulator::voxel_count(uint32_t min_hits) const {
   if (min_hits <= 1) return size_;
   size_t kept = 0;

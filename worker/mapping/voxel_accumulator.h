@@ -69,6 +69,8 @@ class VoxelAccumulator {
   // voxels were first occupied (so one pass over a cloud and any split of it into consecutive
   // batches give the same output; with merging, as long as the point order is kept).
   PointCloud centroids(uint32_t min_hits = 1) const;
+  // The index of each occupied voxel, in the order of centroids() (min_hits 1).
+  std::vector<VoxelKey> voxels() const;
   // Voxels holding at least `min_hits` points.
   size_t voxel_count(uint32_t min_hits) const;
 

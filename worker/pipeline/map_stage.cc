@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <optional>
 
@@ -39,6 +40,8 @@
 #include "worker/mapping/voxel_accumulator.h"
 #include "worker/pipeline/output_runner.h"
 #include "worker/pipeline/refine_stage.h"
+#include "worker/pipeline/tiled_maps.h"
+#include "worker/pipeline/tiled_outputs.h"
 
 namespace keel::pipeline {
 
@@ -59,6 +62,32 @@ void require(bool ok, const std::string& option, const std::string& expected) {
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+
+// The stage's peak RSS: the kernel's high-water mark, reset when the stage starts (writing 5
+// to /proc/self/clear_refs), so an earlier stage of the same process does not count.
+void reset_peak_rss() {
+  std::ofstream clear("/proc/self/clear_refs");
+  clear << "5";
+}
+double peak_rss_mib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+  return 0.0;
+}
+
+// How the memory budget (map.memory_budget_mb) is shared: the spill store's buffers, the
+// tiles being filtered or read (one per thread), and the output tasks (Draco files of maps
+// that fit). What the scans hold (a few scans per thread, one intermediary map per sensor,
+// the mission's poses) is outside it.
+constexpr double kSpillShare = 0.25;
+constexpr double kTileShare = 0.25;
+constexpr double kOutputShare = 0.5;
+// Bytes per point of a map gathered in memory for its Draco file (positions and intensity).
+constexpr double kGatheredBytesPerPoint = 16.0;
+// Finest LOD tiles hold at most this many points (1.6 MB .pnts files).
+constexpr size_t kLodMaxPointsPerTile = 100000;
 
 json span_json(const Trajectory& poses) {
   if (poses.empty()) return {{"poses", 0}};
@@ -254,20 +283,8 @@ constexpr double kDracoCheckBytesPerPoint = 35.0;
 constexpr double kMetricsSecondsPerPoint = 0.15e-6;
 constexpr double kMetricsBytesPerPoint = 29.0;
 constexpr double kPlySecondsPerPoint = 0.05e-6;
-
-OutputTask draco_task(const std::string& map, size_t points, std::function<void()> run) {
-  return {"draco " + map, kDracoSecondsPerPoint * points, kDracoBytesPerPoint * points,
-          std::move(run)};
-}
-OutputTask ply_task(const std::string& map, size_t points, std::function<void()> run) {
-  return {"ply " + map, kPlySecondsPerPoint * points, 0.0, std::move(run)};
-}
-// `extra_bytes`: what the task allocates besides the cell grid.
-OutputTask metrics_task(const std::string& map, size_t points, size_t extra_bytes,
-                        std::function<void()> run) {
-  return {"metrics " + map, kMetricsSecondsPerPoint * points,
-          kMetricsBytesPerPoint * points + static_cast<double>(extra_bytes), std::move(run)};
-}
+// LOD tiles: the octree's splits and thinning, the .pnts encoding (estimate, per map point).
+constexpr double kLodSecondsPerPoint = 0.15e-6;
 
 // One map's artifacts and their figures for the report.
 struct MapOutput {
@@ -306,14 +323,51 @@ MapOutput write_map_draco(const io::DracoEncoded& encoded, size_t points,
   return out;
 }
 
-// Writes map_<name>.ply (a map, or a combined map as its parts); report {"ply": {...}}.
-template <typename Map>
-MapOutput write_map_ply(const Map& map, const std::string& name, const fs::path& work_dir) {
+// Writes map_<name>.ply from the tiles of `parts`; report {"ply": {...}}.
+MapOutput write_tiled_map_ply(TiledMaps& tiled, const std::vector<std::string>& parts,
+                              const std::string& name, const fs::path& work_dir,
+                              const std::function<void()>& check_canceled) {
   MapOutput out;
-  io::write_ply_cloud(work_dir / map_ply_file(name), map);
+  write_tiled_ply(tiled, parts, tiled.output_partition(parts), work_dir / map_ply_file(name),
+                  check_canceled);
   out.artifacts.push_back(map_ply_file(name));
   out.report["ply"] = {{"file", map_ply_file(name)},
                        {"bytes", fs::file_size(work_dir / map_ply_file(name))}};
+  return out;
+}
+
+// Writes tiles_<name>.tar, the LOD tileset of `parts`; report {"tiles": {...}}.
+MapOutput write_map_tiles(TiledMaps& tiled, const std::vector<std::string>& parts,
+                          const std::string& name, const fs::path& work_dir,
+                          const std::function<void()>& check_canceled) {
+  mapping::LodOptions lod;
+  lod.max_points_per_tile = kLodMaxPointsPerTile;
+  lod.min_edge_m = tiled.output_grid().unit_m();
+  const MapTilesetResult result =
+      write_tiled_tileset(tiled, parts, tiled.output_partition(parts), name,
+                          work_dir / map_tiles_file(name), lod, check_canceled);
+  MapOutput out;
+  out.artifacts.push_back(map_tiles_file(name));
+  out.report["tiles"] = {
+      {"file", map_tiles_file(name)}, {"format", "3D Tiles 1.0, pnts (docs/artifacts.md)"},
+      {"tiles", result.tiles},        {"points", result.points},
+      {"bytes", result.bytes},        {"max_points_per_tile", lod.max_points_per_tile},
+      {"seconds", result.seconds}};
+  return out;
+}
+
+// A map whose single Draco file would not fit the memory budget: its report says so.
+MapOutput draco_not_written(size_t points, double needed_bytes, double budget_bytes) {
+  MapOutput out;
+  out.report = {{"points", points},
+                {"draco",
+                 {{"written", false},
+                  {"reason", "one Draco file of " + std::to_string(points) + " points needs ~" +
+                                 std::to_string(static_cast<long long>(needed_bytes / (1 << 20))) +
+                                 " MiB to encode, over the " +
+                                 std::to_string(static_cast<long long>(budget_bytes / (1 << 20))) +
+                                 " MiB the budget leaves the outputs (map.memory_budget_mb); "
+                                 "the map is whole in its PLY file and LOD tiles"}}}};
   return out;
 }
 
@@ -330,17 +384,18 @@ struct MetricsColumn {
   double seconds = 0.0;
 };
 
-MetricsColumn measure(const std::string& name, const PointCloud& map,
-                      const MapStageOptions& options, const StageContext& context) {
+// The metrics of the map made of `parts`, from its tiles.
+MetricsColumn measure_tiled(const std::string& name, TiledMaps& tiled,
+                            const std::vector<std::string>& parts, const MapStageOptions& options,
+                            const StageContext& context) {
   mapping::MapMetricsOptions metrics_options;
   metrics_options.check_canceled = [&context] { context.check_canceled(); };
   metrics_options.radius_m = options.metrics_radius_m;
-  // All threads, although the metrics run as an output task beside others: the last tasks
-  // then still use every core (the figures do not depend on the thread count).
   metrics_options.threads = options.threads;
   metrics_options.max_query_points = options.metrics_max_points;
   const auto start = std::chrono::steady_clock::now();
-  MetricsColumn column{name, mapping::compute_map_metrics(map, metrics_options), 0.0};
+  MetricsColumn column{
+      name, tiled_map_metrics(tiled, parts, tiled.output_partition(parts), metrics_options), 0.0};
   column.seconds = seconds_since(start);
   return column;
 }
@@ -425,7 +480,9 @@ class MapRun {
   explicit MapRun(StageContext& context)
       : context_(context),
         stage_start_(std::chrono::steady_clock::now()),
-        options_(MapStageOptions::from_json(context.options)) {}
+        options_(MapStageOptions::from_json(context.options)) {
+    reset_peak_rss();
+  }
 
   StageResult run() {
     try {
@@ -455,6 +512,7 @@ class MapRun {
     collect_artifacts(out);
     r["metrics"] = metrics_report();
     r["timing"] = timing_report();
+    r["memory"] = memory_report();
     r["warnings"] = warnings_;
     task_log_->flush(context_.log);
     context_.log("map: outputs and metrics " + std::to_string(seconds_since(outputs_start_)) +
@@ -485,6 +543,7 @@ class MapRun {
     poses_ = build_poses(reader, options_, context_);
     tree_.emplace(poses_.T_world_body, "map poses");
     builder_options_ = map_builder_options(options_, selection_);
+    make_tiled_maps();
     for (const auto& s : selection_.mapped) tree_->set_extrinsic(s.name, s.T_body_sensor);
     // One MapBuilder per sensor (a sensor's map depends on its own scans only, Fig. 5): a
     // sensor's outputs start once its last scan is in, while the next sensors scan.
@@ -521,6 +580,7 @@ class MapRun {
     for (const auto& s : selection_.mapped) {  // result slots, made before any task runs
       drc_[s.name];
       ply_[s.name];
+      tiles_[s.name];
     }
     runner_.emplace(*task_log_);
     // Early outputs take one thread beside the scans' `threads` (none when threads = 1).
@@ -571,9 +631,20 @@ class MapRun {
   // A sensor's scans are all in: its map (and the SLAM map) are final; `start_outputs`: queue
   // their tasks now, beside the next sensors' scans.
   void finish_sensor(const MappedSensor& sensor, bool start_outputs) {
-    builders_.at(sensor.name)->finish();
+    mapping::MapBuilder& builder = *builders_.at(sensor.name);
+    builder.finish();
+    if (!builder.sensors().empty()) {
+      // With the merge rule the builder made the final map; it goes to the tiles whole.
+      if (merging()) tiled_->add_final_input(sensor.name, builder.sensor_map(sensor.name));
+      filter_tiles(sensor.name);
+    }
     const bool is_slam_sensor = slam_ && sensor.name == slam_sensor_->name;
-    if (is_slam_sensor) slam_map_ = slam_->finish();
+    if (is_slam_sensor) {
+      const PointCloud slam_map = slam_->finish();
+      slam_points_ = slam_map.size();
+      tiled_->add_slam_points(slam_map);
+      tiled_->finish_slam();
+    }
     if (!start_outputs) return;
     if (!builders_.at(sensor.name)->sensors().empty()) {
       runner_->add(guarded(sensor_tasks(sensor.name)));
@@ -585,8 +656,60 @@ class MapRun {
     }
   }
 
-  const PointCloud& sensor_map(const std::string& name) const {
-    return builders_.at(name)->sensor_map(name);
+  bool merging() const { return options_.final_voxel_merge_radius_leaves > 0.0; }
+
+  // The out-of-core maps: each sensor's final chain runs on its tiles (with the merge rule,
+  // which depends on the order of the whole stream, the builder runs it and the tiles only
+  // hold the result).
+  void make_tiled_maps() {
+    const double budget = static_cast<double>(options_.memory_budget_mb) * (1 << 20);
+    TiledMapsOptions tiles;
+    tiles.buffer_budget_bytes = static_cast<size_t>(budget * kSpillShare);
+    tiles.tile_budget_bytes = static_cast<size_t>(budget * kTileShare / options_.threads);
+    tiles.threads = options_.threads;
+    tiles.output_halo_m = options_.metrics_radius_m;
+    std::vector<std::pair<std::string, mapping::FilterChain>> chains;
+    for (const auto& s : selection_.mapped)
+      chains.emplace_back(s.name, merging() ? mapping::FilterChain{}
+                                            : builder_options_.sensors.at(s.name).final_filters);
+    tiled_ = std::make_unique<TiledMaps>(context_.work_dir, chains, tiles);
+    output_budget_ = budget * kOutputShare;
+    if (!merging())
+      builder_options_.final_sink = [this](const std::string& sensor, const PointCloud& points) {
+        tiled_->add_final_input(sensor, points);
+      };
+  }
+
+  // The sensor's final filters over its tiles; a budget too small for a tile names the option.
+  void filter_tiles(const std::string& sensor) {
+    try {
+      tiled_->filter_sensor(sensor, [this] { context_.check_canceled(); });
+    } catch (const TileBudgetError& e) {
+      throw_budget_error(e);
+    }
+  }
+
+  [[noreturn]] void throw_budget_error(const TileBudgetError& e) const {
+    const double minimum_mb =
+        std::ceil(e.minimum_bytes() * options_.threads / kTileShare / (1 << 20));
+    throw ContractError(
+        "options.map.memory_budget_mb: " + std::to_string(options_.memory_budget_mb) +
+        " MiB cannot hold one tile (" + e.what() + "); the smallest budget that would work is " +
+        std::to_string(static_cast<long long>(minimum_mb)) + " MiB");
+  }
+
+  size_t map_points(const std::string& name) const { return tiled_->points(name); }
+
+  // The builder's counts with the final stage as the tiles ran it (the whole map's counts).
+  mapping::SensorMapStats sensor_stats(const std::string& name) const {
+    mapping::SensorMapStats stats = builders_.at(name)->stats(name);
+    if (!merging()) {
+      const TiledFilterStats& tiled = tiled_->filter_stats(name);
+      stats.final_stage.applications = tiled.tiles;
+      stats.final_stage.steps = tiled.steps;
+    }
+    stats.points_out = map_points(name);
+    return stats;
   }
 
   // The report's `sensors` section (filters, stats, warnings_). Sets written_: the sensors
@@ -602,9 +725,10 @@ class MapRun {
         sensors[s.name] = entry;
         continue;
       }
-      const mapping::SensorMapStats& stats = builders_.at(s.name)->stats(s.name);
+      const mapping::SensorMapStats stats = sensor_stats(s.name);
       entry["stats"] = stats_json(stats);
-      if (sensor_map(s.name).empty()) {
+      entry["tiles"] = filter_tiles_json(s.name);
+      if (map_points(s.name) == 0) {
         warnings_.push_back("sensor '" + s.name + "': the map is empty (every point filtered, " +
                             "or every scan outside the trajectory); no artifacts written");
       } else if (std::find(written_.begin(), written_.end(), s.name) == written_.end()) {
@@ -618,10 +742,9 @@ class MapRun {
         warnings_.push_back("sensor '" + s.name + "': " + w);
       sensors[s.name] = entry;
     }
-    std::stable_sort(written_.begin(), written_.end(),
-                     [&](const std::string& a, const std::string& b) {
-                       return sensor_map(a).size() > sensor_map(b).size();
-                     });
+    std::stable_sort(
+        written_.begin(), written_.end(),
+        [&](const std::string& a, const std::string& b) { return map_points(a) > map_points(b); });
     return sensors;
   }
 
@@ -631,14 +754,14 @@ class MapRun {
       warnings_.push_back("no lidar mapped: no SLAM-map baseline");
       return nullptr;
     }
-    if (slam_map_.empty())
+    if (slam_points_ == 0)
       warnings_.push_back("SLAM map: no scan of '" + slam_sensor_->name +
                           "' matches a keyframe; no baseline");
     return {{"sensor", slam_sensor_->name},
             {"keyframes", slam_->keyframes()},
             {"keyframes_used", slam_->keyframes_used()},
             {"keyframe_leaf_m", options_.slam_keyframe_leaf_m},
-            {"points", slam_map_.size()}};
+            {"points", slam_points_}};
   }
 
   // Steps 4 and 5: the tasks not started during the scans and the combined map's, costliest
@@ -646,10 +769,9 @@ class MapRun {
   // its parts, the sensor maps in name order (MapBuilder's), never copied whole.
   void run_outputs() {
     for (const auto& name : built_) {
-      const PointCloud& map = sensor_map(name);
-      if (map.empty()) continue;
-      combined_parts_.push_back(&map);
-      combined_points_ += map.size();
+      if (map_points(name) == 0) continue;
+      combined_parts_.push_back(name);
+      combined_points_ += map_points(name);
     }
     if (combined_points_ == 0)
       throw std::runtime_error("map: every map is empty; nothing to write");
@@ -666,11 +788,14 @@ class MapRun {
       for (auto& task : slam_tasks()) tasks.push_back(std::move(task));
     for (auto& task : combined_tasks()) tasks.push_back(std::move(task));
     runner_->add(guarded(std::move(tasks)));
-    // Memory: the combined map's Draco encode and metrics together, the peak of the outputs
-    // when they ran once the sensor maps were merged, bounds the tasks running at once.
-    runner_->run_with(options_.threads, (kDracoBytesPerPoint + kMetricsBytesPerPoint) *
-                                            static_cast<double>(combined_points_));
-    runner_->finish([&](double f) { context_.progress(kScansDone + (1.0 - kScansDone) * f); });
+    // Memory: the tasks' estimates within the budget's output share (tile tasks hold a tile
+    // per thread, a Draco task its whole map).
+    runner_->run_with(options_.threads, output_budget_);
+    try {
+      runner_->finish([&](double f) { context_.progress(kScansDone + (1.0 - kScansDone) * f); });
+    } catch (const TileBudgetError& e) {
+      throw_budget_error(e);
+    }
     context_.check_canceled();
   }
 
@@ -684,66 +809,117 @@ class MapRun {
     return tasks;
   }
 
-  // The tasks of a sensor whose map is built: Draco, PLY, and the inspection map's metrics
-  // for the SLAM lidar. Results land in the slots made before the scans.
+  std::function<void()> cancel_check() const {
+    return [this] { context_.check_canceled(); };
+  }
+
+  // Bytes of a Draco file of n points made in memory (the map gathered, then encoded), or 0
+  // when it would not fit the budget's output share.
+  double draco_bytes(size_t points) const {
+    return (kGatheredBytesPerPoint + kDracoBytesPerPoint) * static_cast<double>(points);
+  }
+  bool draco_fits(size_t points) const { return draco_bytes(points) <= output_budget_; }
+
+  // The tasks of a sensor whose map is built, each reading its tiles: the LOD tiles, the PLY
+  // file, the Draco file when the map fits the budget (gathered in memory), and the
+  // inspection map's metrics for the SLAM lidar. Results land in the slots made before the
+  // scans.
   std::vector<OutputTask> sensor_tasks(const std::string& name) {
     std::vector<OutputTask> tasks;
-    const PointCloud& map = sensor_map(name);
-    if (map.empty()) return tasks;
-    tasks.push_back(draco_task(name, map.size(), [this, name, &map] {
-      const auto start = std::chrono::steady_clock::now();
-      drc_.at(name) =
-          write_map_draco(io::encode_draco_point_cloud(map, {}, draco_options(options_)),
-                          map.size(), start, 0.0, name, options_, context_.work_dir);
-    }));
+    const size_t n = map_points(name);
+    if (n == 0) return tasks;
+    const double tile_bytes = static_cast<double>(tiled_->options().tile_budget_bytes);
+    if (draco_fits(n)) {
+      tasks.push_back({"draco " + name, kDracoSecondsPerPoint * n, draco_bytes(n), [this, name, n] {
+                         const auto start = std::chrono::steady_clock::now();
+                         const std::vector<std::string> parts = {name};
+                         const PointCloud map =
+                             gather_tiled_map(*tiled_, parts, tiled_->output_partition(parts));
+                         drc_.at(name) = write_map_draco(
+                             io::encode_draco_point_cloud(map, {}, draco_options(options_)), n,
+                             start, 0.0, name, options_, context_.work_dir);
+                       }});
+    } else {
+      drc_.at(name) = draco_not_written(n, draco_bytes(n), output_budget_);
+      warnings_.push_back("sensor '" + name +
+                          "': " + drc_.at(name).report["draco"]["reason"].get<std::string>());
+    }
     if (options_.write_ply)
-      tasks.push_back(ply_task(name, map.size(), [this, name, &map] {
-        ply_.at(name) = write_map_ply(map, name, context_.work_dir);
-      }));
+      tasks.push_back({"ply " + name, kPlySecondsPerPoint * n, tile_bytes, [this, name] {
+                         ply_.at(name) = write_tiled_map_ply(*tiled_, {name}, name,
+                                                             context_.work_dir, cancel_check());
+                       }});
+    if (options_.write_tiles)
+      tasks.push_back({"tiles " + name, kLodSecondsPerPoint * n, tile_bytes, [this, name] {
+                         tiles_.at(name) = write_map_tiles(*tiled_, {name}, name, context_.work_dir,
+                                                           cancel_check());
+                       }});
     if (slam_ && name == slam_sensor_->name)
-      tasks.push_back(metrics_task("inspection_" + name, map.size(), 0, [this, name, &map] {
-        inspection_ = measure("inspection_" + name, map, options_, context_);
-      }));
+      tasks.push_back({"metrics inspection_" + name, kMetricsSecondsPerPoint * n,
+                       tile_bytes * options_.threads, [this, name] {
+                         inspection_ = measure_tiled("inspection_" + name, *tiled_, {name},
+                                                     options_, context_);
+                       }});
     return tasks;
   }
 
   std::vector<OutputTask> slam_tasks() {
     std::vector<OutputTask> tasks;
-    if (!slam_map_.empty())
-      tasks.push_back(metrics_task("slam_map", slam_map_.size(), 0, [this] {
-        slam_column_ = measure("slam_map", slam_map_, options_, context_);
-      }));
+    if (slam_points_ > 0)
+      tasks.push_back(
+          {"metrics slam_map", kMetricsSecondsPerPoint * slam_points_,
+           static_cast<double>(tiled_->options().tile_budget_bytes) * options_.threads, [this] {
+             slam_column_ = measure_tiled("slam_map", *tiled_, {"slam"}, options_, context_);
+           }});
     return tasks;
   }
 
-  // The combined map's Draco file, the longest task, in two: the encoding adds its round trip
-  // (the check), which may then run beside the combined metrics (the encoding's peak could
-  // not). Its PLY is written from the parts; the metrics read positions only, so the combined
-  // positions are gathered for them alone.
+  // The combined map (Eq. (21)) from every sensor's tiles: its LOD tiles, PLY and metrics, and
+  // its Draco file when it fits the budget (the sensor maps gathered as its parts; the encoding
+  // adds its round trip, the check, as a task of its own).
   std::vector<OutputTask> combined_tasks() {
     std::vector<OutputTask> tasks;
     const double n_combined = static_cast<double>(combined_points_);
-    tasks.push_back({"draco combined (encode)", kDracoEncodeSecondsPerPoint * n_combined,
-                     kDracoBytesPerPoint * n_combined, [this] {
-                       const auto start = std::chrono::steady_clock::now();
-                       combined_encoded_ = io::encode_draco_point_cloud_bytes(
-                           combined_parts_, draco_options(options_));
-                       combined_encode_seconds_ = seconds_since(start);
-                       runner_->add(guarded({combined_draco_check()}));
-                     }});
+    const double tile_bytes = static_cast<double>(tiled_->options().tile_budget_bytes);
+    if (draco_fits(combined_points_)) {
+      tasks.push_back({"draco combined (encode)", kDracoEncodeSecondsPerPoint * n_combined,
+                       draco_bytes(combined_points_), [this] {
+                         const auto start = std::chrono::steady_clock::now();
+                         for (const auto& name : combined_parts_) {
+                           const std::vector<std::string> parts = {name};
+                           combined_maps_.push_back(
+                               gather_tiled_map(*tiled_, parts, tiled_->output_partition(parts)));
+                         }
+                         std::vector<const PointCloud*> parts;
+                         for (const auto& map : combined_maps_) parts.push_back(&map);
+                         combined_encoded_ =
+                             io::encode_draco_point_cloud_bytes(parts, draco_options(options_));
+                         combined_encode_seconds_ = seconds_since(start);
+                         runner_->add(guarded({combined_draco_check()}));
+                       }});
+    } else {
+      combined_output_ =
+          draco_not_written(combined_points_, draco_bytes(combined_points_), output_budget_);
+      warnings_.push_back("combined map: " +
+                          combined_output_.report["draco"]["reason"].get<std::string>());
+    }
     if (options_.write_ply)
-      tasks.push_back(ply_task(kCombinedMapName, combined_points_, [this] {
-        combined_ply_ = write_map_ply(combined_parts_, kCombinedMapName, context_.work_dir);
-      }));
-    tasks.push_back(metrics_task(
-        "inspection_combined", combined_points_, sizeof(Eigen::Vector3f) * combined_points_,
-        [this] {
-          PointCloud positions;
-          positions.xyz.reserve(combined_points_);
-          for (const PointCloud* part : combined_parts_)
-            positions.xyz.insert(positions.xyz.end(), part->xyz.begin(), part->xyz.end());
-          combined_column_ = measure("inspection_combined", positions, options_, context_);
-        }));
+      tasks.push_back({"ply combined", kPlySecondsPerPoint * n_combined, tile_bytes, [this] {
+                         combined_ply_ =
+                             write_tiled_map_ply(*tiled_, combined_parts_, kCombinedMapName,
+                                                 context_.work_dir, cancel_check());
+                       }});
+    if (options_.write_tiles)
+      tasks.push_back({"tiles combined", kLodSecondsPerPoint * n_combined, tile_bytes, [this] {
+                         combined_tiles_ =
+                             write_map_tiles(*tiled_, combined_parts_, kCombinedMapName,
+                                             context_.work_dir, cancel_check());
+                       }});
+    tasks.push_back({"metrics inspection_combined", kMetricsSecondsPerPoint * n_combined,
+                     tile_bytes * options_.threads, [this] {
+                       combined_column_ = measure_tiled("inspection_combined", *tiled_,
+                                                        combined_parts_, options_, context_);
+                     }});
     return tasks;
   }
 
@@ -751,14 +927,17 @@ class MapRun {
   OutputTask combined_draco_check() {
     const double n_combined = static_cast<double>(combined_points_);
     return {"draco combined (check)", kDracoCheckSecondsPerPoint * n_combined,
-            kDracoCheckBytesPerPoint * n_combined, [this] {
+            (kGatheredBytesPerPoint + kDracoCheckBytesPerPoint) * n_combined, [this] {
               const auto start = std::chrono::steady_clock::now();
-              io::measure_draco_point_cloud(combined_parts_, draco_options(options_),
-                                            &combined_encoded_);
+              std::vector<const PointCloud*> parts;
+              for (const auto& map : combined_maps_) parts.push_back(&map);
+              io::measure_draco_point_cloud(parts, draco_options(options_), &combined_encoded_);
               combined_output_ = write_map_draco(combined_encoded_, combined_points_, start,
                                                  combined_encode_seconds_, kCombinedMapName,
                                                  options_, context_.work_dir);
               combined_encoded_ = io::DracoEncoded{};
+              combined_maps_.clear();
+              combined_maps_.shrink_to_fit();
             }};
   }
 
@@ -767,11 +946,15 @@ class MapRun {
     for (const auto& name : written_) {
       MapOutput& map_output = drc_.at(name);
       merge_output(map_output, ply_.at(name));
+      merge_output(map_output, tiles_.at(name));
       out.report["sensors"][name]["map"] = map_output.report;
       out.artifacts.insert(out.artifacts.end(), map_output.artifacts.begin(),
                            map_output.artifacts.end());
     }
     merge_output(combined_output_, combined_ply_);
+    merge_output(combined_output_, combined_tiles_);
+    if (!combined_output_.report.contains("points"))
+      combined_output_.report["points"] = combined_points_;
     out.report["combined"] = combined_output_.report;
     out.artifacts.insert(out.artifacts.end(), combined_output_.artifacts.begin(),
                          combined_output_.artifacts.end());
@@ -782,8 +965,8 @@ class MapRun {
   // first; they record what they wrote in drc_, ply_ and the combined outputs.
   void remove_written_maps() {
     runner_.reset();
-    std::vector<const MapOutput*> outputs = {&combined_output_, &combined_ply_};
-    for (const auto* by_sensor : {&drc_, &ply_})
+    std::vector<const MapOutput*> outputs = {&combined_output_, &combined_ply_, &combined_tiles_};
+    for (const auto* by_sensor : {&drc_, &ply_, &tiles_})
       for (const auto& [name, output] : *by_sensor) outputs.push_back(&output);
     std::error_code ignored;  // best effort: the stage's own error is the one to report
     for (const MapOutput* output : outputs)
@@ -806,6 +989,27 @@ class MapRun {
     }
     metrics["table_v"] = table_v(columns, primary_);
     return metrics;
+  }
+
+  json filter_tiles_json(const std::string& name) const {
+    const TiledFilterStats& t = tiled_->filter_stats(name);
+    return {{"filter_tiles", t.tiles},
+            {"splits", t.splits},
+            {"halo_points", t.halo_points},
+            {"largest_tile_points", t.largest_tile_points}};
+  }
+
+  // Report 4 of issue 17: the stage's peak memory against its budget, what was spilled.
+  json memory_report() const {
+    const io::SpillStore& store = tiled_->store();
+    const double mib = 1 << 20;
+    return {{"budget_mb", options_.memory_budget_mb},
+            {"peak_rss_mib", peak_rss_mib()},
+            {"spill_buffer_budget_mib", static_cast<double>(store.buffer_budget()) / mib},
+            {"spill_buffered_peak_mib", static_cast<double>(store.peak_bytes_buffered()) / mib},
+            {"bytes_spilled", store.bytes_spilled()},
+            {"tile_budget_mib", static_cast<double>(tiled_->options().tile_budget_bytes) / mib},
+            {"output_budget_mib", output_budget_ / mib}};
   }
 
   json timing_report() const {
@@ -833,8 +1037,10 @@ class MapRun {
   std::map<std::string, std::unique_ptr<mapping::MapBuilder>> builders_;
   const MappedSensor* slam_sensor_ = nullptr;  // in selection_.mapped
   std::optional<mapping::SlamMapBuilder> slam_;
+  std::unique_ptr<TiledMaps> tiled_;  // the maps, out of core
+  double output_budget_ = 0.0;        // bytes the output tasks may hold at once
   // Step 3.
-  PointCloud slam_map_;
+  size_t slam_points_ = 0;
   std::vector<std::string> built_;  // sensors that had scans, in name order
   size_t points_in_ = 0;
   double scans_seconds_ = 0.0;
@@ -846,9 +1052,10 @@ class MapRun {
   std::string primary_ = "inspection_combined";  // Table V's inspection map
   std::chrono::steady_clock::time_point outputs_start_;
   double outputs_cpu_start_ = 0.0;
-  std::map<std::string, MapOutput> drc_, ply_;
-  MapOutput combined_output_, combined_ply_;
-  std::vector<const PointCloud*> combined_parts_;
+  std::map<std::string, MapOutput> drc_, ply_, tiles_;
+  MapOutput combined_output_, combined_ply_, combined_tiles_;
+  std::vector<std::string> combined_parts_;  // the sensor maps of the combined map
+  std::vector<PointCloud> combined_maps_;    // gathered for its Draco file
   size_t combined_points_ = 0;
   io::DracoEncoded combined_encoded_;
   double combined_encode_seconds_ = 0.0;
@@ -869,6 +1076,7 @@ class MapStage : public Stage {
 
 std::string map_draco_file(const std::string& sensor) { return "map_" + sensor + ".drc"; }
 std::string map_ply_file(const std::string& sensor) { return "map_" + sensor + ".ply"; }
+std::string map_tiles_file(const std::string& sensor) { return "tiles_" + sensor + ".tar"; }
 
 MapStageOptions MapStageOptions::from_json(const json& options) {
   MapStageOptions o;
@@ -901,6 +1109,8 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.slam_sensor = r.optional<std::string>("slam_sensor", o.slam_sensor);
   o.slam_keyframe_leaf_m = r.optional<double>("slam_keyframe_leaf_m", o.slam_keyframe_leaf_m);
   o.threads = r.optional<int>("threads", o.threads);
+  o.memory_budget_mb = r.optional<int>("memory_budget_mb", o.memory_budget_mb);
+  o.write_tiles = r.optional<bool>("write_tiles", o.write_tiles);
   r.finish();
 
   require(o.lidar_filters.is_object(), "lidar_filters",
@@ -929,6 +1139,11 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   require(std::isfinite(o.slam_keyframe_leaf_m) && o.slam_keyframe_leaf_m > 0.0,
           "slam_keyframe_leaf_m", "a leaf in metres > 0");
   require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
+  require(o.memory_budget_mb >= kMinMemoryBudgetMb && o.memory_budget_mb <= 1 << 20,
+          "memory_budget_mb",
+          "an integer in [" + std::to_string(kMinMemoryBudgetMb) +
+              ", 1048576] (MiB; the spill buffers and a tile per thread need at least " +
+              std::to_string(kMinMemoryBudgetMb) + ")");
   // The filter chains fail here, naming the option path, rather than halfway through a job.
   try {
     o.sensor_options("", "lidar");
@@ -979,7 +1194,9 @@ json MapStageOptions::to_json() const {
           {"metrics_max_points", metrics_max_points},
           {"slam_sensor", slam_sensor},
           {"slam_keyframe_leaf_m", slam_keyframe_leaf_m},
-          {"threads", threads}};
+          {"threads", threads},
+          {"memory_budget_mb", memory_budget_mb},
+          {"write_tiles", write_tiles}};
 }
 
 std::unique_ptr<Stage> make_map_stage() { return std::make_unique<MapStage>(); }

@@ -6,7 +6,9 @@
 // scan gets a pose. The first lidar's keyframe scans also build the SLAM-map baseline, and the
 // report compares both maps by the metrics of Eqs. (23)-(26), as Table V does.
 //
-// Artifacts: map_<sensor>.drc / .ply per sensor, map_combined.drc / .ply (Eq. (21)).
+// Artifacts: map_<sensor>.drc / .ply / tiles_<sensor>.tar per sensor, and the same for the
+// combined map (Eq. (21)). The maps are kept out of core, in tiles within map.memory_budget_mb
+// (tiled_maps.h); a map too large for the budget has no single Draco file.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -26,6 +28,12 @@ inline constexpr const char* kCombinedMapName = "combined";
 // `map_<sensor>.drc` / `map_<sensor>.ply` (sensor "combined" for the union).
 std::string map_draco_file(const std::string& sensor);
 std::string map_ply_file(const std::string& sensor);
+// `tiles_<sensor>.tar`: the map's level-of-detail tileset (docs/artifacts.md).
+std::string map_tiles_file(const std::string& sensor);
+
+// The smallest map.memory_budget_mb accepted: the spill store's buffers and one tile per
+// thread need a few MiB each; a dense map may need more (refused naming the minimum).
+inline constexpr int kMinMemoryBudgetMb = 64;
 
 // `--set map.<name>=<value>`.
 struct MapStageOptions {
@@ -74,6 +82,13 @@ struct MapStageOptions {
   std::string slam_sensor;
   double slam_keyframe_leaf_m = 0.2;
   int threads = 2;
+  // Memory the stage keeps its maps within (MiB, issue 17): what leaves the scans is kept in
+  // spatial tiles that spill to disk beyond a quarter of it, filtered and read a tile at a
+  // time (a quarter, shared by the threads), and half is left to the output tasks: a map's
+  // single Draco file is written only when encoding it fits there (~64 bytes per point).
+  int memory_budget_mb = 2048;
+  // Also write each map as level-of-detail tiles (tiles_<map>.tar, docs/artifacts.md).
+  bool write_tiles = true;
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static MapStageOptions from_json(const nlohmann::json& options);

@@ -10,6 +10,8 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +22,7 @@
 
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
+#include "tests/worker/io/pnts_reader.h"
 #include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/draco_codec.h"
 #include "worker/io/folder_index.h"
@@ -120,7 +123,7 @@ TEST_F(MapStageTest, MapsFromTrueTrajectoryLieOnTheSceneAndBeatTheSlamMap) {
     EXPECT_TRUE(fs::exists(work / map_draco_file(name))) << name;
     EXPECT_TRUE(fs::exists(work / map_ply_file(name))) << name;
   }
-  EXPECT_EQ(run.result.artifacts.size(), 8u);
+  EXPECT_EQ(run.result.artifacts.size(), 12u);  // and tiles_<map>.tar
   EXPECT_EQ(report["poses"]["keyframes"]["source"], kRefinedTrajectoryFile);
 
   // Every scan of every sensor was fed, as the index files list them.
@@ -176,6 +179,97 @@ TEST_F(MapStageTest, MapsFromTrueTrajectoryLieOnTheSceneAndBeatTheSlamMap) {
   ASSERT_FALSE(run.progress.empty());
   for (size_t k = 1; k < run.progress.size(); ++k) EXPECT_GE(run.progress[k], run.progress[k - 1]);
   EXPECT_EQ(run.progress.back(), 1.0);
+}
+
+std::vector<std::array<float, 4>> sorted_ply(const fs::path& ply) {
+  const PointCloud cloud = io::read_scan_file(ply, 0);
+  std::vector<std::array<float, 4>> points;
+  for (size_t k = 0; k < cloud.size(); ++k)
+    points.push_back({cloud.xyz[k].x(), cloud.xyz[k].y(), cloud.xyz[k].z(),
+                      cloud.has_intensity() ? cloud.intensity[k] : -1.f});
+  std::sort(points.begin(), points.end());
+  return points;
+}
+
+// Issue 17, the maps out of core: a budget small enough to spill and split tiles gives the
+// same maps, point for point, as the default one (which holds the tiles in memory); each map's
+// LOD tiles hold its points once (read with the specification reader); the report gives the
+// budget, the stage's peak RSS and what was spilled; a map whose Draco file would not fit the
+// budget says so instead of writing it.
+TEST_F(MapStageTest, ASmallBudgetSpillsAndGivesTheSameMapsAndTheirTiles) {
+  const fs::path mission = simulated_mission();
+  const fs::path roomy = temp_root() / "work_roomy", small = temp_root() / "work_small";
+  const StageRun a = run_stage(mission, {{"metrics_max_points", 2000}}, roomy);
+  const StageRun b =
+      run_stage(mission, {{"metrics_max_points", 2000}, {"memory_budget_mb", 64}}, small);
+  const json& memory_a = a.result.report["memory"];
+  const json& memory_b = b.result.report["memory"];
+  EXPECT_EQ(memory_a["budget_mb"], 2048);
+  EXPECT_EQ(memory_a["bytes_spilled"], 0u);
+  EXPECT_EQ(memory_b["budget_mb"], 64);
+  EXPECT_GT(memory_b["bytes_spilled"].get<uint64_t>(), 10u << 20);
+  EXPECT_LE(memory_b["spill_buffered_peak_mib"].get<double>(), 16.0 + 4 * 7);  // + binner batches
+  EXPECT_GT(memory_b["peak_rss_mib"].get<double>(), 10.0);
+  for (const std::string name : {"lidar_h", "lidar_v", "sonar", "combined"}) {
+    SCOPED_TRACE(name);
+    const auto points = sorted_ply(roomy / map_ply_file(name));
+    EXPECT_TRUE(points == sorted_ply(small / map_ply_file(name)));
+    const json& map = name == "combined" ? b.result.report["combined"]
+                                         : b.result.report["sensors"][name]["map"];
+    EXPECT_EQ(map["points"], points.size());
+    // The LOD tiles: every point in exactly one finest tile.
+    const keel::testing::Tileset tiles =
+        keel::testing::read_tileset_tar(small / map_tiles_file(name), temp_root() / ("x_" + name));
+    size_t finest = 0;
+    for (const auto& [uri, tile] : tiles.tiles) {
+      if (!tile.children.empty()) continue;
+      finest += tile.content.positions.size();
+      ASSERT_EQ(tile.content.properties.at("intensity").size(), tile.content.positions.size());
+      if (name == "combined") {
+        for (const double sensor : tile.content.properties.at("sensor"))
+          EXPECT_TRUE(sensor == 0 || sensor == 1 || sensor == 2);
+      }
+    }
+    EXPECT_EQ(finest, points.size());
+    EXPECT_EQ(tiles.json["extras"]["keel"]["points"], points.size());
+    EXPECT_EQ(map["tiles"]["points"], points.size());
+    // Draco: written when it fits the budget, else said why.
+    if (fs::exists(small / map_draco_file(name))) {
+      EXPECT_GT(map["draco"]["bytes"].get<size_t>(), 0u);
+    } else {
+      EXPECT_EQ(map["draco"]["written"], false);
+      EXPECT_NE(map["draco"]["reason"].get<std::string>().find("map.memory_budget_mb"),
+                std::string::npos);
+    }
+    EXPECT_TRUE(fs::exists(roomy / map_draco_file(name)));
+  }
+  EXPECT_EQ(b.result.report["sensors"]["lidar_h"]["stats"]["final_stage"]["filters"][0]["filter"],
+            "voxel_grid");
+  const json tiles_combined = keel::testing::read_tileset_tar(small / map_tiles_file("combined"),
+                                                        temp_root() / "x_c").json;
+  EXPECT_EQ(tiles_combined["extras"]["keel"]["sensors"], json({"lidar_h", "lidar_v", "sonar"}));
+  // The same figures either way.
+  EXPECT_EQ(a.result.report["metrics"]["maps"]["inspection_combined"]["points"],
+            b.result.report["metrics"]["maps"]["inspection_combined"]["points"]);
+  EXPECT_EQ(a.result.report["metrics"]["maps"]["slam_map"]["surface_density_per_m2"]["mean"],
+            b.result.report["metrics"]["maps"]["slam_map"]["surface_density_per_m2"]["mean"]);
+}
+
+// A budget that cannot hold one tile, whatever the splits, is refused naming the option and the
+// smallest budget that would work (here a final ROR whose 50 m halo takes in the whole map).
+TEST_F(MapStageTest, ABudgetTooSmallForOneTileIsRefusedWithTheMinimum) {
+  const std::string error = error_of(
+      simulated_mission(),
+      {{"memory_budget_mb", 64},
+       {"sensors", {"lidar_h"}},
+       {"lidar_filters", {{"final_filters", {{{"type", "ror"}, {"radius", 50.0}}}}}}});
+  EXPECT_NE(error.find("options.map.memory_budget_mb: 64 MiB cannot hold one tile"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("the smallest budget that would work is"), std::string::npos) << error;
+  EXPECT_NE(error.find("lidar_h"), std::string::npos) << error;
+  const std::string below = error_of(simulated_mission(), {{"memory_budget_mb", 16}});
+  EXPECT_NE(below.find("options.map.memory_budget_mb"), std::string::npos) << below;
 }
 
 // Writes a copy of the mission whose lidar_h scans carry Ouster's uint32 nanosecond field `t`.
@@ -340,7 +434,8 @@ TEST_F(MapStageTest, AFailedStageLeavesNoMapFilesBehind) {
   EXPECT_NE(error.find("s3.pcd"), std::string::npos) << error;
   for (const auto& entry : fs::directory_iterator(work)) {
     const std::string name = entry.path().filename().string();
-    EXPECT_TRUE(name.rfind("map_", 0) != 0) << name << " left behind";
+    EXPECT_TRUE(name.rfind("map_", 0) != 0 && name.rfind("tiles_", 0) != 0)
+        << name << " left behind";
   }
 }
 
