@@ -27,9 +27,7 @@ struct Node {
   bool operator<(const Node& o) const {
     return std::tie(level, x, y, z) < std::tie(o.level, o.x, o.y, o.z);
   }
-  Node parent() const {
-    return Node{level - 1, floor_div(x, 2), floor_div(y, 2), floor_div(z, 2)};
-  }
+  Node parent() const { return Node{level - 1, floor_div(x, 2), floor_div(y, 2), floor_div(z, 2)}; }
   Node child(int index) const {
     return Node{level + 1, 2 * x + (index & 1), 2 * y + ((index >> 1) & 1),
                 2 * z + ((index >> 2) & 1)};
@@ -106,8 +104,9 @@ class Builder {
   }
 
   mapping::LodPoints build(const Node& node, const std::string& name) {
-    const mapping::LodWrite write = [this](const mapping::LodNode& n,
-                                           const mapping::LodPoints& p) { this->write(n, p); };
+    const mapping::LodWrite write = [this](const mapping::LodNode& n, const mapping::LodPoints& p) {
+      this->write(n, p);
+    };
     if (tiles_.count(node))
       return mapping::build_lod_subtree(name, cube(node), source_.load(tile_key(node)), options_,
                                         write, nullptr);

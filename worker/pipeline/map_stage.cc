@@ -77,13 +77,6 @@ double peak_rss_mib() {
   return 0.0;
 }
 
-// How the memory budget (map.memory_budget_mb) is shared: the spill store's buffers, the
-// tiles being filtered or read (one per thread), and the output tasks (Draco files of maps
-// that fit). What the scans hold (a few scans per thread, one intermediary map per sensor,
-// the mission's poses) is outside it.
-constexpr double kSpillShare = 0.25;
-constexpr double kTileShare = 0.25;
-constexpr double kOutputShare = 0.5;
 // Bytes per point of a map gathered in memory for its Draco file (positions and intensity).
 constexpr double kGatheredBytesPerPoint = 16.0;
 // Finest LOD tiles hold at most this many points (1.6 MB .pnts files).
@@ -663,11 +656,8 @@ class MapRun {
   // hold the result).
   void make_tiled_maps() {
     const double budget = static_cast<double>(options_.memory_budget_mb) * (1 << 20);
-    TiledMapsOptions tiles;
-    tiles.buffer_budget_bytes = static_cast<size_t>(budget * kSpillShare);
-    tiles.tile_budget_bytes = static_cast<size_t>(budget * kTileShare / options_.threads);
-    tiles.threads = options_.threads;
-    tiles.output_halo_m = options_.metrics_radius_m;
+    const TiledMapsOptions tiles =
+        tiled_maps_options_for_budget(budget, options_.threads, options_.metrics_radius_m);
     std::vector<std::pair<std::string, mapping::FilterChain>> chains;
     for (const auto& s : selection_.mapped)
       chains.emplace_back(s.name, merging() ? mapping::FilterChain{}

@@ -31,6 +31,16 @@ std::vector<TileKey> sorted_tiles(const std::vector<io::StreamKey>& keys) {
 
 }  // namespace
 
+TiledMapsOptions tiled_maps_options_for_budget(double budget_bytes, int threads,
+                                               double output_halo_m) {
+  TiledMapsOptions options;
+  options.buffer_budget_bytes = static_cast<size_t>(budget_bytes * kSpillShare);
+  options.tile_budget_bytes = static_cast<size_t>(budget_bytes * kTileShare / std::max(1, threads));
+  options.threads = threads;
+  options.output_halo_m = output_halo_m;
+  return options;
+}
+
 struct TiledMaps::Sensor {
   std::string name;
   uint16_t input_cloud = 0, output_cloud = 0;

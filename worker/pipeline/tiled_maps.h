@@ -44,6 +44,17 @@ struct TiledMapsOptions {
   double filter_tile_edge_m = 10.0;
 };
 
+// How the map stage shares its memory budget (map.memory_budget_mb): a quarter for the spill
+// store's buffers, a quarter for the tiles being filtered or read (shared by the threads), and
+// the other half for the output tasks (a map's Draco file, made only when it fits there). What
+// the scans hold (a few scans per thread, an intermediary map per sensor, the poses) is
+// outside it.
+inline constexpr double kSpillShare = 0.25;
+inline constexpr double kTileShare = 0.25;
+inline constexpr double kOutputShare = 0.5;
+TiledMapsOptions tiled_maps_options_for_budget(double budget_bytes, int threads,
+                                               double output_halo_m);
+
 // A budget that cannot hold one tile: the message names the tile and the smallest budget that
 // would do (`minimum_bytes`).
 class TileBudgetError : public std::runtime_error {

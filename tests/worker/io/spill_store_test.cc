@@ -95,7 +95,9 @@ TEST(SpillStore, ConcurrentAppendsAndReads) {
         const std::string bytes(50 + (round * 7 + s) % 200, static_cast<char>('A' + first + s));
         store.append(key(first + 2 * s), bytes.data(), bytes.size());
         expected[s] += bytes;
-        if (round % 50 == 49) EXPECT_TRUE(store.read(key(first + 2 * s)) == expected[s]);
+        if (round % 50 == 49) {
+          EXPECT_TRUE(store.read(key(first + 2 * s)) == expected[s]);
+        }
       }
   };
   std::thread other(work, 1);

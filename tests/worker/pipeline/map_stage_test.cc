@@ -214,8 +214,8 @@ TEST_F(MapStageTest, ASmallBudgetSpillsAndGivesTheSameMapsAndTheirTiles) {
     SCOPED_TRACE(name);
     const auto points = sorted_ply(roomy / map_ply_file(name));
     EXPECT_TRUE(points == sorted_ply(small / map_ply_file(name)));
-    const json& map = name == "combined" ? b.result.report["combined"]
-                                         : b.result.report["sensors"][name]["map"];
+    const json& map =
+        name == "combined" ? b.result.report["combined"] : b.result.report["sensors"][name]["map"];
     EXPECT_EQ(map["points"], points.size());
     // The LOD tiles: every point in exactly one finest tile.
     const keel::testing::Tileset tiles =
@@ -245,8 +245,8 @@ TEST_F(MapStageTest, ASmallBudgetSpillsAndGivesTheSameMapsAndTheirTiles) {
   }
   EXPECT_EQ(b.result.report["sensors"]["lidar_h"]["stats"]["final_stage"]["filters"][0]["filter"],
             "voxel_grid");
-  const json tiles_combined = keel::testing::read_tileset_tar(small / map_tiles_file("combined"),
-                                                        temp_root() / "x_c").json;
+  const json tiles_combined =
+      keel::testing::read_tileset_tar(small / map_tiles_file("combined"), temp_root() / "x_c").json;
   EXPECT_EQ(tiles_combined["extras"]["keel"]["sensors"], json({"lidar_h", "lidar_v", "sonar"}));
   // The same figures either way.
   EXPECT_EQ(a.result.report["metrics"]["maps"]["inspection_combined"]["points"],
@@ -258,11 +258,11 @@ TEST_F(MapStageTest, ASmallBudgetSpillsAndGivesTheSameMapsAndTheirTiles) {
 // A budget that cannot hold one tile, whatever the splits, is refused naming the option and the
 // smallest budget that would work (here a final ROR whose 50 m halo takes in the whole map).
 TEST_F(MapStageTest, ABudgetTooSmallForOneTileIsRefusedWithTheMinimum) {
-  const std::string error = error_of(
-      simulated_mission(),
-      {{"memory_budget_mb", 64},
-       {"sensors", {"lidar_h"}},
-       {"lidar_filters", {{"final_filters", {{{"type", "ror"}, {"radius", 50.0}}}}}}});
+  const std::string error =
+      error_of(simulated_mission(),
+               {{"memory_budget_mb", 64},
+                {"sensors", {"lidar_h"}},
+                {"lidar_filters", {{"final_filters", {{{"type", "ror"}, {"radius", 50.0}}}}}}});
   EXPECT_NE(error.find("options.map.memory_budget_mb: 64 MiB cannot hold one tile"),
             std::string::npos)
       << error;

@@ -14,8 +14,8 @@
 #include <random>
 
 #include "tests/worker/io/pnts_reader.h"
-#include "worker/io/ply_cloud_writer.h"
 #include "tests/worker/mapping/test_clouds.h"
+#include "worker/io/ply_cloud_writer.h"
 #include "worker/mapping/filter_chain.h"
 #include "worker/mapping/map_builder.h"
 #include "worker/mapping/map_metrics.h"
