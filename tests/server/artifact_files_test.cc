@@ -102,6 +102,27 @@ TEST_F(ArtifactFilesTest, WhatIsNotAUstarTarIsRefusedByName) {
   EXPECT_NE(short_tar.body.find("past the end"), std::string::npos) << short_tar.body;
 }
 
+TEST_F(ArtifactFilesTest, AnotherProjectsTarAnswers404AndItsOwnViewerReadsIt) {
+  const std::string id =
+      add_artifact("tiles_lidar.tar",
+                   build_tar({tar_file("tileset.json", "{}")}, false, ARCHIVE_FORMAT_TAR_USTAR));
+  const std::string target = "/v1/artifacts/" + id + "/files/tileset.json";
+  const auto as = [&](proto::Role role, const std::string& project) {
+    storage::TokenSpec spec;
+    spec.role = role;
+    spec.project = project;
+    const std::string token = "tok-" + project;
+    store_->add_token(token, spec);
+    return call("GET", target, "", {{"Authorization", "Bearer " + token}}, false);
+  };
+  Response stranger = as(proto::Role::kAdmin, "dock");  // even an admin of another project
+  EXPECT_EQ(stranger.status, 404) << stranger.body;
+  EXPECT_EQ(stranger.body.find("tiles_lidar"), std::string::npos) << stranger.body;
+  Response viewer = as(proto::Role::kViewer, proto::kDefaultProject);
+  ASSERT_EQ(viewer.status, 200) << viewer.body;
+  EXPECT_EQ(read_region(*viewer.file), "{}");
+}
+
 TEST(TarIndex, ReadsWhatGnuTarWrites) {
   TempDir dir;
   const auto root = dir.path() / "in";
