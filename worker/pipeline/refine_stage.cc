@@ -12,9 +12,13 @@
 #include "worker/pipeline/stage_options.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 
 #include "proto/contract_error.h"
@@ -23,6 +27,7 @@
 #include "worker/io/yaml_json.h"
 #include "worker/pipeline/servo_tray.h"
 #include "worker/slam/gicp_odometry.h"
+#include "worker/slam/map_agreement.h"
 #include "worker/slam/so3.h"
 #include "worker/slam/trajectory_metrics.h"
 
@@ -354,29 +359,6 @@ void loop_closures(const io::MissionReader& reader, const slam::RefineOptions& s
                           " loop closures match no keyframe stamp and were left out");
 }
 
-// Step 4c: MAP anchors T_0_k = T_world_0^-1 T_world_k from the recorded keyframe poses, as
-// relative measurements from the first keyframe (see RefineStageOptions::map_anchors).
-void map_anchors(const RefineStageOptions& options, Inputs& in) {
-  const Trajectory& keyframes = in.solver.keyframes;
-  slam::Matrix6d information = slam::Matrix6d::Zero();
-  information.topLeftCorner<3, 3>().diagonal().setConstant(
-      1.0 / (options.map_sigma_translation_m * options.map_sigma_translation_m));
-  information.bottomRightCorner<3, 3>().diagonal().setConstant(
-      1.0 / (options.map_sigma_rotation_rad * options.map_sigma_rotation_rad));
-  const Pose3 T_0_world = keyframes.front().T_world_body.inverse();
-  for (size_t k = 2; k < keyframes.size(); ++k) {
-    slam::RelativePoseMeasurement m;
-    m.t_i_ns = keyframes.front().t_ns;
-    m.t_j_ns = keyframes[k].t_ns;
-    m.T_i_j = T_0_world * keyframes[k].T_world_body;
-    m.information = information;
-    in.solver.loop_closures.push_back(m);
-  }
-  in.report["map_anchors"] = {{"count", keyframes.size() > 2 ? keyframes.size() - 2 : 0},
-                              {"sigma_translation_m", options.map_sigma_translation_m},
-                              {"sigma_rotation_rad", options.map_sigma_rotation_rad}};
-}
-
 // Step 4b: IMU and DVL samples with their extrinsics and noise figures.
 void inertial_inputs(const io::MissionReader& reader, const RefineStageOptions& options,
                      slam::RefineOptions& solver_options, Inputs& in) {
@@ -467,10 +449,6 @@ Inputs gather_inputs(const io::MissionReader& reader, const RefineStageOptions& 
     loop_closures(reader, solver_options, in);
   else
     in.report["loop_closures"] = {{"used", 0}, {"disabled", true}};
-  if (options.map_anchors)
-    map_anchors(options, in);
-  else
-    in.report["map_anchors"] = {{"count", 0}, {"disabled", true}};
   in.report["keyframes"]["used"] = in.solver.keyframes.size();
   return in;
 }
@@ -490,7 +468,8 @@ json solver_json(const slam::RefineSummary& s) {
            {{"odometry", s.num_odometry_factors},
             {"imu", s.num_imu_factors},
             {"dvl", s.num_dvl_factors},
-            {"loop_closures", s.num_loop_closures}}},
+            {"loop_closures", s.num_loop_closures},
+            {"map_anchors", s.num_map_anchors}}},
           {"intervals_skipped",
            {{"imu_gaps", s.num_imu_intervals_skipped}, {"dvl_gaps", s.num_dvl_intervals_skipped}}},
           {"pseudo_samples", s.num_pseudo_samples},
@@ -633,6 +612,70 @@ std::string ground_truth_source(const io::Mission& mission) {
   return spec.topic.empty() ? spec.file : "topic " + spec.topic;
 }
 
+// Standard deviations along the world (translation) or body (rotation) axes, and along the
+// covariance's principal axes (largest first), in `unit_scale` units.
+json covariance_json(const Eigen::Matrix3d& covariance, double unit_scale) {
+  const Eigen::Vector3d axes = covariance.diagonal().cwiseMax(0.0).cwiseSqrt() * unit_scale;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(covariance);
+  const Eigen::Vector3d principal = es.eigenvalues().cwiseMax(0.0).cwiseSqrt() * unit_scale;
+  const Eigen::Vector3d largest = es.eigenvectors().col(2);
+  return {{"axes", {axes.x(), axes.y(), axes.z()}},
+          {"principal", {principal.z(), principal.y(), principal.x()}},
+          {"largest_direction", {largest.x(), largest.y(), largest.z()}}};
+}
+
+json map_noise_json(const slam::RefineResult& r, bool anchors) {
+  return {{"anchors", anchors},
+          {"estimated", r.map_noise_estimated},
+          {"sigma_translation_m", covariance_json(r.map_noise.translation_covariance, 1.0)},
+          {"drift_m_per_sqrt_m", covariance_json(r.map_noise.drift_covariance_per_m, 1.0)},
+          {"sigma_rotation_deg", covariance_json(r.map_noise.rotation_covariance, kRadToDeg)}};
+}
+
+// Runs of consecutive flagged keyframes, as stamp ranges.
+json flagged_ranges(const slam::MapAgreement& a) {
+  json ranges = json::array();
+  for (size_t k = 0; k < a.keyframes.size(); ++k) {
+    if (!a.keyframes[k].flagged) continue;
+    const double t = ns_to_seconds(a.keyframes[k].t_ns);
+    if (k > 0 && a.keyframes[k - 1].flagged) {
+      ranges.back()["t_last_s"] = t;
+      ranges.back()["keyframes"] = ranges.back()["keyframes"].get<int>() + 1;
+    } else {
+      ranges.push_back({{"t_first_s", t}, {"t_last_s", t}, {"keyframes", 1}});
+    }
+  }
+  return ranges;
+}
+
+json self_check_json(const slam::MapAgreement& a) {
+  return {{"keyframes", a.keyframes.size()},
+          {"flagged_keyframes", a.flagged},
+          {"flagged_ranges", flagged_ranges(a)},
+          {"chi2_threshold", a.chi2_threshold},
+          {"translation_m", {{"rms", a.translation_rms_m}, {"max", a.translation_max_m}}},
+          {"rotation_deg",
+           {{"rms", a.rotation_rms_rad * kRadToDeg}, {"max", a.rotation_max_rad * kRadToDeg}}},
+          {"per_keyframe", kSelfCheckFile}};
+}
+
+void write_self_check_csv(const std::filesystem::path& path, const slam::MapAgreement& a) {
+  std::ofstream out(path);
+  out << "t_s,dx_m,dy_m,dz_m,moved_m,droll_deg,dpitch_deg,dyaw_deg,turned_deg,drift_path_m,"
+         "mahalanobis_translation,mahalanobis_rotation,flagged\n";
+  char line[512];
+  for (const auto& m : a.keyframes) {
+    const Eigen::Vector3d r = m.rotation_rad * kRadToDeg;
+    std::snprintf(
+        line, sizeof line, "%.9f,%.6f,%.6f,%.6f,%.6f,%.5f,%.5f,%.5f,%.5f,%.3f,%.4f,%.4f,%d\n",
+        ns_to_seconds(m.t_ns), m.translation_m.x(), m.translation_m.y(), m.translation_m.z(),
+        m.translation_m.norm(), r.x(), r.y(), r.z(), r.norm(), m.drift_path_m,
+        m.mahalanobis_translation, m.mahalanobis_rotation, m.flagged ? 1 : 0);
+    out << line;
+  }
+  if (!out) throw std::runtime_error(path.string() + ": could not write the self-check");
+}
+
 // ---- the stage ----------------------------------------------------------------------------
 
 class RefineStage : public Stage {
@@ -683,6 +726,14 @@ class RefineStage : public Stage {
     io::write_tum(context.work_dir / kRefinedTrajectoryFile, refined);
     StageResult out;
     out.artifacts.push_back(kRefinedTrajectoryFile);
+    // The self-check against the MAP poses the solve started from, with the MAP noise it used
+    // (the options' fixed noise when it was not estimated).
+    std::vector<double> drift_path;
+    for (const auto& k : result.keyframes) drift_path.push_back(k.map_drift_path_m);
+    const slam::MapAgreement agreement =
+        slam::compare_with_map(in.solver.keyframes, refined, result.map_noise, drift_path);
+    write_self_check_csv(context.work_dir / kSelfCheckFile, agreement);
+    out.artifacts.push_back(kSelfCheckFile);
     json& r = out.report;
     r["inputs"] = in.report;
     r["options"] = options_json(options);
@@ -693,6 +744,8 @@ class RefineStage : public Stage {
     r["solver"] = solver_json(result.summary);
     if (with_dvl && without_dvl) r["solver_without_dvl"] = solver_json(without_dvl->summary);
     r["degenerate_keyframes"] = degenerate_json(result);
+    r["map_noise"] = map_noise_json(result, options.map_anchors);
+    r["self_check"] = self_check_json(agreement);
     r["dvl"] = nullptr;
     if (with_dvl) {
       const DvlTruth truth = read_dvl_truth(reader.mission(), in.dvl_sensor, in.warnings);
@@ -739,6 +792,8 @@ class RefineStage : public Stage {
             {"map_anchors", o.map_anchors},
             {"map_sigma_translation_m", o.map_sigma_translation_m},
             {"map_sigma_rotation_rad", o.map_sigma_rotation_rad},
+            {"map_drift_per_sqrt_m", o.map_drift_per_sqrt_m},
+            {"estimate_map_noise", o.estimate_map_noise},
             {"max_dvl_gap_s", o.max_dvl_gap_s},
             {"servo_window_s", o.servo_window_s},
             {"rpe_delta_m", o.rpe_delta_m}};
@@ -786,6 +841,8 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   o.map_sigma_translation_m =
       r.optional<double>("map_sigma_translation_m", o.map_sigma_translation_m);
   o.map_sigma_rotation_rad = r.optional<double>("map_sigma_rotation_rad", o.map_sigma_rotation_rad);
+  o.map_drift_per_sqrt_m = r.optional<double>("map_drift_per_sqrt_m", o.map_drift_per_sqrt_m);
+  o.estimate_map_noise = r.optional<bool>("estimate_map_noise", o.estimate_map_noise);
   o.max_iterations = r.optional<int>("max_iterations", o.max_iterations);
   o.relinearization_passes = r.optional<int>("relinearization_passes", o.relinearization_passes);
   o.threads = r.optional<int>("threads", o.threads);
@@ -814,6 +871,7 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   require(o.degeneracy_sigma_rotation_rad > 0.0, "degeneracy_sigma_rotation_rad", "> 0");
   require(o.map_sigma_translation_m > 0.0, "map_sigma_translation_m", "> 0");
   require(o.map_sigma_rotation_rad > 0.0, "map_sigma_rotation_rad", "> 0");
+  require(o.map_drift_per_sqrt_m > 0.0, "map_drift_per_sqrt_m", "> 0");
   require(o.max_iterations >= 1 && o.max_iterations <= 10000, "max_iterations",
           "an integer in [1, 10000]");
   require(o.relinearization_passes >= 1 && o.relinearization_passes <= 10, "relinearization_passes",
@@ -827,10 +885,11 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
 slam::RefineOptions RefineStageOptions::solver_options() const {
   slam::RefineOptions s;
   s.use_dvl = dvl;
-  // The stage hands the solver only the relative constraints it wants (the mission's loop
-  // closures when `loop_closures`, the MAP anchors when `map_anchors`); the solver's switch
-  // would drop both together.
-  s.use_loop_closures = loop_closures || map_anchors;
+  s.use_loop_closures = loop_closures;
+  s.use_map_anchors = map_anchors;
+  s.estimate_map_noise = estimate_map_noise;
+  s.map_noise = slam::MapPoseNoise::isotropic(map_sigma_translation_m, map_sigma_rotation_rad,
+                                              map_drift_per_sqrt_m);
   s.estimate_dvl_scale = estimate_dvl_scale;
   s.dvl_scale_initial = dvl_scale_initial;
   s.dvl_scale_prior_sigma = dvl_scale_prior_sigma;

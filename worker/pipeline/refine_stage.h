@@ -18,6 +18,9 @@
 namespace keel::pipeline {
 
 inline constexpr const char* kRefinedTrajectoryFile = "trajectory_refined.tum";
+// The self-check per keyframe: movement from the MAP pose and whether it exceeds the MAP
+// pose's stated uncertainty (slam::compare_with_map).
+inline constexpr const char* kSelfCheckFile = "refine_self_check.csv";
 
 // `--set refine.<name>=<value>`; defaults are seed 000's (Table I noise comes from mission.yaml).
 struct RefineStageOptions {
@@ -59,12 +62,17 @@ struct RefineStageOptions {
   bool imu_position_when_degenerate = true;
   // Beyond the paper: offline, the global constraints of the online SLAM (scan-to-map matching,
   // its loop closures) survive only in its MAP poses, so each keyframe is anchored to its MAP
-  // pose (expressed relative to the first keyframe, which the prior r_0 holds at its MAP pose)
-  // with these sigmas, Cauchy-robustified like loop closures. Without them nothing bounds the
-  // heading drift of odometry + IMU + DVL dead reckoning.
+  // pose (slam::RefineOptions::use_map_anchors: white noise plus a drift over the degenerate
+  // stretches, Huber-robustified). Without them nothing bounds the heading drift of odometry +
+  // IMU + DVL dead reckoning.
   bool map_anchors = true;
   double map_sigma_translation_m = 0.05;
   double map_sigma_rotation_rad = 0.01;
+  // The MAP poses' noise (slam::MapPoseNoise): white sigmas above and a drift random walk, m
+  // per sqrt(m) of degenerate path; with estimate_map_noise these are the first pass's values
+  // and later passes use the noise estimated from the data.
+  double map_drift_per_sqrt_m = 0.001;
+  bool estimate_map_noise = true;
 
   int max_iterations = 50;
   int relinearization_passes = 2;

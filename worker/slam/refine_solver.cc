@@ -32,6 +32,7 @@ double seconds_since(Clock::time_point t0) {
 struct States {
   std::vector<std::array<double, 7>> pose;  // T_world_imu, manifolds.h layout
   std::vector<Vec3Block> vel, bg, ba, bv;
+  std::vector<Vec3Block> drift;  // MAP drift (MapAnchorFactor), world frame
   double scale = 1.0;
   std::array<double, 4> q_imu_dvl{0, 0, 0, 1};
 };
@@ -189,7 +190,7 @@ States initial_states(const std::vector<Pose3>& T_world_imu, const std::vector<T
   States s;
   s.pose.resize(n);
   s.vel.assign(n, Vec3Block{0, 0, 0});
-  s.bg = s.ba = s.bv = s.vel;
+  s.bg = s.ba = s.bv = s.drift = s.vel;
   s.scale = opt.dvl_scale_initial;
   set_rotation_block(T_imu_dvl.linear(), s.q_imu_dvl.data());
   for (size_t k = 0; k < n; ++k) {
@@ -268,20 +269,27 @@ class GraphBuilder {
         problem_->AddParameterBlock(b->data(), 3);
       }
     }
+    if (opt_.use_map_anchors) {
+      for (auto& d : s_->drift) problem_->AddParameterBlock(d.data(), 3);
+      problem_->SetParameterBlockConstant(s_->drift[0].data());  // keyframe 0 is the gauge
+    }
     problem_->AddParameterBlock(&s_->scale, 1);
     problem_->AddParameterBlock(s_->q_imu_dvl.data(), 4, &rotation_manifold_);
   }
 
-  // r_0 of Eq. (3): the first keyframe's pose (the gauge), velocity and biases.
+  // r_0 of Eq. (3): the first keyframe's pose (the gauge), velocity and biases. With MAP
+  // anchors the pose part is the first keyframe's anchor instead (add_map_anchors): its
+  // recorded pose is as noisy as the others, and the anchors together fix the gauge.
   void add_prior(const Pose3& T0) {
-    Matrix6d S = Matrix6d::Zero();
-    S.diagonal().head<3>().setConstant(1.0 / opt_.prior_sigma_position_m);
-    S.diagonal().tail<3>().setConstant(1.0 / opt_.prior_sigma_rotation_rad);
-    problem_->AddResidualBlock(new PosePriorFactor(T0, S), nullptr, s_->pose[0].data());
     add_vector_prior(&s_->vel[0], opt_.prior_sigma_velocity_mps);
     add_vector_prior(&s_->bg[0], opt_.prior_sigma_gyro_bias_radps);
     add_vector_prior(&s_->ba[0], opt_.prior_sigma_accel_bias_mps2);
     add_vector_prior(&s_->bv[0], opt_.prior_sigma_dvl_bias_mps);
+    if (opt_.use_map_anchors) return;
+    Matrix6d S = Matrix6d::Zero();
+    S.diagonal().head<3>().setConstant(1.0 / opt_.prior_sigma_position_m);
+    S.diagonal().tail<3>().setConstant(1.0 / opt_.prior_sigma_rotation_rad);
+    problem_->AddResidualBlock(new PosePriorFactor(T0, S), nullptr, s_->pose[0].data());
   }
 
   // Loop closures are robustified (a wrong one must not wreck the map); odometry is not.
@@ -293,6 +301,35 @@ class GraphBuilder {
       }
       problem_->AddResidualBlock(new RelativePoseFactor(e.T_i_j, e.sqrt_info), loss,
                                  s_->pose[e.i].data(), s_->pose[e.j].data());
+    }
+  }
+
+  // MAP anchors on every keyframe (keyframe 0's drift is zero) and the drift's random walk, in
+  // the IMU frame: T_map[k] = T_world_body,map T_body_imu, noise with rotation in IMU axes.
+  // The drift walks only over intervals whose odometry is degenerate (where the online SLAM,
+  // using the same scan matching, had to dead reckon) and where a factor measures displacement
+  // (D_ij, or an odometry edge kept): against the IMU alone, whose velocity and accelerometer
+  // bias are free, a drift of the MAP cannot be told from a bias, and fitting one would bend
+  // the trajectory to the MAP's noise. Elsewhere the drift is held (its walk at the floor).
+  void add_map_anchors(const std::vector<Pose3>& T_map, const MapPoseNoise& noise,
+                       const std::vector<double>& path_m, const std::vector<bool>& walks) {
+    Matrix6d S = Matrix6d::Zero();
+    S.topLeftCorner<3, 3>() = sqrt_information_from_covariance(noise.translation_covariance);
+    S.bottomRightCorner<3, 3>() = sqrt_information_from_covariance(noise.rotation_covariance);
+    const Eigen::Matrix3d floor =
+        Eigen::Matrix3d::Identity() * std::pow(opt_.map_noise_estimate.min_drift_per_sqrt_m, 2);
+    for (size_t k = 0; k < T_map.size(); ++k) {
+      ceres::LossFunction* loss = nullptr;
+      if (opt_.map_anchor_huber_scale > 0) loss = new ceres::HuberLoss(opt_.map_anchor_huber_scale);
+      problem_->AddResidualBlock(new MapAnchorFactor(T_map[k], S), loss, s_->pose[k].data(),
+                                 s_->drift[k].data());
+      if (k == 0) continue;
+      // A keyframe that did not move still gets a finite step (1 mm of path).
+      const double step_m = std::max(1e-3, path_m[k] - path_m[k - 1]);
+      const Eigen::Matrix3d Q = walks[k] ? noise.drift_covariance_per_m : floor;
+      problem_->AddResidualBlock(
+          new VectorRandomWalkFactor(sqrt_information_from_covariance(Q * step_m)), nullptr,
+          s_->drift[k - 1].data(), s_->drift[k].data());
     }
   }
 
@@ -486,9 +523,11 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   const std::vector<Edge> loops = loop_edges(in, opt, t_ns);
   // Biases are unobservable in degeneracy unless I_ij's position residual ties the velocity
   // states to the DVL there (imu_position_when_degenerate).
+  // MAP anchors observe every keyframe's position, which makes them observable as well.
   const bool biases_observable_when_degenerate =
-      opt.use_imu && opt.use_dvl && !in.dvl.empty() &&
-      (opt.imu_position_when_degenerate || !opt.drop_imu_position_residual_with_dvl);
+      opt.use_map_anchors ||
+      (opt.use_imu && opt.use_dvl && !in.dvl.empty() &&
+       (opt.imu_position_when_degenerate || !opt.drop_imu_position_residual_with_dvl));
   for (KeyframeEstimate& k : kf) {
     k.biases_zeroed =
         k.degenerate && opt.zero_biases_when_degenerate && !biases_observable_when_degenerate;
@@ -505,6 +544,21 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   // 4. Initial states.
   States s = initial_states(T_world_imu, t_ns, pseudo, T_imu_dvl, opt);
   const Eigen::Vector3d g(0.0, 0.0, -opt.gravity_mps2);
+
+  // MAP anchors: the recorded poses in the IMU frame, and their noise with rotation in IMU axes.
+  const Eigen::Matrix3d R_body_imu = in.T_body_imu.linear();
+  const std::vector<double> path_m = path_lengths(T_world_imu);
+  // The MAP's drift path: the path travelled over keyframes whose odometry is degenerate.
+  for (size_t k = 1; k < n; ++k)
+    kf[k].map_drift_path_m =
+        kf[k - 1].map_drift_path_m + (kf[k].degenerate ? path_m[k] - path_m[k - 1] : 0.0);
+  MapPoseNoise map_noise = opt.map_noise;
+  map_noise.rotation_covariance =
+      R_body_imu.transpose() * opt.map_noise.rotation_covariance * R_body_imu;
+  if (opt.use_map_anchors && opt.estimate_map_noise && n < 3) {
+    throw std::invalid_argument("keyframes: estimating the MAP noise needs at least 3, got " +
+                                std::to_string(n));
+  }
 
   // 5. Preintegrate at the current estimates, build Eq. (3) extended, solve; repeat.
   std::unique_ptr<GraphBuilder> graph;
@@ -530,6 +584,12 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
       summary.num_imu_factors += intervals[k].imu ? 1 : 0;
       summary.num_dvl_factors += intervals[k].dvl ? 1 : 0;
     }
+    if (opt.use_map_anchors) {
+      std::vector<bool> walks(n, false);
+      for (size_t k = 1; k < n; ++k)
+        walks[k] = kf[k].degenerate && (kf[k].has_dvl_factor || kf[k].has_odometry_factor);
+      graph->add_map_anchors(T_world_imu, map_noise, path_m, walks);
+    }
     graph->finish(kf, T_imu_dvl.linear());
 
     ceres::Solver::Options so;
@@ -546,10 +606,23 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
     summary.iterations += static_cast<int>(ceres_summary.iterations.size());
     summary.converged = ceres_summary.termination_type == ceres::CONVERGENCE;
     summary.ceres_report = ceres_summary.BriefReport();
+    if (opt.use_map_anchors && opt.estimate_map_noise && pass + 1 < passes) {
+      std::vector<Pose3> estimate(n);
+      for (size_t k = 0; k < n; ++k) estimate[k] = get_pose_block(s.pose[k].data());
+      std::vector<double> drift_path(n);
+      for (size_t k = 0; k < n; ++k) drift_path[k] = kf[k].map_drift_path_m;
+      map_noise =
+          estimate_map_pose_noise(T_world_imu, estimate, drift_path, opt.map_noise_estimate);
+      result.map_noise_estimated = true;
+    }
   }
+  result.map_noise = map_noise;
+  result.map_noise.rotation_covariance =
+      R_body_imu * map_noise.rotation_covariance * R_body_imu.transpose();
   summary.num_keyframes = static_cast<int>(n);
   summary.num_odometry_factors = static_cast<int>(odometry.size());
   summary.num_loop_closures = static_cast<int>(loops.size());
+  summary.num_map_anchors = opt.use_map_anchors ? static_cast<int>(n) : 0;
 
   // 6. Covariances of the last pass's problem.
   Covariances cov;

@@ -33,6 +33,7 @@
 #include "worker/slam/dvl_imu_reconciliation.h"
 #include "worker/slam/dvl_preintegration.h"
 #include "worker/slam/imu_preintegration.h"
+#include "worker/slam/map_pose_noise.h"
 #include "worker/slam/relative_pose.h"
 #include "worker/slam/sensor_samples.h"
 
@@ -101,6 +102,23 @@ struct RefineOptions {
   // the forward speed wherever the biases are free, and the yaw estimate wanders by ~3x.
   double prior_sigma_dvl_bias_mps = 0.005;
 
+  // MAP anchors (beyond the paper): offline, the online SLAM's global constraints (scan-to-map
+  // matching, its loop closures) survive only in its keyframe poses, which are also the initial
+  // values (RefineInput::keyframes). Every keyframe is anchored to its recorded pose
+  // (MapAnchorFactor): white noise plus a drift state that random-walks along the path
+  // travelled in degeneracy (map_pose_noise.h), Huber-robustified. The first keyframe's anchor
+  // (drift zero) replaces r_0's pose prior: the anchors together fix the gauge. With
+  // estimate_map_noise the noise is re-estimated from the MAP poses' disagreement with the
+  // refinement after every pass but the last (so relinearization_passes >= 2 is needed for an
+  // estimate); `map_noise` is the first pass's (or the fixed) noise. Anchors observe every
+  // keyframe's position, so biases stay observable in degeneracy and are estimated rather than
+  // zeroed.
+  bool use_map_anchors = false;
+  MapPoseNoise map_noise = MapPoseNoise::isotropic(0.05, 0.01, 0.0);
+  bool estimate_map_noise = true;
+  MapNoiseEstimateOptions map_noise_estimate;
+  double map_anchor_huber_scale = 1.345;  // whitened units; <= 0: plain least squares
+
   // Loop closures: Cauchy loss scale in whitened units (<= 0: plain least squares), and how
   // far a loop's stamps may be from a keyframe stamp.
   double loop_closure_cauchy_scale = 1.0;
@@ -139,6 +157,10 @@ struct KeyframeEstimate {
   Eigen::Matrix3d bias_accel_covariance = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d bias_dvl_covariance = Eigen::Matrix3d::Zero();
   bool degenerate = false;  // its incoming odometry edge was degenerate
+  // MAP path travelled over degenerate keyframes up to this one, m: what the MAP's drift grows
+  // with (map_pose_noise.h); its stated position covariance is
+  // RefineResult::map_noise.position_covariance(map_drift_path_m).
+  double map_drift_path_m = 0.0;
   bool biases_zeroed = false;
   bool imu_position_with_dvl = false;  // I_ij kept its position residual next to D_ij
   // Factors over the interval from the previous keyframe to this one.
@@ -163,6 +185,7 @@ struct RefineSummary {
   int num_imu_factors = 0;
   int num_dvl_factors = 0;
   int num_loop_closures = 0;
+  int num_map_anchors = 0;
   int num_imu_intervals_skipped = 0;  // IMU gaps
   int num_dvl_intervals_skipped = 0;  // DVL dropouts / no coverage
   size_t num_pseudo_samples = 0;      // Algorithm 1 output
@@ -171,6 +194,10 @@ struct RefineSummary {
 
 struct RefineResult {
   std::vector<KeyframeEstimate> keyframes;
+  // The MAP poses' noise the last pass used (body frame; rotation in body axes), and whether
+  // it was estimated from the data (RefineOptions::estimate_map_noise) or given.
+  MapPoseNoise map_noise;
+  bool map_noise_estimated = false;
   double dvl_scale = 1.0;  // s_d of Eq. (8)
   double dvl_scale_sigma = 0.0;
   Eigen::Quaterniond q_body_dvl = Eigen::Quaterniond::Identity();  // refined T_body_dvl rotation

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "tests/sim/simulator.h"
@@ -71,7 +72,8 @@ TEST_F(RefineStageTest, RefinedKeyframesBeatMapPosesAndTheRefinementWithoutDvl) 
   const StageRun run = run_stage(mission, nlohmann::json::object(), work);
 
   // One pose per keyframe, at the keyframes' exact stamps.
-  ASSERT_EQ(run.result.artifacts, std::vector<std::string>{kRefinedTrajectoryFile});
+  ASSERT_EQ(run.result.artifacts,
+            (std::vector<std::string>{kRefinedTrajectoryFile, kSelfCheckFile}));
   const Trajectory refined = io::read_tum(work / kRefinedTrajectoryFile);
   const Trajectory map = io::read_tum(mission / "map_poses.tum");
   ASSERT_EQ(refined.size(), map.size());
@@ -114,10 +116,71 @@ TEST_F(RefineStageTest, RefinedKeyframesBeatMapPosesAndTheRefinementWithoutDvl) 
     EXPECT_LT(std::abs(rotation["error_vs_truth_deg"][a].get<double>()), 5.0 * sigma + 0.05) << a;
   }
 
+  // The self-check: one CSV row per keyframe whose movement is the refined minus the MAP
+  // position, computed here from the two TUM files; the report's RMS is theirs. The bridge's
+  // odometry never degenerates, so the MAP has no drift path and its drift is at the floor.
+  const auto& check = report["self_check"];
+  EXPECT_EQ(check["keyframes"].get<size_t>(), map.size());
+  std::ifstream csv(work / kSelfCheckFile);
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line.substr(0, 26), "t_s,dx_m,dy_m,dz_m,moved_m");
+  double sum_squared = 0.0;
+  int flagged = 0;
+  for (size_t k = 0; k < map.size(); ++k) {
+    ASSERT_TRUE(std::getline(csv, line)) << k;
+    std::vector<double> v;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 13u) << line;
+    const Eigen::Vector3d moved =
+        refined[k].T_world_body.translation() - map[k].T_world_body.translation();
+    EXPECT_NEAR(v[1], moved.x(), 2e-6) << k;
+    EXPECT_NEAR(v[4], moved.norm(), 2e-6) << k;
+    EXPECT_EQ(v[9], 0.0) << k;  // drift path
+    sum_squared += moved.squaredNorm();
+    flagged += static_cast<int>(v[12]);
+  }
+  EXPECT_FALSE(std::getline(csv, line));
+  EXPECT_NEAR(check["translation_m"]["rms"].get<double>(), std::sqrt(sum_squared / map.size()),
+              1e-5);
+  EXPECT_EQ(check["flagged_keyframes"].get<int>(), flagged);
+  EXPECT_TRUE(report["map_noise"]["estimated"].get<bool>());
+  for (int a = 0; a < 3; ++a)
+    EXPECT_NEAR(report["map_noise"]["drift_m_per_sqrt_m"]["axes"][a].get<double>(), 0.001, 1e-6);
+
   // Progress is monotone and ends at 1.
   ASSERT_FALSE(run.progress.empty());
   for (size_t k = 1; k < run.progress.size(); ++k) EXPECT_GE(run.progress[k], run.progress[k - 1]);
   EXPECT_EQ(run.progress.back(), 1.0);
+}
+
+// Issue 19: on keel-sim usv-corridor seed 12 (whole path) the refinement ended worse than the
+// MAP poses it started from, with DVL (0.196 vs 0.171 m) and without (0.381 m). The MAP walks
+// along the corridor (x) where its scan matching degenerates; its drift is now modelled and
+// estimated, so neither refinement may end worse than the MAP (without DVL by at most 10 %,
+// the issue's target), and the estimated drift must point along the corridor.
+TEST_F(RefineStageTest, CorridorRefinementsAreNotWorseThanTheMapPoses) {
+  const fs::path mission = temp_root() / "corridor_12";
+  sim::SimOptions o;
+  o.scenario = "usv-corridor";
+  o.seed = 12;
+  o.out_dir = mission.string();
+  o.sensors = {"imu", "dvl", "depth"};
+  sim::run_simulation(o);
+  const StageRun run = run_stage(mission, nlohmann::json::object(), temp_root() / "work_corridor");
+  const auto& report = run.result.report;
+  const auto& table = report["evaluation"]["table"];
+  auto ate = [&](const char* row) {
+    return table[row]["ate"]["translation_m"]["rmse"].get<double>();
+  };
+  EXPECT_LT(ate("refined_with_dvl"), ate("map"));
+  EXPECT_LT(ate("refined_without_dvl"), 1.10 * ate("map"));
+  const auto& drift = report["map_noise"]["drift_m_per_sqrt_m"];
+  EXPECT_GT(std::abs(drift["largest_direction"][0].get<double>()), 0.9) << drift.dump();
+  EXPECT_GT(drift["principal"][0].get<double>(), 0.02) << drift.dump();
+  EXPECT_EQ(report["degenerate_keyframes"]["count"].get<int>(),
+            report["solver"]["keyframes"].get<int>() - 1);
 }
 
 // keel-sim hauv-hull: the DVL rides the servo tray, which turns up to ~90 deg over the survey.
@@ -234,13 +297,12 @@ TEST_F(RefineStageTest, MissionWithoutDvlFailsUnlessDvlIsOff) {
   EXPECT_NE(error.find("refine.dvl=false"), std::string::npos) << error;
 
   const fs::path work = temp_root() / "work_imu_only";
-  // Loop closures off keeps the MAP anchors: every anchor reaches the solver.
+  // Loop closures off keeps the MAP anchors: one per keyframe.
   const StageRun run = run_stage(mission, {{"dvl", false}, {"loop_closures", false}}, work);
   const Trajectory refined = io::read_tum(work / kRefinedTrajectoryFile);
   EXPECT_EQ(refined.size(), io::read_tum(mission / "map_poses.tum").size());
-  EXPECT_GT(run.result.report["inputs"]["map_anchors"]["count"].get<int>(), 0);
-  EXPECT_EQ(run.result.report["solver"]["factors"]["loop_closures"],
-            run.result.report["inputs"]["map_anchors"]["count"]);
+  EXPECT_EQ(run.result.report["solver"]["factors"]["map_anchors"].get<size_t>(), refined.size());
+  EXPECT_EQ(run.result.report["solver"]["factors"]["loop_closures"], 0);
   EXPECT_TRUE(run.result.report["dvl"].is_null());
   EXPECT_TRUE(run.result.report["evaluation"]["table"]["refined_with_dvl"].is_null());
   EXPECT_EQ(run.result.report["solver"]["factors"]["dvl"], 0);

@@ -132,6 +132,33 @@ TEST(FactorJacobians, PosePriorAndRotationPrior) {
   expect_jacobians_match(rot, {rotation_block({0.3, -0.2, 0.25})}, {&kRotation});
 }
 
+TEST(FactorJacobians, MapAnchorAndVectorRandomWalk) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = so3_exp(Eigen::Vector3d(-0.2, 0.1, 0.6));
+  T.translation() = Eigen::Vector3d(3.0, -1.0, 0.4);
+  MapAnchorFactor anchor(T, random_sqrt_info(6, 4));
+  expect_jacobians_match(anchor,
+                         {pose_block({-0.1, 0.2, 0.5}, {3.2, -0.8, 0.3}), vec(0.1, -0.2, 0.05)},
+                         {&kPose, nullptr});
+  VectorRandomWalkFactor walk(random_sqrt_info(3, 5));
+  expect_jacobians_match(walk, {vec(0.1, 0.2, 0.3), vec(0.2, 0.1, -0.3)}, {nullptr, nullptr});
+}
+
+// The anchor's residual is the translation minus the drift: a pose at MAP + drift fits exactly.
+TEST(MapAnchorFactor, ResidualIsPositionMinusMapMinusDrift) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = so3_exp(Eigen::Vector3d(0.0, 0.0, 0.3));
+  T.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  MapAnchorFactor anchor(T, Eigen::Matrix<double, 6, 6>::Identity());
+  const Eigen::VectorXd r =
+      evaluate(anchor, {pose_block({0.0, 0.0, 0.3}, {1.5, 2.0, 3.0}), vec(0.5, 0.0, 0.0)});
+  EXPECT_LT(r.norm(), 1e-12);
+  const Eigen::VectorXd r2 =
+      evaluate(anchor, {pose_block({0.0, 0.0, 0.3}, {1.5, 2.0, 3.0}), vec(0.0, 0.1, 0.0)});
+  EXPECT_NEAR(r2(0), 0.5, 1e-12);
+  EXPECT_NEAR(r2(1), -0.1, 1e-12);
+}
+
 TEST(FactorJacobians, BiasRandomWalk) {
   BiasRandomWalkFactor f(1e-4, 0.7);
   expect_jacobians_match(f, {vec(0.1, 0.2, 0.3), vec(0.2, 0.1, -0.3)}, {nullptr, nullptr});
