@@ -1,6 +1,7 @@
 // The dashboard in a real headless Chromium against a real keel-server with a worker on
 // loopback and keel-sim missions (issue #13, "Tests"): sign-in and a refused token, the job
-// list updated live while a job runs, a failed job's error, the report view's numbers
+// list updated live while a job runs, a list of 300 jobs drawn a window at a time and
+// reached by scrolling, a failed job's error, the report view's numbers
 // against report.json, the viewer's point and vertex counts against Debian's draco_decoder,
 // the legend's range against the sidecar and the decoded values, a shape click moving the
 // camera, the camera restored from the URL, the queue page against GET /v1/queue, missing
@@ -338,6 +339,71 @@ test('the queue page shows the server\'s own figures', (t) => step('queue', asyn
     assert.equal(await page.textContent(`#count-${state} .value`), String(queue.jobs_by_state[state] ?? 0), state);
   assert.equal(await page.textContent('#workers-alive .value'), String(queue.workers_alive));
 }));
+
+// The job list keeps only the rows in view in the page (web/js/virtual_rows.js): a long list
+// still counts every job, reaches each one by scrolling, newest first by the server's
+// creation times, and shows a change that arrived while its row was out of view.
+let longPage;
+test('a long job list draws the rows in view and reaches every job by scrolling', (t) => step('long job list', async () => {
+  const bare = await new Server(binDir, webDir, {workers: 0}).start();
+  longPage = await browser.context.newPage();
+  const longListProblems = watchPage(longPage);
+  try {
+    const first = bare.submit(jobs.bridgeMission, 'ingest');
+    const {mission_id: missionId} = await bare.api(`v1/jobs/${first}`);
+    const total = 300;
+    for (let made = 1; made < total; made += 20)
+      await Promise.all(Array.from({length: Math.min(20, total - made)}, () =>
+        bare.api('v1/jobs', {method: 'POST', json: {mission_id: missionId, stages: ['ingest']}})));
+    const {jobs: records} = await bare.api('v1/jobs?limit=10000');
+    assert.equal(records.length, total);
+    const createdMs = new Map(records.map((job) => [job.id, job.created_at_ms]));
+
+    await signIn(longPage, bare);
+    await longPage.waitForFunction((n) => document.body.dataset.jobsRendered === String(n), total, {timeout: 30000});
+    assert.equal(await longPage.textContent('#job-count'), `${total} of ${total} jobs`);
+    const drawn = () => longPage.$$eval('#jobs-table tbody tr[data-job-id]', (trs) => trs.map((tr) => ({id: tr.dataset.jobId, state: tr.dataset.state})));
+    const frame = () => longPage.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+    const inView = await drawn();
+    assert.ok(inView.length > 5 && inView.length < 100, `${inView.length} rows in the page for ${total} jobs`);
+
+    // A change to the oldest job (the last row, out of view) while the page is open.
+    if (hasEvents) {
+      await longPage.waitForSelector('#live[data-state="live"]', {timeout: 10000});
+      assert.ok(!inView.some((row) => row.id === first), 'the oldest job is drawn before scrolling to it');
+      await bare.api(`v1/jobs/${first}/cancel`, {method: 'POST', json: {}});
+      await longPage.waitForTimeout(1000);  // the event has arrived (its latency is measured by the benchmark)
+    } else {
+      t.diagnostic('no GET /v1/events: the change out of view is not tested');
+    }
+
+    // Scroll through the whole list a viewport at a time.
+    const seen = new Map();  // id -> state
+    const order = [];
+    for (let top = 0; ; ) {
+      await longPage.$eval('#jobs-scroll', (el, y) => { el.scrollTop = y; }, top);
+      await frame();
+      const rows = await drawn();
+      for (const row of rows) {
+        if (!seen.has(row.id)) order.push(row.id);  // windows overlap; scrolling down keeps the list's order
+        seen.set(row.id, row.state);
+      }
+      const box = await longPage.$eval('#jobs-scroll', (el) => ({top: el.scrollTop, height: el.clientHeight, scroll: el.scrollHeight}));
+      assert.ok(rows.length < 100, `${rows.length} rows in the page at scrollTop ${box.top}`);
+      if (box.top + box.height >= box.scroll - 1) break;
+      top = box.top + box.height;
+    }
+    assert.equal(seen.size, total, 'jobs reached by scrolling');
+    for (let i = 1; i < order.length; i += 1)
+      assert.ok(createdMs.get(order[i - 1]) >= createdMs.get(order[i]), `${order[i - 1]} drawn above the older ${order[i]}`);
+    assert.equal(order[order.length - 1], first, 'the oldest job is the last row');
+    if (hasEvents) assert.equal(seen.get(first), 'canceled', 'the change made while the row was out of view');
+    assert.deepEqual(longListProblems, []);
+  } finally {
+    await longPage.close();
+    await bare.stop();
+  }
+}, () => longPage));
 
 test('no console error and no failed request on the signed-in pages', () => {
   assert.deepEqual(problems, []);

@@ -15,7 +15,7 @@ export const CHROMIUM = process.env.KEEL_CHROMIUM || '/usr/bin/chromium';
 export function parseArgs(argv) {
   const args = {};
   for (let i = 0; i < argv.length; i += 1)
-    if (argv[i].startsWith('--')) args[argv[i].slice(2)] = argv[i + 1]?.startsWith('--') ? 'true' : argv[++i];
+    if (argv[i].startsWith('--')) args[argv[i].slice(2)] = i + 1 === argv.length || argv[i + 1].startsWith('--') ? 'true' : argv[++i];
   return args;
 }
 

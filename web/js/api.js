@@ -62,7 +62,23 @@ export async function request(path, {method = 'GET', json, headers = {}, signal,
   return response;
 }
 
+// GETs started early by the app for the page whose module is still loading (the job list:
+// its request then runs while the page's code arrives). path -> {promise, at}.
+const prefetched = new Map();
+const PREFETCH_FRESH_MS = 5000;
+
+export function prefetchJson(path) {
+  const promise = request(path).then((response) => response.json());
+  promise.catch(() => {});  // the page that takes it handles the error
+  prefetched.set(path, {promise, at: performance.now()});
+}
+
 export async function getJson(path, options) {
+  const early = options ? null : prefetched.get(path);
+  if (early) {
+    prefetched.delete(path);
+    if (performance.now() - early.at < PREFETCH_FRESH_MS) return early.promise;
+  }
   return (await request(path, options)).json();
 }
 
@@ -73,6 +89,8 @@ export async function postJson(path, json, options = {}) {
 
 export const jobsApi = {
   list: (query = {}) => getJson(`v1/jobs?${new URLSearchParams(query)}`),
+  // Every job of a state ('' = any) for the job list, newest first (the app prefetches it).
+  listPath: (state = '') => `v1/jobs?${new URLSearchParams(state ? {limit: 10000, state} : {limit: 10000})}`,
   get: (id) => getJson(`v1/jobs/${encodeURIComponent(id)}`),
   log: (id, from) => getJson(`v1/jobs/${encodeURIComponent(id)}/log?from=${from}`),
   artifacts: (id) => getJson(`v1/jobs/${encodeURIComponent(id)}/artifacts`),

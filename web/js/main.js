@@ -2,7 +2,7 @@
 // #/jobs/<id>/viewer, #/queue, #/signin), the sign-in state and the live-event indicator.
 // Pages are modules with mount(container, route) -> unmount; the report view and the 3D
 // viewer are loaded only when opened, so the job list never waits for uPlot or three.js.
-import {session} from './api.js';
+import {jobsApi, prefetchJson, session} from './api.js';
 import {clear, message} from './dom.js';
 import {liveEvents} from './events.js';
 import {navigate, parseRoute} from './router.js';
@@ -39,6 +39,8 @@ async function route() {
     unmount = null;
   }
   clear(app);
+  // The job list's request runs while its page's code loads.
+  if (current.page === 'jobs' && session.token()) prefetchJson(jobsApi.listPath(current.query.get('state') || ''));
   let module;
   try {
     module = await pages[current.page]();

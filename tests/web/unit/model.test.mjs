@@ -74,3 +74,29 @@ test('formats', () => {
   assert.equal(formatNumber(2.5e-5), '2.500e-5');
   assert.equal(formatNumber(null), '–');
 });
+
+test('virtual list window: the rows meeting the viewport, overscan either side, clamped', async () => {
+  const {rowWindow} = await import('../../../web/js/virtual_rows.js');
+  // 1,000 rows of 30 px, a 600 px viewport scrolled to 3,000 px: rows 100..119 meet it.
+  assert.deepEqual(rowWindow({scrollTop: 3000, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 0}),
+                   {first: 100, last: 120});
+  assert.deepEqual(rowWindow({scrollTop: 3000, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 5}),
+                   {first: 95, last: 125});
+  // A row cut by the viewport's edges is drawn: 3,010 px starts inside row 100, 3,610 ends inside row 120.
+  assert.deepEqual(rowWindow({scrollTop: 3010, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 0}),
+                   {first: 100, last: 121});
+  // Top, bottom, short lists, overscrolled and empty.
+  assert.deepEqual(rowWindow({scrollTop: 0, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 10}), {first: 0, last: 30});
+  assert.deepEqual(rowWindow({scrollTop: 29400, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 10}), {first: 970, last: 1000});
+  assert.deepEqual(rowWindow({scrollTop: 0, viewportHeight: 600, rowHeight: 30, count: 7, overscan: 10}), {first: 0, last: 7});
+  assert.deepEqual(rowWindow({scrollTop: 90000, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 10}), {first: 1000, last: 1000});
+  assert.deepEqual(rowWindow({scrollTop: -50, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 0}), {first: 0, last: 20});
+  assert.deepEqual(rowWindow({scrollTop: 0, viewportHeight: 600, rowHeight: 30, count: 0}), {first: 0, last: 0});
+  // Every row of a long list is in some window while scrolling through it in viewport steps.
+  const seen = new Set();
+  for (let top = 0; top < 1000 * 30; top += 600) {
+    const {first, last} = rowWindow({scrollTop: top, viewportHeight: 600, rowHeight: 30, count: 1000, overscan: 0});
+    for (let i = first; i < last; i += 1) seen.add(i);
+  }
+  assert.equal(seen.size, 1000);
+});
