@@ -12,6 +12,8 @@ packages=(
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev libnanoflann-dev
   libdraco-dev draco libsqlite3-dev nlohmann-json3-dev libcli11-dev
   libspdlog-dev libyaml-cpp-dev libssl-dev libarchive-dev
+  # PostgreSQL store for several replicas (issue 14); tests start a private server
+  libpqxx-dev postgresql
   # ROS1 bags without ROS (PLATFORM-NOTES.md)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev

@@ -175,9 +175,9 @@ int apply_migrations(Database& db, const std::vector<Migration>& migrations) {
   int version = schema_version(db);
   const int newest = static_cast<int>(migrations.size());
   if (version > newest)
-    throw std::runtime_error(db.file().string() + ": schema version " + std::to_string(version) +
-                             " is newer than this program knows (" + std::to_string(newest) +
-                             "); use a newer keel-server");
+    throw SchemaTooNew(db.file().string() + ": schema version " + std::to_string(version) +
+                       " is newer than this program knows (" + std::to_string(newest) +
+                       "); use a newer keel-server");
   for (const Migration& migration : migrations) {
     if (migration.version <= version) continue;
     Transaction transaction(db);

@@ -3,12 +3,19 @@
 // transaction, so a crash mid-migration leaves the previous version intact.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "storage/sqlite_db.h"
 
 namespace keel::storage {
+
+// The database was made by a newer program (its schema version is beyond ours): opening it
+// would misread it, so it is refused.
+struct SchemaTooNew : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 struct Migration {
   int version;       // 1, 2, 3, ... in order; never renumber or edit a released one

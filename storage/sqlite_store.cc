@@ -10,6 +10,7 @@
 #include "storage/migrations.h"
 #include "storage/sha256.h"
 #include "storage/sqlite_queries.h"
+#include "storage/store_rules.h"
 
 namespace keel::storage {
 
@@ -22,14 +23,7 @@ const fs::path& ensure_directory(const fs::path& dir) {
   return dir;
 }
 
-void require_sha256(const std::string& sha256, const std::string& field) {
-  if (!proto::is_sha256_hex(sha256))
-    throw Invalid(field + ": expected 64 lowercase hex digits (SHA-256), got '" + sha256 + "'");
-}
-
-NotFound upload_not_found(const std::string& upload_id) {
-  return NotFound("upload " + upload_id + " not found");
-}
+using namespace rules;
 
 }  // namespace
 
@@ -88,8 +82,7 @@ void SqliteStore::recover_uploads() {
 }
 
 proto::Upload SqliteStore::create_upload(const proto::UploadRequest& request) {
-  if (request.size < 0)
-    throw Invalid("upload size: expected >= 0 bytes, got " + std::to_string(request.size));
+  require_upload_size(request.size);
   proto::Upload upload;
   upload.id = new_id(kUploadPrefix);
   upload.name = request.name;
@@ -245,15 +238,7 @@ std::string SqliteStore::put_blob(const std::string& bytes) {
 // --- missions ---
 
 proto::Mission SqliteStore::create_mission(const proto::MissionRequest& request) {
-  if (request.name.empty()) throw Invalid("name: expected a non-empty mission name");
-  require_sha256(request.bundle_blob, "bundle_blob");
-  if (!request.cad_blob.empty()) {
-    require_sha256(request.cad_blob, "cad_blob");
-    if (request.cad_name.empty())
-      throw Invalid("cad_name: required with cad_blob (its extension tells the mesh format)");
-  } else if (!request.cad_name.empty()) {
-    throw Invalid("cad_name: given without cad_blob");
-  }
+  require_mission_request(request);
   proto::Mission mission;
   mission.id = new_id(kMissionPrefix);
   mission.name = request.name;
@@ -313,13 +298,6 @@ proto::TokenInfo read_token(const Statement& row) {
   return token;
 }
 
-void require_project_name(const std::string& name, const std::string& field) {
-  if (!proto::is_project_name(name))
-    throw Invalid(field + ": project name '" + name +
-                  "' must be 1..64 characters of a-z, 0-9, '.', '_' or '-', starting with a "
-                  "letter or digit");
-}
-
 void insert_project(Database& db, const std::string& name, int64_t now_ms) {
   auto statement = db.cached(
       "INSERT INTO projects (name, created_at_ms) VALUES (?1, ?2) ON CONFLICT (name) DO NOTHING");
@@ -336,13 +314,7 @@ std::string SqliteStore::project_of_request(Database& db, const std::string& pro
 }
 
 proto::TokenInfo SqliteStore::add_token(const std::string& token, const TokenSpec& spec) {
-  if (token.empty()) throw Invalid("token: expected a non-empty token");
-  if (spec.project == proto::kAllProjects) {
-    if (spec.role != proto::Role::kAdmin && spec.role != proto::Role::kWorker)
-      throw Invalid("project: '*' (every project) is only for admin and worker tokens");
-  } else {
-    require_project_name(spec.project, "project");
-  }
+  require_token_spec(token, spec);
   const std::string hash = sha256_bytes(token);  // the clear token is never stored
   return write([&](Database& db) {
     const int64_t now_ms = clock_();
@@ -384,7 +356,7 @@ std::optional<proto::TokenInfo> SqliteStore::check_token(const std::string& toke
 
 std::vector<proto::TokenInfo> SqliteStore::list_tokens() {
   return read([&](Database& db) {
-    static const std::string sql = std::string(kTokenSelect) + " ORDER BY created_at_ms, id";
+    static const std::string sql = std::string(kTokenSelect) + " ORDER BY created_at_ms, rowid";
     auto statement = db.cached(sql);
     std::vector<proto::TokenInfo> tokens;
     while (statement->step()) tokens.push_back(read_token(*statement));
@@ -394,8 +366,8 @@ std::vector<proto::TokenInfo> SqliteStore::list_tokens() {
 
 proto::TokenInfo SqliteStore::revoke_token(const std::string& token_id) {
   return write([&](Database& db) {
-    auto update = db.cached(
-        "UPDATE api_tokens SET revoked_at_ms = ?2 WHERE id = ?1 AND revoked_at_ms = 0");
+    auto update =
+        db.cached("UPDATE api_tokens SET revoked_at_ms = ?2 WHERE id = ?1 AND revoked_at_ms = 0");
     update->bind_text(1, token_id).bind_int64(2, clock_()).run();
     static const std::string sql = std::string(kTokenSelect) + " WHERE id = ?1";
     auto select = db.cached(sql);

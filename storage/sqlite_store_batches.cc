@@ -3,28 +3,16 @@
 #include <algorithm>
 #include <unordered_set>
 
-#include "proto/contract_error.h"
-#include "proto/options.h"
 #include "storage/ids.h"
 #include "storage/sqlite_queries.h"
 #include "storage/sqlite_store.h"
+#include "storage/store_rules.h"
 
 namespace keel::storage {
 
 namespace {
 
-// A worker that called the worker protocol this recently is alive (docs/api.md).
-constexpr int64_t kWorkerAliveMs = 60'000;
-constexpr int64_t kHourMs = 3'600'000;
-
-std::map<std::string, int64_t> zero_counts() {
-  std::map<std::string, int64_t> counts;
-  for (auto state : {proto::JobState::kQueued, proto::JobState::kRunning,
-                     proto::JobState::kSucceeded, proto::JobState::kFailed,
-                     proto::JobState::kCanceled})
-    counts[proto::to_string(state)] = 0;
-  return counts;
-}
+using namespace rules;
 
 // The missions a batch runs on, oldest first, all of `project`.
 std::vector<std::string> batch_missions(Database& db, const proto::ReprocessRequest& request,
@@ -56,12 +44,7 @@ std::vector<std::string> batch_missions(Database& db, const proto::ReprocessRequ
 proto::Batch SqliteStore::create_batch(const proto::ReprocessRequest& request) {
   if (!request.mission_ids.empty() && !request.name_prefix.empty())
     throw Invalid("give either mission_ids or name_prefix, not both");
-  try {
-    proto::validate_stage_list(request.stages, "stages");
-    proto::validate_options(request.options, "options");
-  } catch (const proto::ContractError& error) {
-    throw Invalid(error.what());
-  }
+  require_pipeline(request.stages, request.options);
   const std::string stages = nlohmann::json(request.stages).dump();
   const std::string options = request.options.dump();
   return write([&](Database& db) {
@@ -85,8 +68,8 @@ proto::Batch SqliteStore::create_batch(const proto::ReprocessRequest& request) {
           .bind_text(7, batch.id)
           .run();
     }
-    auto record = db.cached(
-        "INSERT INTO batches (id, project, jobs, created_at_ms) VALUES (?1, ?2, ?3, ?4)");
+    auto record =
+        db.cached("INSERT INTO batches (id, project, jobs, created_at_ms) VALUES (?1, ?2, ?3, ?4)");
     record->bind_text(1, batch.id)
         .bind_text(2, batch.project)
         .bind_int64(3, static_cast<int64_t>(missions.size()))

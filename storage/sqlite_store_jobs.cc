@@ -2,52 +2,21 @@
 // artifacts and logs.
 #include <cmath>
 
-#include "proto/contract_error.h"
-#include "proto/options.h"
 #include "storage/ids.h"
 #include "storage/sqlite_queries.h"
 #include "storage/sqlite_store.h"
+#include "storage/store_rules.h"
 
 namespace keel::storage {
 
 namespace {
 
-// After this many expired leases a job fails instead of being leased again (docs/api.md).
-constexpr int kMaxLeaseExpiries = 3;
-constexpr size_t kMaxIdempotencyKeyBytes = 255;
-constexpr size_t kMaxArtifactNameBytes = 255;
-constexpr int kMaxListLimit = 10000;
-
-NotFound job_not_found(const std::string& job_id) {
-  return NotFound("job " + job_id + " not found");
-}
+using namespace rules;
 
 proto::Job require_job(Database& db, const std::string& job_id) {
   auto job = find_job(db, job_id);
   if (!job) throw job_not_found(job_id);
   return *job;
-}
-
-void require_stage_of(const proto::Job& job, const std::string& stage, const std::string& field) {
-  if (pipeline_index(job.stages, stage) == job.stages.size())
-    throw Invalid(field + ": job " + job.id + " has no stage '" + stage +
-                  "' (its stages: " + nlohmann::json(job.stages).dump() + ")");
-}
-
-// Artifact names become download file names: one plain path component.
-void require_artifact_name(const std::string& name) {
-  if (name.empty() || name.size() > kMaxArtifactNameBytes || name == "." || name == "..")
-    throw Invalid("name: expected a file name of 1.." + std::to_string(kMaxArtifactNameBytes) +
-                  " bytes, got '" + name + "'");
-  for (char c : name)
-    if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20)
-      throw Invalid("name: artifact name '" + name +
-                    "' must not contain '/', '\\' or control characters");
-}
-
-bool same_request(const proto::Job& job, const proto::JobRequest& request) {
-  return job.mission_id == request.mission_id && job.stages == request.stages &&
-         job.options == request.options;
 }
 
 }  // namespace
@@ -56,15 +25,8 @@ bool same_request(const proto::Job& job, const proto::JobRequest& request) {
 
 proto::Job SqliteStore::create_job(const proto::JobRequest& request,
                                    const std::string& idempotency_key, bool* created) {
-  try {
-    proto::validate_stage_list(request.stages, "stages");
-    proto::validate_options(request.options, "options");
-  } catch (const proto::ContractError& error) {
-    throw Invalid(error.what());
-  }
-  if (idempotency_key.size() > kMaxIdempotencyKeyBytes)
-    throw Invalid("Idempotency-Key: expected at most " + std::to_string(kMaxIdempotencyKeyBytes) +
-                  " bytes");
+  require_pipeline(request.stages, request.options);
+  require_idempotency_key(idempotency_key);
   return write([&](Database& db) {
     if (!idempotency_key.empty()) {
       auto existing = db.cached("SELECT id FROM jobs WHERE idempotency_key = ?1");
@@ -105,9 +67,7 @@ proto::Job SqliteStore::get_job(const std::string& job_id) {
 }
 
 std::vector<proto::Job> SqliteStore::list_jobs(const JobFilter& filter) {
-  if (filter.limit < 1 || filter.limit > kMaxListLimit)
-    throw Invalid("limit: expected 1.." + std::to_string(kMaxListLimit) + ", got " +
-                  std::to_string(filter.limit));
+  require_list_limit(filter.limit);
   return read([&](Database& db) { return query_jobs(db, filter); });
 }
 
@@ -170,14 +130,10 @@ int SqliteStore::expire_leases(Database& db, int64_t now_ms) {
     statement->bind_text(1, job.job_id)
         .bind_text(2, give_up ? "failed" : "queued")
         .bind_int64(3, job.expiries)
-        .bind_text(4, give_up ? "lease expired " + std::to_string(job.expiries) +
-                                    " times (last worker: " + job.worker + ")"
-                              : "")
+        .bind_text(4, give_up ? expired_lease_error(job.expiries, job.worker) : "")
         .bind_int64(5, give_up ? now_ms : 0)
         .run();
-    insert_log_lines(db, job.job_id,
-                     {"lease " + job.lease_id + " of worker " + job.worker + " expired" +
-                      (give_up ? "; the job failed" : "; the job is queued again")},
+    insert_log_lines(db, job.job_id, {expired_lease_line(job.lease_id, job.worker, give_up)},
                      now_ms);
     note_job(db, job.job_id);
   }
@@ -189,15 +145,13 @@ int SqliteStore::requeue_expired_leases() {
 }
 
 std::optional<proto::Lease> SqliteStore::lease_job(const proto::LeaseRequest& request) {
-  if (request.lease_seconds < 1)
-    throw Invalid("lease_seconds: expected >= 1, got " + std::to_string(request.lease_seconds));
+  require_lease_seconds(request.lease_seconds);
   return write([&](Database& db) -> std::optional<proto::Lease> {
     const int64_t now_ms = clock_();
     expire_leases(db, now_ms);
     std::string job_id;
     {
-      const bool any_project =
-          request.project.empty() || request.project == proto::kAllProjects;
+      const bool any_project = request.project.empty() || request.project == proto::kAllProjects;
       auto oldest = db.cached(
           "SELECT id FROM jobs WHERE state = 'queued' AND (?1 IS NULL OR project = ?1) "
           "ORDER BY seq LIMIT 1");
@@ -242,9 +196,7 @@ proto::Job SqliteStore::require_running_lease(Database& db, const std::string& j
   if (!statement->step()) throw job_not_found(job_id);
   const std::string state = statement->column_text(0);
   if (statement->column_is_null(1) || statement->column_text(1) != lease_id)
-    throw LeaseLost("job " + job_id + ": lease " + lease_id +
-                    " is not the job's current lease (it expired and the job was queued "
-                    "again, or the job finished or was retried)");
+    throw lease_lost(job_id, lease_id);
   if (state != "running")
     throw Conflict("job " + job_id + " is " + state + "; the worker must stop");
   return require_job(db, job_id);
@@ -252,8 +204,7 @@ proto::Job SqliteStore::require_running_lease(Database& db, const std::string& j
 
 proto::HeartbeatReply SqliteStore::heartbeat(const std::string& job_id,
                                              const proto::Heartbeat& beat) {
-  if (!(beat.progress >= 0.0 && beat.progress <= 1.0))
-    throw Invalid("progress: expected a fraction in [0, 1]");
+  require_progress(beat.progress);
   return write([&](Database& db) {
     const int64_t now_ms = clock_();
     proto::HeartbeatReply reply;
@@ -265,9 +216,7 @@ proto::HeartbeatReply SqliteStore::heartbeat(const std::string& job_id,
       const std::string state = statement->column_text(0);
       if (statement->column_is_null(1) || statement->column_text(1) != beat.lease_id ||
           (state != "running" && state != "canceled"))
-        throw LeaseLost("job " + job_id + ": lease " + beat.lease_id +
-                        " is not the job's current lease (it expired and the job was queued "
-                        "again, or the job finished or was retried)");
+        throw lease_lost(job_id, beat.lease_id);
       if (state == "canceled") {
         reply.canceled = true;
         reply.expires_at_ms = statement->column_int64(2);
@@ -353,9 +302,7 @@ proto::Job SqliteStore::finish_job(const std::string& job_id, const proto::JobFi
                                    bool succeeded) {
   return write([&](Database& db) {
     require_running_lease(db, job_id, finish.lease_id);
-    const std::string error =
-        succeeded ? ""
-                  : (finish.error.empty() ? "the worker failed without a message" : finish.error);
+    const std::string error = finish_error(finish, succeeded);
     auto statement = db.cached(
         "UPDATE jobs SET state = ?2, error = ?3, finished_at_ms = ?4, stage = '', "
         "progress = CASE WHEN ?2 = 'succeeded' THEN 1 ELSE progress END, "
@@ -381,10 +328,7 @@ proto::Job SqliteStore::release_job(const std::string& job_id, const std::string
         "UPDATE jobs SET state = 'queued', stage = '', progress = 0, lease_id = NULL, "
         "lease_expires_at_ms = NULL WHERE id = ?1");
     statement->bind_text(1, job_id).run();
-    insert_log_lines(db, job_id,
-                     {"worker " + job.worker + " gave lease " + lease_id +
-                      " back; the job is queued again"},
-                     now_ms);
+    insert_log_lines(db, job_id, {released_lease_line(job.worker, lease_id)}, now_ms);
     release_worker_of(db, job_id, now_ms);
     note_job(db, job_id);
     return require_job(db, job_id);
@@ -451,9 +395,7 @@ void SqliteStore::append_log(const std::string& job_id, const std::vector<std::s
 
 proto::LogPage SqliteStore::read_log(const std::string& job_id, int64_t from, int limit) {
   if (from < 0) throw Invalid("from: expected >= 0, got " + std::to_string(from));
-  if (limit < 1 || limit > kMaxListLimit)
-    throw Invalid("limit: expected 1.." + std::to_string(kMaxListLimit) + ", got " +
-                  std::to_string(limit));
+  require_list_limit(limit);
   return read([&](Database& db) {
     Transaction snapshot(db, Transaction::Mode::kDeferred);
     if (!find_job(db, job_id)) throw job_not_found(job_id);

@@ -34,6 +34,9 @@ namespace keel::storage {
 struct NotFound : std::runtime_error { using std::runtime_error::runtime_error; };
 struct Conflict : std::runtime_error { using std::runtime_error::runtime_error; };
 struct Invalid : std::runtime_error { using std::runtime_error::runtime_error; };
+// The database cannot be reached now (PostgreSQL down, network cut): nothing was changed,
+// or the outcome of a commit is unknown; the caller may try again later (503).
+struct Unavailable : std::runtime_error { using std::runtime_error::runtime_error; };
 
 // Refinements, so the server can choose the HTTP code (catching the base still works).
 // append_upload: the chunk does not start at the committed offset (409 offset_mismatch).

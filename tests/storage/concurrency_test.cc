@@ -14,7 +14,7 @@ namespace {
 using testing::StoreTest;
 using ConcurrencyTest = StoreTest;
 
-TEST_F(ConcurrencyTest, CreateLeaseHeartbeatReadFromManyThreads) {
+TEST_P(ConcurrencyTest, CreateLeaseHeartbeatReadFromManyThreads) {
   const proto::Mission mission = make_mission();
   constexpr int kThreads = 4;
   constexpr int kJobsPerThread = 25;
@@ -58,7 +58,7 @@ TEST_F(ConcurrencyTest, CreateLeaseHeartbeatReadFromManyThreads) {
   }
 }
 
-TEST_F(ConcurrencyTest, ParallelUploadsAndBlobs) {
+TEST_P(ConcurrencyTest, ParallelUploadsAndBlobs) {
   constexpr int kThreads = 4;
   std::atomic<int> errors{0};
   std::vector<std::thread> threads;
@@ -82,6 +82,59 @@ TEST_F(ConcurrencyTest, ParallelUploadsAndBlobs) {
   EXPECT_EQ(store_->metrics().blobs, 4);  // 2 uploaded contents + 2 small blobs
   EXPECT_EQ(store_->metrics().uploads_open, 0);
 }
+
+// 8 workers lease from 2,000 queued jobs at once (the concurrency test): every job
+// is leased exactly once and none is lost; a stale lease's completion is rejected.
+TEST_P(ConcurrencyTest, EightWorkersLeaseTwoThousandJobsEachExactlyOnce) {
+  constexpr int kJobs = 2000;
+  constexpr int kThreads = 8;
+  const proto::Mission mission = make_mission();
+  std::set<std::string> queued;
+  for (int i = 0; i < kJobs; ++i)
+    queued.insert(store_->create_job(job_request(mission, {"ingest"}), "").id);
+  ASSERT_EQ(queued.size(), static_cast<size_t>(kJobs));
+
+  std::vector<std::vector<proto::Lease>> leased(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t)
+    threads.emplace_back([&, t] {
+      try {
+        while (auto lease = store_->lease_job({"w" + std::to_string(t), 60})) {
+          store_->finish_job(lease->job.id, {lease->lease_id, ""}, true);
+          leased[t].push_back(std::move(*lease));
+        }
+      } catch (const std::exception& error) {
+        ADD_FAILURE() << "worker " << t << ": " << error.what();
+      }
+    });
+  for (auto& thread : threads) thread.join();
+
+  std::multiset<std::string> taken;
+  for (const auto& leases : leased)
+    for (const auto& lease : leases) taken.insert(lease.job.id);
+  EXPECT_EQ(taken.size(), static_cast<size_t>(kJobs)) << "every job leased once, none twice";
+  EXPECT_EQ(std::set<std::string>(taken.begin(), taken.end()), queued) << "none lost";
+  size_t busy_workers = 0;
+  for (const auto& leases : leased) busy_workers += leases.empty() ? 0 : 1;
+  EXPECT_GT(busy_workers, 1u) << "the workers ran side by side";
+  const Metrics metrics = store_->metrics();
+  EXPECT_EQ(metrics.jobs_by_state[static_cast<int>(proto::JobState::kSucceeded)], kJobs);
+  EXPECT_EQ(metrics.jobs_by_state[static_cast<int>(proto::JobState::kQueued)], 0);
+
+  // A stale lease: the job's lease expired and another worker holds it now.
+  const proto::Job job = store_->create_job(job_request(mission, {"ingest"}), "");
+  const proto::Lease stale = lease("slow", 30);
+  clock_.advance_ms(31'000);
+  const proto::Lease current = lease("fast", 30);
+  EXPECT_EQ(current.job.id, job.id);
+  EXPECT_THROW(store_->finish_job(job.id, {stale.lease_id, ""}, true), LeaseLost);
+  EXPECT_THROW(store_->complete_stage(job.id, "ingest", {stale.lease_id, {}, 1.0}), LeaseLost);
+  EXPECT_EQ(store_->get_job(job.id).state, proto::JobState::kRunning);
+  EXPECT_EQ(store_->finish_job(job.id, {current.lease_id, ""}, true).state,
+            proto::JobState::kSucceeded);
+}
+
+KEEL_STORE_TEST_SUITE(ConcurrencyTest);
 
 }  // namespace
 }  // namespace keel::storage

@@ -29,7 +29,7 @@ bool has_hex_suffix(const std::string& id, const std::string& prefix) {
 using MissionTest = StoreTest;
 using JobTest = StoreTest;
 
-TEST_F(MissionTest, CreateGetAndListByPrefix) {
+TEST_P(MissionTest, CreateGetAndListByPrefix) {
   const proto::Mission a = make_mission("bridge-01");
   clock_.advance_ms(10);
   const proto::Mission b = make_mission("bridge-02");
@@ -51,7 +51,7 @@ TEST_F(MissionTest, CreateGetAndListByPrefix) {
   EXPECT_EQ(store_->list_missions("hull")[0].id, c.id);
 }
 
-TEST_F(MissionTest, CadBlobAndErrors) {
+TEST_P(MissionTest, CadBlobAndErrors) {
   proto::MissionRequest request{"hull", store_->put_blob("tar"), store_->put_blob("ply"),
                                 "ship.ply"};
   EXPECT_EQ(store_->get_mission(store_->create_mission(request).id).cad_name, "ship.ply");
@@ -73,7 +73,7 @@ TEST_F(MissionTest, CadBlobAndErrors) {
             std::string::npos);
 }
 
-TEST_F(JobTest, CreateAndGet) {
+TEST_P(JobTest, CreateAndGet) {
   const proto::Mission mission = make_mission();
   proto::JobRequest request = job_request(mission);
   request.options = {{"map", {{"voxel_m", 0.05}}}};
@@ -92,7 +92,7 @@ TEST_F(JobTest, CreateAndGet) {
   EXPECT_TRUE(got.completed_stages.empty());
 }
 
-TEST_F(JobTest, BadRequestsAreInvalidOrNotFound) {
+TEST_P(JobTest, BadRequestsAreInvalidOrNotFound) {
   const proto::Mission mission = make_mission();
   EXPECT_THROW(store_->create_job(job_request(mission, {}), ""), Invalid);
   EXPECT_THROW(store_->create_job(job_request(mission, {"map", "map"}), ""), Invalid);
@@ -111,7 +111,7 @@ TEST_F(JobTest, BadRequestsAreInvalidOrNotFound) {
             std::string::npos);
 }
 
-TEST_F(JobTest, IdempotencyKeyReturnsFirstJob) {
+TEST_P(JobTest, IdempotencyKeyReturnsFirstJob) {
   const proto::Mission mission = make_mission();
   bool created = false;
   const proto::Job first = store_->create_job(job_request(mission), "key-1", &created);
@@ -130,7 +130,7 @@ TEST_F(JobTest, IdempotencyKeyReturnsFirstJob) {
   EXPECT_THROW(store_->create_job(job_request(mission, {"ingest"}), "key-1"), Conflict);
 }
 
-TEST_F(JobTest, ListNewestFirstWithFilters) {
+TEST_P(JobTest, ListNewestFirstWithFilters) {
   const proto::Mission m1 = make_mission("a");
   const proto::Mission m2 = make_mission("b");
   std::vector<std::string> ids;
@@ -161,7 +161,7 @@ TEST_F(JobTest, ListNewestFirstWithFilters) {
   EXPECT_EQ(metrics.missions, 2);
 }
 
-TEST_F(JobTest, CancelQueuedAndConflictWhenFinished) {
+TEST_P(JobTest, CancelQueuedAndConflictWhenFinished) {
   const proto::Job job = store_->create_job(job_request(make_mission()), "");
   clock_.advance_ms(5);
   const proto::Job canceled = store_->cancel_job(job.id);
@@ -174,7 +174,7 @@ TEST_F(JobTest, CancelQueuedAndConflictWhenFinished) {
                Conflict);  // queued: nothing to retry
 }
 
-TEST_F(JobTest, LogsInPagesWithSeq) {
+TEST_P(JobTest, LogsInPagesWithSeq) {
   const proto::Job job = store_->create_job(job_request(make_mission()), "");
   store_->append_log(job.id, {"a", "b", "c"});
   clock_.advance_ms(7);
@@ -198,7 +198,7 @@ TEST_F(JobTest, LogsInPagesWithSeq) {
   EXPECT_THROW(store_->read_log(job.id, -1, 10), Invalid);
 }
 
-TEST_F(JobTest, TokensStoredAsHashOnly) {
+TEST_P(JobTest, TokensStoredAsHashOnly) {
   const std::string token = "kt_5f2b9c0d1e4a7788aa01bb02cc03dd04";
   EXPECT_EQ(store_->token_count(), 0);
   store_->add_token(token, admin_token("first"));
@@ -210,14 +210,25 @@ TEST_F(JobTest, TokensStoredAsHashOnly) {
   EXPECT_THROW(store_->add_token("", admin_token("empty")), Invalid);
   store_.reset();  // close, so the WAL is checkpointed into keel.db
   std::string bytes;
-  for (const char* file : {"keel.db", "keel.db-wal"})
-    bytes += testing::read_file(dir_.path() / file);
+  if (postgres()) {
+    // Every stored column of every token row, as PostgreSQL prints them.
+    pqxx::connection connection(database_url_);
+    pqxx::nontransaction work(connection);
+    for (const auto& row : work.exec("SELECT t::text FROM api_tokens t"))
+      bytes += row[0].as<std::string>();
+  } else {
+    for (const char* file : {"keel.db", "keel.db-wal"})
+      bytes += testing::read_file(dir_.path() / file);
+  }
   EXPECT_EQ(bytes.find(token), std::string::npos);
   EXPECT_EQ(bytes.find(token.substr(3, 20)), std::string::npos);
   EXPECT_NE(bytes.find(sha256_bytes(token)), std::string::npos);  // its hash is what is kept
   reopen();
   EXPECT_TRUE(store_->check_token(token));
 }
+
+KEEL_STORE_TEST_SUITE(MissionTest);
+KEEL_STORE_TEST_SUITE(JobTest);
 
 }  // namespace
 }  // namespace keel::storage

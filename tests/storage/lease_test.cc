@@ -20,9 +20,9 @@ class LeaseTest : public StoreTest {
   }
 };
 
-TEST_F(LeaseTest, NothingQueuedGivesNoLease) { EXPECT_FALSE(store_->lease_job({"w", 30})); }
+TEST_P(LeaseTest, NothingQueuedGivesNoLease) { EXPECT_FALSE(store_->lease_job({"w", 30})); }
 
-TEST_F(LeaseTest, OldestQueuedFirstWithMissionAndExpiry) {
+TEST_P(LeaseTest, OldestQueuedFirstWithMissionAndExpiry) {
   const proto::Mission mission = make_mission();
   const proto::Job first = store_->create_job(job_request(mission), "");
   clock_.advance_ms(1);
@@ -42,7 +42,7 @@ TEST_F(LeaseTest, OldestQueuedFirstWithMissionAndExpiry) {
   EXPECT_FALSE(store_->lease_job({"w", 30}));
 }
 
-TEST_F(LeaseTest, HeartbeatExtendsLeaseAndRecordsProgressAndLog) {
+TEST_P(LeaseTest, HeartbeatExtendsLeaseAndRecordsProgressAndLog) {
   store_->create_job(job_request(make_mission()), "");
   const proto::Lease lease = this->lease("w", 30);
   clock_.advance_ms(25'000);
@@ -62,7 +62,7 @@ TEST_F(LeaseTest, HeartbeatExtendsLeaseAndRecordsProgressAndLog) {
   EXPECT_THROW(store_->heartbeat(lease.job.id, beat(lease, "bake", 0.5)), Invalid);
 }
 
-TEST_F(LeaseTest, ExpiredLeaseIsReleasedAndOldLeaseGetsConflict) {
+TEST_P(LeaseTest, ExpiredLeaseIsReleasedAndOldLeaseGetsConflict) {
   store_->create_job(job_request(make_mission()), "");
   const proto::Lease first = lease("worker-a", 10);
   clock_.advance_ms(10'001);
@@ -88,7 +88,7 @@ TEST_F(LeaseTest, ExpiredLeaseIsReleasedAndOldLeaseGetsConflict) {
   EXPECT_NE(log.lines[0].text.find("worker-a"), std::string::npos);
 }
 
-TEST_F(LeaseTest, ThirdExpiryFailsTheJob) {
+TEST_P(LeaseTest, ThirdExpiryFailsTheJob) {
   const proto::Job job = store_->create_job(job_request(make_mission()), "");
   for (int attempt = 1; attempt <= 3; ++attempt) {
     const proto::Lease lease = this->lease("w" + std::to_string(attempt), 5);
@@ -104,7 +104,7 @@ TEST_F(LeaseTest, ThirdExpiryFailsTheJob) {
   EXPECT_EQ(failed.finished_at_ms, clock_.now_ms());
 }
 
-TEST_F(LeaseTest, StagesAndArtifactsThenSucceed) {
+TEST_P(LeaseTest, StagesAndArtifactsThenSucceed) {
   store_->create_job(job_request(make_mission()), "");
   const proto::Lease lease = this->lease();
   const std::string job_id = lease.job.id;
@@ -130,7 +130,7 @@ TEST_F(LeaseTest, StagesAndArtifactsThenSucceed) {
   EXPECT_THROW(store_->retry_job(job_id), Conflict);
 }
 
-TEST_F(LeaseTest, ArtifactRulesAndReplacement) {
+TEST_P(LeaseTest, ArtifactRulesAndReplacement) {
   store_->create_job(job_request(make_mission()), "");
   const proto::Lease lease = this->lease();
   const std::string job_id = lease.job.id;
@@ -162,7 +162,7 @@ TEST_F(LeaseTest, ArtifactRulesAndReplacement) {
   EXPECT_THROW(store_->list_artifacts("j_0000000000000000"), NotFound);
 }
 
-TEST_F(LeaseTest, CancelWhileRunning) {
+TEST_P(LeaseTest, CancelWhileRunning) {
   store_->create_job(job_request(make_mission()), "");
   const proto::Lease lease = this->lease();
   const proto::Job canceled = store_->cancel_job(lease.job.id);
@@ -180,7 +180,7 @@ TEST_F(LeaseTest, CancelWhileRunning) {
   EXPECT_FALSE(store_->lease_job({"w", 30}));
 }
 
-TEST_F(LeaseTest, FailThenRetryKeepsCompletedStagesAndArtifacts) {
+TEST_P(LeaseTest, FailThenRetryKeepsCompletedStagesAndArtifacts) {
   store_->create_job(job_request(make_mission(), {"ingest", "refine", "map"}), "");
   const proto::Lease first = lease("w1");
   const std::string job_id = first.job.id;
@@ -216,7 +216,7 @@ TEST_F(LeaseTest, FailThenRetryKeepsCompletedStagesAndArtifacts) {
   EXPECT_EQ(store_->finish_job(job_id, {second.lease_id, ""}, true).completed_stages.size(), 3u);
 }
 
-TEST_F(LeaseTest, RetryAfterCancelRequeues) {
+TEST_P(LeaseTest, RetryAfterCancelRequeues) {
   store_->create_job(job_request(make_mission()), "");
   const proto::Lease first = lease();
   store_->cancel_job(first.job.id);
@@ -224,6 +224,8 @@ TEST_F(LeaseTest, RetryAfterCancelRequeues) {
   EXPECT_THROW(store_->heartbeat(first.job.id, beat(first, "", 0.0)), LeaseLost);
   EXPECT_EQ(lease().job.id, first.job.id);
 }
+
+KEEL_STORE_TEST_SUITE(LeaseTest);
 
 }  // namespace
 }  // namespace keel::storage

@@ -32,7 +32,7 @@ proto::Mission mission_in(Store& store, const std::string& project, const std::s
   return store.create_mission(request);
 }
 
-TEST_F(ProjectTest, TokensCarryRoleProjectExpiryAndRevocation) {
+TEST_P(ProjectTest, TokensCarryRoleProjectExpiryAndRevocation) {
   const proto::TokenInfo submitter =
       store_->add_token("tok-submitter", spec(proto::Role::kSubmitter, "harbour"));
   EXPECT_EQ(submitter.role, proto::Role::kSubmitter);
@@ -73,7 +73,7 @@ TEST_F(ProjectTest, TokensCarryRoleProjectExpiryAndRevocation) {
   EXPECT_NO_THROW(store_->add_token("z", spec(proto::Role::kWorker, "*")));
 }
 
-TEST_F(ProjectTest, ObjectsBelongToProjectsAndListingsFilterThem) {
+TEST_P(ProjectTest, ObjectsBelongToProjectsAndListingsFilterThem) {
   const proto::Mission a = mission_in(*store_, "harbour", "pier-a");
   const proto::Mission b = mission_in(*store_, "dock", "pier-b");
   const proto::Mission c = make_mission("pier-c");  // no project named: default
@@ -119,7 +119,7 @@ TEST_F(ProjectTest, ObjectsBelongToProjectsAndListingsFilterThem) {
   EXPECT_THROW(store_->create_upload(upload_request), Invalid);
 }
 
-TEST_F(ProjectTest, LeaseTakesOnlyTheWorkersProject) {
+TEST_P(ProjectTest, LeaseTakesOnlyTheWorkersProject) {
   const proto::Mission a = mission_in(*store_, "harbour", "pier-a");
   const proto::Mission b = mission_in(*store_, "dock", "pier-b");
   const proto::Job job_a = store_->create_job(job_request(a), "");
@@ -136,7 +136,7 @@ TEST_F(ProjectTest, LeaseTakesOnlyTheWorkersProject) {
   EXPECT_EQ(lease->job.id, job_a.id);
 }
 
-TEST_F(ProjectTest, BatchIsMadeInOneTransactionAndCountedByState) {
+TEST_P(ProjectTest, BatchIsMadeInOneTransactionAndCountedByState) {
   std::vector<proto::Mission> harbour;
   for (int i = 0; i < 5; ++i)
     harbour.push_back(mission_in(*store_, "harbour", "survey-" + std::to_string(i)));
@@ -195,7 +195,7 @@ TEST_F(ProjectTest, BatchIsMadeInOneTransactionAndCountedByState) {
   EXPECT_THROW(store_->get_batch("b_0000000000000000"), NotFound);
 }
 
-TEST_F(ProjectTest, ReleasedJobIsQueuedAtOnceAndNotCountedAsExpiry) {
+TEST_P(ProjectTest, ReleasedJobIsQueuedAtOnceAndNotCountedAsExpiry) {
   const proto::Job job = store_->create_job(job_request(make_mission()), "");
   for (int round = 1; round <= 4; ++round) {  // more releases than the 3-expiry limit
     const proto::Lease lease = this->lease("w" + std::to_string(round));
@@ -208,7 +208,7 @@ TEST_F(ProjectTest, ReleasedJobIsQueuedAtOnceAndNotCountedAsExpiry) {
   EXPECT_EQ(store_->get_job(job.id).state, proto::JobState::kQueued);
 }
 
-TEST_F(ProjectTest, ExpiredLeasesAreRequeuedByOneCall) {
+TEST_P(ProjectTest, ExpiredLeasesAreRequeuedByOneCall) {
   const proto::Job job = store_->create_job(job_request(make_mission()), "");
   lease("w", 30);
   EXPECT_EQ(store_->requeue_expired_leases(), 0);
@@ -218,7 +218,7 @@ TEST_F(ProjectTest, ExpiredLeasesAreRequeuedByOneCall) {
   EXPECT_EQ(store_->requeue_expired_leases(), 0);
 }
 
-TEST_F(ProjectTest, ChangeFeedReportsCommittedChangesUntilUnsubscribed) {
+TEST_P(ProjectTest, ChangeFeedReportsCommittedChangesUntilUnsubscribed) {
   std::mutex mutex;
   std::vector<Change> seen;
   auto subscription = store_->subscribe([&](const Change& change) {
@@ -255,7 +255,7 @@ TEST_F(ProjectTest, ChangeFeedReportsCommittedChangesUntilUnsubscribed) {
   EXPECT_EQ(seen.size(), before);
 }
 
-TEST_F(ProjectTest, ListenerMayEndItsOwnSubscription) {
+TEST_P(ProjectTest, ListenerMayEndItsOwnSubscription) {
   std::unique_ptr<Subscription> subscription;
   int calls = 0;
   subscription = store_->subscribe([&](const Change&) {
@@ -267,7 +267,7 @@ TEST_F(ProjectTest, ListenerMayEndItsOwnSubscription) {
   EXPECT_EQ(calls, 1);
 }
 
-TEST_F(ProjectTest, QueueSummaryCountsStatesWorkersAndTheLastHour) {
+TEST_P(ProjectTest, QueueSummaryCountsStatesWorkersAndTheLastHour) {
   const proto::Mission mission = make_mission();
   for (int i = 0; i < 3; ++i) store_->create_job(job_request(mission), "");
   const proto::Lease busy = lease("busy");
@@ -325,6 +325,8 @@ TEST(ProjectMigration, VersionTwoDataMovesIntoDefault) {
   EXPECT_TRUE(info->all_projects());
   EXPECT_EQ(info->id, "t_" + sha256_bytes(token).substr(0, 16));
 }
+
+KEEL_STORE_TEST_SUITE(ProjectTest);
 
 }  // namespace
 }  // namespace keel::storage

@@ -1,8 +1,9 @@
 // Resumable uploads through the Store: chunk order, conflicts, completion and crash recovery.
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include "storage/sha256.h"
-#include "storage/sqlite_db.h"
 #include "store_fixture.h"
 
 namespace keel::storage {
@@ -19,15 +20,10 @@ class UploadTest : public StoreTest {
   proto::Upload append(const std::string& id, int64_t offset, const std::string& chunk) {
     return store_->append_upload(id, offset, chunk.data(), chunk.size());
   }
-  int64_t upload_rows() {
-    Database db(dir_.path() / "keel.db");
-    auto statement = db.cached("SELECT COUNT(*) FROM uploads");
-    statement->step();
-    return statement->column_int64(0);
-  }
+  int64_t upload_rows() { return count_rows("uploads"); }
 };
 
-TEST_F(UploadTest, ChunksInOrderThenCompleteGivesBlob) {
+TEST_P(UploadTest, ChunksInOrderThenCompleteGivesBlob) {
   const std::string bytes = testing::random_bytes(100'000, 1);
   proto::Upload upload = store_->create_upload({"m.tar", 100'000});
   EXPECT_EQ(upload.id.substr(0, 2), "u_");
@@ -49,7 +45,7 @@ TEST_F(UploadTest, ChunksInOrderThenCompleteGivesBlob) {
   EXPECT_EQ(store_->metrics().uploads_open, 0);
 }
 
-TEST_F(UploadTest, WrongOffsetIsConflictWithCommittedOffset) {
+TEST_P(UploadTest, WrongOffsetIsConflictWithCommittedOffset) {
   const proto::Upload upload = store_->create_upload({"m.tar", 10});
   append(upload.id, 0, "abcd");
   try {
@@ -64,7 +60,7 @@ TEST_F(UploadTest, WrongOffsetIsConflictWithCommittedOffset) {
   EXPECT_EQ(testing::read_file(part_file(upload.id)), "abcd");
 }
 
-TEST_F(UploadTest, ChunkBeyondAnnouncedSizeIsInvalidAndCommitsNothing) {
+TEST_P(UploadTest, ChunkBeyondAnnouncedSizeIsInvalidAndCommitsNothing) {
   const proto::Upload upload = store_->create_upload({"m.tar", 6});
   append(upload.id, 0, "abcd");
   EXPECT_THROW(append(upload.id, 4, "efg"), Invalid);
@@ -73,7 +69,7 @@ TEST_F(UploadTest, ChunkBeyondAnnouncedSizeIsInvalidAndCommitsNothing) {
   EXPECT_THROW(append(upload.id, 6, "x"), Invalid);
 }
 
-TEST_F(UploadTest, WrongHashDeletesEverything) {
+TEST_P(UploadTest, WrongHashDeletesEverything) {
   const std::string bytes = "the mission bytes";
   const proto::Upload upload = store_->create_upload({"m.tar", static_cast<int64_t>(bytes.size())});
   append(upload.id, 0, bytes);
@@ -95,7 +91,7 @@ TEST_F(UploadTest, WrongHashDeletesEverything) {
   EXPECT_EQ(store_->metrics().blobs, 0);
 }
 
-TEST_F(UploadTest, ShortUploadIsSizeMismatchAndDeleted) {
+TEST_P(UploadTest, ShortUploadIsSizeMismatchAndDeleted) {
   const proto::Upload upload = store_->create_upload({"m.tar", 10});
   append(upload.id, 0, "abc");
   try {
@@ -109,7 +105,7 @@ TEST_F(UploadTest, ShortUploadIsSizeMismatchAndDeleted) {
   EXPECT_FALSE(fs::exists(part_file(upload.id)));
 }
 
-TEST_F(UploadTest, SameContentTwiceIsOneBlob) {
+TEST_P(UploadTest, SameContentTwiceIsOneBlob) {
   std::string shas[2];
   for (std::string& sha : shas) {
     const proto::Upload upload = store_->create_upload({"m.tar", 5});
@@ -122,13 +118,13 @@ TEST_F(UploadTest, SameContentTwiceIsOneBlob) {
   EXPECT_TRUE(fs::is_empty(dir_.path() / "uploads"));
 }
 
-TEST_F(UploadTest, EmptyUploadCompletes) {
+TEST_P(UploadTest, EmptyUploadCompletes) {
   const proto::Upload upload = store_->create_upload({"empty", 0});
   EXPECT_EQ(store_->complete_upload(upload.id, sha256_bytes("")), sha256_bytes(""));
   EXPECT_EQ(store_->blob_size(sha256_bytes("")), 0);
 }
 
-TEST_F(UploadTest, CrashBetweenWriteAndCommitIsCutOnReopenAndResumes) {
+TEST_P(UploadTest, CrashBetweenWriteAndCommitIsCutOnReopenAndResumes) {
   const std::string bytes = testing::random_bytes(50'000, 9);
   const proto::Upload upload = store_->create_upload({"m.tar", 50'000});
   append(upload.id, 0, bytes.substr(0, 20'000));
@@ -149,7 +145,7 @@ TEST_F(UploadTest, CrashBetweenWriteAndCommitIsCutOnReopenAndResumes) {
   EXPECT_EQ(testing::read_file(store_->blob_path(sha256_bytes(bytes))), bytes);
 }
 
-TEST_F(UploadTest, LeftoverBytesAreCutOnAppendToo) {
+TEST_P(UploadTest, LeftoverBytesAreCutOnAppendToo) {
   // The same uncommitted tail, but found by the next append rather than by a reopen.
   const std::string bytes = "0123456789";
   const proto::Upload upload = store_->create_upload({"m", 10});
@@ -160,7 +156,7 @@ TEST_F(UploadTest, LeftoverBytesAreCutOnAppendToo) {
   EXPECT_EQ(store_->complete_upload(upload.id, sha256_bytes(bytes)), sha256_bytes(bytes));
 }
 
-TEST_F(UploadTest, LostCommittedBytesMoveTheOffsetBack) {
+TEST_P(UploadTest, LostCommittedBytesMoveTheOffsetBack) {
   const proto::Upload upload = store_->create_upload({"m", 8});
   append(upload.id, 0, "0123");
   testing::write_file(part_file(upload.id), "01");  // damaged: two committed bytes gone
@@ -175,15 +171,43 @@ TEST_F(UploadTest, LostCommittedBytesMoveTheOffsetBack) {
   EXPECT_EQ(store_->complete_upload(upload.id, sha256_bytes("01234567")), sha256_bytes("01234567"));
 }
 
-TEST_F(UploadTest, ReopenRemovesOrphanPartsAndTempFiles) {
+TEST_P(UploadTest, ReopenRemovesOrphanPartsAndTempFiles) {
   testing::write_file(dir_.path() / "uploads" / "u_00000000deadbeef.part", "orphan");
-  testing::write_file(dir_.path() / "tmp" / "abc.tmp", "half a blob");
+  const fs::path old_temp = dir_.path() / "tmp" / "abc.tmp";
+  testing::write_file(old_temp, "half a blob");
+  fs::last_write_time(old_temp, fs::file_time_type::clock::now() - std::chrono::hours(2));
   reopen();
   EXPECT_TRUE(fs::is_empty(dir_.path() / "uploads"));
   EXPECT_TRUE(fs::is_empty(dir_.path() / "tmp"));
 }
 
-TEST_F(UploadTest, DeleteAndUnknownIds) {
+// Replicas share the blob folder: a fresh temp file may be another replica's blob being
+// written, so a PostgreSQL store opening leaves it (SQLite owns its folder alone).
+TEST_P(UploadTest, ReopenKeepsAFreshTempFileOfAnotherReplica) {
+  if (!postgres()) GTEST_SKIP() << "one SQLite store owns its folder";
+  const fs::path fresh = dir_.path() / "tmp" / "def.tmp";
+  testing::write_file(fresh, "a blob another replica is writing");
+  auto replica = open_another();
+  EXPECT_TRUE(fs::exists(fresh));
+}
+
+// An upload continues on another replica: the committed offset is in the database and the
+// part file in the shared folder.
+TEST_P(UploadTest, ResumesOnAnotherStoreOfTheSameData) {
+  const std::string bytes = testing::random_bytes(30'000, 5);
+  const proto::Upload upload = store_->create_upload({"m.tar", 30'000});
+  append(upload.id, 0, bytes.substr(0, 10'000));
+  auto replica = open_another();
+  EXPECT_EQ(replica->get_upload(upload.id).offset, 10'000);
+  replica->append_upload(upload.id, 10'000, bytes.data() + 10'000, 10'000);
+  EXPECT_THROW(append(upload.id, 10'000, bytes.substr(10'000, 10'000)), OffsetMismatch)
+      << "the first store sees the offset the other committed";
+  append(upload.id, 20'000, bytes.substr(20'000));
+  EXPECT_EQ(replica->complete_upload(upload.id, sha256_bytes(bytes)), sha256_bytes(bytes));
+  EXPECT_EQ(testing::read_file(store_->blob_path(sha256_bytes(bytes))), bytes);
+}
+
+TEST_P(UploadTest, DeleteAndUnknownIds) {
   const proto::Upload upload = store_->create_upload({"m", 3});
   store_->delete_upload(upload.id);
   EXPECT_FALSE(fs::exists(part_file(upload.id)));
@@ -197,6 +221,8 @@ TEST_F(UploadTest, DeleteAndUnknownIds) {
   EXPECT_THROW(store_->complete_upload(upload.id, "not-a-hash"), Invalid);
   EXPECT_THROW(store_->create_upload({"m", -1}), Invalid);
 }
+
+KEEL_STORE_TEST_SUITE(UploadTest);
 
 }  // namespace
 }  // namespace keel::storage
