@@ -113,6 +113,11 @@ Response HttpHandler::handle(const Request& request) {
     response = error_response(409, "conflict", e.what());
   } catch (const storage::Invalid& e) {
     response = error_response(400, "invalid_field", e.what());
+  } catch (const storage::Unavailable& e) {
+    // The database is away (restart, network): nothing was lost, the client retries.
+    spdlog::warn("{} {}: {}", request.method, request.target, e.what());
+    response = error_response(503, "unavailable", e.what());
+    response.headers.set("Retry-After", "2");
   } catch (const std::exception& e) {
     spdlog::error("{} {}: unexpected error: {}", request.method, request.target, e.what());
     response = error_response(500, "internal", std::string("internal error: ") + e.what());

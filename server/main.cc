@@ -2,6 +2,12 @@
 //
 //   keel-server --data-dir DIR [--listen 127.0.0.1:8080] [--workers N] [--worker-binary P]
 //               [--max-chunk-bytes B] [--threads T] [--web-dir D]
+//               [--database postgresql://... --blob-dir SHARED] [--requeue-seconds S]
+//
+// The store is SQLite in --data-dir unless --database (or $KEEL_DATABASE_URL) names a
+// PostgreSQL database; then several replicas share it and the blob folder --blob-dir.
+// A store that cannot be opened ends the program before it listens, with an exit code
+// saying why (kExit* below, docs/deploy.md).
 //
 // Prints the URL it listens on (also written to <data-dir>/server.url) once it accepts
 // connections. SIGTERM/SIGINT: workers are stopped first (they may still report to the
@@ -19,8 +25,10 @@
 #include "server/data_dir.h"
 #include "server/http_handler.h"
 #include "server/http_server.h"
+#include "server/requeue_loop.h"
 #include "server/static_files.h"
 #include "server/worker_supervisor.h"
+#include "storage/open_store.h"
 #include "storage/store.h"
 
 namespace {
@@ -40,8 +48,32 @@ std::filesystem::path default_web_dir() {
   return self.parent_path().parent_path() / "share" / "keel" / "web";
 }
 
+// Exit codes for a store that cannot be opened (1 = any other error at start).
+constexpr int kExitBadDatabaseUrl = 3;
+constexpr int kExitDatabaseUnreachable = 4;
+constexpr int kExitSchemaTooNew = 5;
+constexpr int kExitFolderNotWritable = 6;
+
+int exit_code_of(keel::storage::OpenError::Kind kind) {
+  using Kind = keel::storage::OpenError::Kind;
+  switch (kind) {
+    case Kind::kBadUrl:
+      return kExitBadDatabaseUrl;
+    case Kind::kUnreachable:
+      return kExitDatabaseUnreachable;
+    case Kind::kSchemaTooNew:
+      return kExitSchemaTooNew;
+    case Kind::kBlobDirUnwritable:
+      return kExitFolderNotWritable;
+  }
+  return 1;
+}
+
 struct Settings {
   std::filesystem::path data_dir;
+  std::string database;  // "" = SQLite in data_dir
+  std::filesystem::path blob_dir;
+  double requeue_seconds = 5.0;
   std::string listen = "127.0.0.1:8080";
   int workers = 1;
   std::string worker_binary;
@@ -64,8 +96,13 @@ int run(const Settings& settings) {
   signal(SIGPIPE, SIG_IGN);
 
   const ks::ListenAddress listen = ks::parse_listen_address(settings.listen);
-  std::filesystem::create_directories(settings.data_dir);
-  auto store = keel::storage::open_sqlite_store(settings.data_dir);
+  keel::storage::StoreLocation location;
+  location.database_url = settings.database;
+  location.data_dir = settings.data_dir;
+  location.blob_dir = settings.blob_dir;
+  auto store = keel::storage::open_store(location);
+  keel::server::RequeueLoop requeue(
+      *store, std::chrono::milliseconds(static_cast<int64_t>(settings.requeue_seconds * 1000)));
   if (ks::ensure_initial_token(*store, settings.data_dir))
     spdlog::info("made a first API token in {}", (settings.data_dir / "token").string());
 
@@ -108,8 +145,10 @@ int run(const Settings& settings) {
                     "--exit-with-parent", std::to_string(::getpid())});
 
   std::cout << url << std::endl;
-  spdlog::info("keel-server listening on {} with {} io threads, {} workers, data in {}", url,
-               settings.threads, settings.workers, settings.data_dir.string());
+  spdlog::info(
+      "keel-server listening on {} with {} io threads, {} workers, data in {}, store {}", url,
+      settings.threads, settings.workers, settings.data_dir.string(),
+      settings.database.empty() ? "SQLite" : keel::storage::redact_database_url(settings.database));
 
   int received = 0;
   sigwait(&stop_signals, &received);
@@ -127,6 +166,17 @@ int main(int argc, char** argv) {
   Settings settings;
   app.add_option("--data-dir", settings.data_dir, "folder for keel.db, blobs, uploads, token, logs")
       ->required();
+  app.add_option("--database", settings.database,
+                 "postgresql://user@host:port/db for several replicas on one PostgreSQL "
+                 "(default: SQLite in --data-dir)")
+      ->envname("KEEL_DATABASE_URL");
+  app.add_option("--blob-dir", settings.blob_dir,
+                 "with --database: the blob folder every replica shares (NFS, a ReadWriteMany "
+                 "volume; default --data-dir)");
+  app.add_option("--requeue-seconds", settings.requeue_seconds,
+                 "how often expired leases are requeued")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
   app.add_option("--listen", settings.listen, "address:port to listen on (port 0 = any free port)")
       ->capture_default_str();
   app.add_option("--workers", settings.workers, "local keel-worker processes to run (0 = none)")
@@ -157,6 +207,9 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(settings.log_level));
   try {
     return run(settings);
+  } catch (const keel::storage::OpenError& e) {
+    spdlog::critical("keel-server: {}", e.what());
+    return exit_code_of(e.kind);
   } catch (const std::exception& e) {
     spdlog::critical("keel-server: {}", e.what());
     return 1;
