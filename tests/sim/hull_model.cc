@@ -164,7 +164,8 @@ TriangleMesh foreign_object_mesh(const ForeignObject& object) {
 
 std::vector<Landmark> scatter_landmarks(const TriangleMesh& mesh, double density_per_m2,
                                         double max_normal_z, bool on_cad, int64_t first_id,
-                                        uint64_t seed, uint64_t stream_index) {
+                                        uint64_t seed, uint64_t stream_index,
+                                        const std::function<bool(const Eigen::Vector3d&)>& keep) {
   Rng rng(seed, Stream::kLandmarks, stream_index);
   std::vector<Landmark> out;
   int64_t id = first_id;
@@ -179,9 +180,11 @@ std::vector<Landmark> scatter_landmarks(const TriangleMesh& mesh, double density
     const int count = static_cast<int>(std::floor(area * density_per_m2 + rng.uniform()));
     for (int k = 0; k < count; ++k) {
       const double r1 = std::sqrt(rng.uniform()), r2 = rng.uniform();
+      const Eigen::Vector3d p = (1.0 - r1) * a + r1 * (1.0 - r2) * b + r1 * r2 * c;
+      if (keep && !keep(p)) continue;
       Landmark lm;
       lm.id = id++;
-      lm.p_world = (1.0 - r1) * a + r1 * (1.0 - r2) * b + r1 * r2 * c;
+      lm.p_world = p;
       lm.normal_world = normal;
       lm.radius_m = rng.uniform(0.015, 0.04);
       lm.albedo = rng.uniform() < 0.5 ? 0.08 : 0.92;

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -78,10 +79,12 @@ struct Landmark {
 };
 
 // Landmarks scattered over the faces of `mesh` (world frame), `density_per_m2` on average,
-// skipping faces whose normal points up more than max_normal_z (the deck).
-std::vector<Landmark> scatter_landmarks(const TriangleMesh& mesh_world, double density_per_m2,
-                                        double max_normal_z, bool on_cad, int64_t first_id,
-                                        uint64_t seed, uint64_t stream_index);
+// skipping faces whose normal points up more than max_normal_z (the deck) and, when `keep` is
+// given, points it refuses.
+std::vector<Landmark> scatter_landmarks(
+    const TriangleMesh& mesh_world, double density_per_m2, double max_normal_z, bool on_cad,
+    int64_t first_id, uint64_t seed, uint64_t stream_index,
+    const std::function<bool(const Eigen::Vector3d&)>& keep = nullptr);
 
 TriangleMesh transform_mesh(const TriangleMesh& mesh, const Pose3& T);
 void append_mesh(TriangleMesh* into, const TriangleMesh& mesh);

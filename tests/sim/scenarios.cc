@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
+#include "tests/sim/cad_hull.h"
 #include "tests/sim/mesh_bvh.h"
 #include "tests/sim/rng.h"
 
@@ -271,13 +273,15 @@ Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions&
 
 // ---- hauv-hull -------------------------------------------------------------------------
 
-Pose3 misalignment(Rng& rng) {
-  // A few cm and ~1 deg between the CAD drawing and the real hull.
+Pose3 misalignment(Rng& rng, const Eigen::Vector3d& about_cad) {
+  // A few cm and ~1 deg between the CAD drawing and the real hull, turning about the
+  // surveyed part (a CAD origin 100 m away would turn that 1 deg into metres there).
   Eigen::Vector3d axis(rng.gaussian(), rng.gaussian(), rng.gaussian());
   axis.normalize();
   const double angle = rng.uniform(0.7, 1.3) * M_PI / 180.0;
   const Eigen::Vector3d t(0.03 * rng.gaussian(), 0.03 * rng.gaussian(), 0.03 * rng.gaussian());
-  return pose(Eigen::AngleAxisd(angle, axis).toRotationMatrix(), t);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+  return pose(R, t + about_cad - R * about_cad);
 }
 
 // Snaps an analytic hull point onto the CAD mesh (along the normal) and places it in world.
@@ -299,10 +303,17 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   s.name = "hauv-hull";
   s.platform = "hauv";
   s.hull_options = options.hull;
-  const HullShape shape(options.hull);
-  s.cad_mesh = make_hull_mesh(options.hull);
+  std::unique_ptr<HullSurface> hull;
+  if (options.cad.path.empty()) {
+    s.cad_mesh = make_hull_mesh(options.hull);
+    hull = std::make_unique<ProceduralHullSurface>(options.hull);
+  } else {
+    s.cad_mesh = load_cad_hull(options.cad);
+    hull = std::make_unique<CadHullSurface>(s.cad_mesh, options.cad.survey_x);
+  }
+  const HullSurface& shape = *hull;
   Rng rng(seed, Stream::kHull);
-  s.T_world_cad = misalignment(rng);
+  s.T_world_cad = misalignment(rng, shape.survey_center());
   const MeshBvh cad_bvh(s.cad_mesh);
 
   // Survey lanes along the starboard side and bilge; the vehicle faces the hull (yaw 90 deg)
@@ -316,7 +327,7 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   for (int lane = 0; lane < 5; ++lane) {
     for (int k = 0; k <= 10; ++k) {
       const double x = (lane % 2 == 0 ? -1.0 : 1.0) * half_span_m * (1.0 - 0.2 * k);
-      const SurfacePoint sp = shape.surface(2.0 * x / options.hull.length_m, lanes[lane]);
+      const SurfacePoint sp = shape.surface(x, lanes[lane]);
       // The standoff is the DVL's (on the tray pivot, 0.6 m ahead of the body origin).
       waypoints.push_back(sp.p + options.hull_standoff_m * sp.normal - kYaw90 * kPivotInBody);
       angles.push_back(std::atan2(-sp.normal.z(), -sp.normal.y()));
@@ -355,8 +366,7 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
     ForeignObject object;
     object.kind = place.kind;
     const double x = place.x + rng.uniform(-0.5, 0.5);
-    const SurfacePoint sp =
-        shape.surface(2.0 * x / options.hull.length_m, place.sigma + rng.uniform(-0.02, 0.02));
+    const SurfacePoint sp = shape.surface(x, place.sigma + rng.uniform(-0.02, 0.02));
     if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object.center, &object.axis))
       throw std::logic_error("hauv-hull: foreign object misses the CAD mesh");
     if (object.kind == ForeignObject::Kind::kCylinder) {
@@ -377,8 +387,7 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   auto random_patch = [&](Rng& r, ForeignObject* object) {
     object->kind = ForeignObject::Kind::kPatch;
     const double x = r.uniform(-half_span_m, half_span_m);
-    const SurfacePoint sp =
-        shape.surface(2.0 * x / options.hull.length_m, r.uniform(lanes[4] - 0.03, lanes[0] + 0.03));
+    const SurfacePoint sp = shape.surface(x, r.uniform(lanes[4] - 0.03, lanes[0] + 0.03));
     object->radius_m = r.uniform(0.1, 0.25);
     object->height_m = r.uniform(0.06, 0.18);
     if (!place_on_real_hull(cad_bvh, sp, s.T_world_cad, &object->center, &object->axis))
@@ -443,8 +452,18 @@ Scenario make_hauv(uint64_t seed, const ScenarioOptions& options) {
   }
 
   TriangleMesh real = transform_mesh(s.cad_mesh, s.T_world_cad);
+  std::function<bool(const Eigen::Vector3d&)> in_view;  // procedural: the whole hull
+  if (!options.cad.path.empty()) {
+    // A real hull has ~100 times the surveyed area: landmarks only where the cameras look.
+    const Pose3 T_cad_world = s.T_world_cad.inverse();
+    const Eigen::Vector3d center = shape.survey_center();
+    in_view = [T_cad_world, center, half_span_m](const Eigen::Vector3d& p_world) {
+      const Eigen::Vector3d p = T_cad_world * p_world;
+      return std::abs(p.x() - center.x()) <= half_span_m + 4.0 && p.y() <= 1.0 && p.z() <= 0.5;
+    };
+  }
   const auto hull_landmarks =
-      scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0);
+      scatter_landmarks(real, options.landmark_density_per_m2, 0.7, true, 0, seed, 0, in_view);
   std::vector<Landmark> landmarks = hull_landmarks;
   for (const auto& [object, index] : placed) {
     const TriangleMesh object_mesh = foreign_object_mesh(object);
@@ -511,6 +530,8 @@ Scenario make_scenario(const std::string& name, uint64_t seed, const ScenarioOpt
       throw std::invalid_argument("hull.fouling_patches: " + name +
                                   " has no hull; expected 0, got " +
                                   std::to_string(options.fouling_patches));
+    if (!options.cad.path.empty())
+      throw std::invalid_argument("hull.cad: " + name + " has no hull (hauv-hull has)");
     return make_usv(name, seed, options);
   }
   if (options.survey < 1 || options.survey > 100)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tests/sim/analytic_scene.h"
+#include "tests/sim/cad_hull.h"
 #include "tests/sim/camera_sim.h"
 #include "tests/sim/hull_model.h"
 #include "tests/sim/hull_world.h"
@@ -41,6 +42,7 @@ struct ScenarioOptions {
   MotionOptions motion;  // the scenario sets speed/heading defaults, overrides follow
   bool speed_overridden = false;
   HullOptions hull;
+  CadHullOptions cad;            // hauv-hull on a user's CAD mesh instead of `hull` (hull.cad=FILE)
   double hull_standoff_m = 1.5;  // seed 001: 1-2 m
   double landmark_density_per_m2 = 40.0;
   // hauv-hull: biofouling patches scattered over the surveyed hull besides the four fixed
@@ -75,8 +77,8 @@ struct Scenario {
   Pose3 T_body_servo = Pose3::Identity();
   Eigen::Vector3d servo_axis = Eigen::Vector3d::UnitY();  // in the servo frame
   // Hull truth (hauv-hull).
-  HullOptions hull_options;
-  TriangleMesh cad_mesh;  // CAD frame
+  HullOptions hull_options;  // the procedural hull's, unused with a CAD hull
+  TriangleMesh cad_mesh;     // CAD frame
   Pose3 T_world_cad = Pose3::Identity();
   std::vector<ForeignObject> foreign_objects;
   TriangleMesh real_mesh_world;  // CAD at T_world_cad plus the objects

@@ -87,7 +87,9 @@ std::string settings_help() {
   std::string out;
   for (const auto& [key, ptr] : setting_table(&s, &c)) out += key + " ";
   for (const char* key : kIntegerSettings) out += std::string(key) + " ";
-  out += "motion.laps hull.fouling_patches ";
+  out +=
+      "motion.laps hull.fouling_patches hull.cad(=FILE) hull.cad_scale hull.cad_z_down(0/1) "
+      "hull.cad_draft hull.cad_survey_x ";
   for (const char* key : kSwitchSettings) out += std::string(key) + "(0/1) ";
   return out;
 }
@@ -100,6 +102,11 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
     if (eq == std::string::npos || eq == 0)
       throw std::invalid_argument("--set " + item + ": expected key=value");
     const std::string key = item.substr(0, eq), text = item.substr(eq + 1);
+    if (key == "hull.cad") {  // the one setting that is not a number: a mesh file
+      if (text.empty()) throw std::invalid_argument("--set hull.cad: expected a mesh file");
+      c->cad.path = text;
+      continue;
+    }
     double value;
     try {
       size_t used = 0;
@@ -137,6 +144,25 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
       c->fouling_patches = int(value);
       continue;
     }
+    if (key == "hull.cad_scale" || key == "hull.cad_draft" || key == "hull.cad_survey_x") {
+      if (key == "hull.cad_scale" && !(value > 0.0))
+        throw std::invalid_argument("--set hull.cad_scale: expected a factor > 0, got '" + text +
+                                    "'");
+      if (key == "hull.cad_draft" && !(value >= 0.0))
+        throw std::invalid_argument(
+            "--set hull.cad_draft: expected metres >= 0 (0: half the "
+            "hull's depth), got '" +
+            text + "'");
+      if (key == "hull.cad_survey_x" && !(value >= 0.0 && value <= 1.0))
+        throw std::invalid_argument(
+            "--set hull.cad_survey_x: expected a value in [0, 1] (aft "
+            "end to forward end), got '" +
+            text + "'");
+      (key == "hull.cad_scale"   ? c->cad.scale
+       : key == "hull.cad_draft" ? c->cad.draft_m
+                                 : c->cad.survey_x) = value;
+      continue;
+    }
     const bool integer =
         std::find_if(std::begin(kIntegerSettings), std::end(kIntegerSettings),
                      [&](const char* k) { return key == k; }) != std::end(kIntegerSettings);
@@ -148,9 +174,11 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
       if (key == "sonar.beams") s->sonar.beams = int(value);
       continue;
     }
-    if (key == "imu.noise" || key == "dvl.noise" || key == "camera.tracks") {
+    if (key == "imu.noise" || key == "dvl.noise" || key == "camera.tracks" ||
+        key == "hull.cad_z_down") {
       if (value != 0.0 && value != 1.0)
         throw std::invalid_argument("--set " + key + ": expected 0 or 1");
+      if (key == "hull.cad_z_down") c->cad.z_down = value != 0.0;
       if (key == "imu.noise") s->imu.noise = value != 0.0;
       if (key == "dvl.noise") s->dvl.noise = value != 0.0;
       if (key == "camera.tracks") s->feature_tracks = value != 0.0;
