@@ -44,6 +44,7 @@ async function benchBigMap(browser) {
     console.log(`map job ${job} made in ${((Date.now() - t0) / 1000).toFixed(0)} s (data in ${server.dataDir}; reuse with --map-data ${server.dataDir} --map-job ${job})`);
   }
   const artifacts = await server.artifacts(job);
+  const tiles = artifacts['tiles_combined.tar'];
   const sidecar = artifacts['map_combined.json'] ? await server.artifactJson(artifacts['map_combined.json']) : null;
   console.log(`map_combined: ${sidecar?.points ?? '?'} points, ${(artifacts['map_combined.drc'].size / 2 ** 20).toFixed(1)} MiB;` +
               ` preview: ${artifacts['map_combined_preview.drc'] ? `${sidecar?.preview?.points} points, ${(artifacts['map_combined_preview.drc'].size / 2 ** 20).toFixed(1)} MiB` : 'none'}`);
@@ -64,8 +65,13 @@ async function benchBigMap(browser) {
   const longest = Math.max(0, ...first.tasks.map((t) => t.ms));
   const marks = await page.evaluate(() => performance.getEntriesByType('mark').map((m) => `${m.name} ${(m.startTime / 1000).toFixed(2)} s`));
   console.log(`  marks: ${marks.join('; ')}`);
+  const measures = await page.evaluate(() => performance.getEntriesByType('measure').map((m) => `${m.name} at ${(m.startTime / 1000).toFixed(2)} s: ${m.duration.toFixed(0)} ms`));
+  console.log(`  measures: ${measures.join('; ')}`);
   console.log(`  tasks over 50 ms (start s: ms): ${first.tasks.map((t) => `${(t.start / 1000).toFixed(2)}: ${t.ms.toFixed(0)}`).join(', ')}`);
-  console.log(`big map, preview first: first picture ${(first.first / 1000).toFixed(2)} s after navigation (target <= 3 s); ` +
+  const shown = await page.$eval('.layer-entry[data-layer="map_combined"]', (e) => ({...e.dataset}));
+  console.log(`  map_combined drawn from ${shown.level}${tiles ? ` (tiles_combined.tar ${(tiles.size / 2 ** 20).toFixed(1)} MiB)` : ''}: ` +
+              `${shown.drawn} of ${shown.points} points on screen${shown.tiles ? ` in ${shown.tiles} tiles` : ''} once ready (mark keel:viewer-ready)`);
+  console.log(`big map, ${shown.level === 'tiles' ? 'coarsest tiles' : shown.level === 'preview' ? 'preview' : 'whole Draco map'} first: first picture ${(first.first / 1000).toFixed(2)} s after navigation (target <= 3 s); ` +
               `longest main-thread task ${longest.toFixed(0)} ms (target <= 200 ms), ${first.tasks.length} tasks over 50 ms; load ${load()}`);
   // The full map on demand, thinned to the point budget.
   const before = await page.evaluate(() => window.longTasks.length);

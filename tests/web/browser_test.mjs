@@ -3,7 +3,8 @@
 // list updated live while a job runs, a list of 300 jobs drawn a window at a time and
 // reached by scrolling, a failed job's error, the report view's numbers
 // against report.json, the viewer's point and vertex counts against Debian's draco_decoder,
-// the legend's range against the sidecar and the decoded values, a shape click moving the
+// the legend's range against the sidecar and the decoded values, a map from its 3D tiles
+// (counts against draco_decoder and the .pnts headers, legends against tileset.json), a shape click moving the
 // camera, the camera restored from the URL, the queue page against GET /v1/queue, missing
 // and corrupt artifacts shown as messages; and no console error or failed request.
 //   node tests/web/browser_test.mjs --bin build/bin --web build/share/keel/web --out DIR
@@ -12,8 +13,8 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import {after, before, test} from 'node:test';
-import {Server, dracoVertexCount, launchChromium, missingPrerequisite, parseArgs, simulate, sourceDir,
-        tempDir, watchPage} from './harness.mjs';
+import {Server, dracoVertexCount, launchChromium, missingPrerequisite, parseArgs, readPnts, simulate,
+        sourceDir, tempDir, watchPage} from './harness.mjs';
 
 const args = parseArgs(process.argv.slice(2));
 const binDir = path.resolve(args.bin || path.join(sourceDir, 'build/bin'));
@@ -267,6 +268,62 @@ test('the viewer shows every map with its point count and a legend equal to the 
   }
 }));
 
+// The same map drawn from its level-of-detail tiles (?lod=tiles; by default only maps over
+// the point budget are): the map's point count from tileset.json against draco_decoder's
+// count of its Draco file, the points on screen against the .pnts headers of the tiles the
+// page shows, and each colouring's legend against tileset.json's ranges.
+test('a map drawn from its level-of-detail tiles shows the map\'s count, its tiles\' points and the tileset\'s ranges', (t) => step('viewer tiles', async () => {
+  const artifacts = await server.artifacts(jobs.bridge);
+  const tar = artifacts['tiles_combined.tar'];
+  if (!tar) {
+    t.skip('the map stage wrote no tiles_combined.tar');
+    return;
+  }
+  const tileset = JSON.parse((await server.artifactFile(tar, 'tileset.json')).toString('utf8'));
+  const keel = tileset.extras.keel;
+  await openViewer(jobs.bridge, '?lod=tiles');
+  const entry = '.layer-entry[data-layer="map_combined"]';
+  await layerShown('map_combined');
+  const row = await page.$eval(entry, (e) => ({...e.dataset}));
+  assert.equal(row.level, 'tiles');
+  assert.equal(Number(row.points), keel.points, 'page vs tileset.json');
+  const oracle = dracoVertexCount(await server.artifactBytes(artifacts['map_combined.drc']));
+  if (oracle !== null) assert.equal(keel.points, oracle, 'tileset.json vs draco_decoder on map_combined.drc');
+  // The tiles on screen, each tile's points read from its own header.
+  const shown = await page.evaluate(() => [...window.keelViewer.layers.get('map_combined').tiles.visibleTiles].map((tile) => tile.content.uri));
+  assert.ok(shown.length > 0, 'no tile on screen');
+  let points = 0;
+  let zMin = Infinity;
+  let zMax = -Infinity;
+  for (const uri of shown) {
+    const tile = readPnts(await server.artifactFile(tar, uri));
+    points += tile.points;
+    zMin = Math.min(zMin, tile.zMin);
+    zMax = Math.max(zMax, tile.zMax);
+  }
+  assert.equal(Number(row.drawn), points, `points on screen in ${shown.join(', ')}`);
+  assert.ok(points <= Number(row.points));
+  // Height: the legend spans the points on screen, and the colour ramp's ends are the legend's.
+  const height = await page.$('.legend-box[data-layer="map_combined"][data-mode="height"]');
+  const [min, max] = [Number(await height.getAttribute('data-min')), Number(await height.getAttribute('data-max'))];
+  assert.ok(min <= zMin + 1e-3 && max >= zMax - 1e-3, `height legend ${min}..${max} vs tiles on screen ${zMin}..${zMax}`);
+  const ramp = await page.evaluate(() => {
+    const u = window.keelViewer.layers.get('map_combined').material.uniforms;
+    return [u.vmin.value, u.vmax.value];
+  });
+  assert.deepEqual(ramp, [min, max], 'colour ramp ends vs height legend');
+  // Colourings: every attribute tileset.json lists, its legend its min/max.
+  const modes = await page.$$eval('#color-by option', (os) => os.map((o) => o.value));
+  for (const [mode, range] of Object.entries(keel.attributes)) {
+    assert.ok(modes.includes(mode), `no ${mode} colouring: ${modes}`);
+    await page.selectOption('#color-by', mode);
+    const legend = await page.waitForSelector(`.legend-box[data-layer="map_combined"][data-mode="${mode}"]`);
+    assert.equal(Number(await legend.getAttribute('data-min')), range.min, `${mode} min`);
+    assert.equal(Number(await legend.getAttribute('data-max')), range.max, `${mode} max`);
+  }
+  await page.selectOption('#color-by', 'height');
+}));
+
 test('the camera in the URL reopens the same view', () => step('camera url', async () => {
   await openViewer(jobs.bridge, '?cam=12.5,-40.25,18,3,4.5,-1');
   assert.equal(await page.evaluate(() => window.keelViewer.camera()), '12.5,-40.25,18,3,4.5,-1');
@@ -436,6 +493,7 @@ test('missing and corrupt artifacts are named in messages', () => step('bad arti
     await register('map_lidar_h.drc', Buffer.from([0x44, 0x52, 0x41, 0x43, 0x4f, 2, 2, 0, 0, 0, 1, 2, 3]));
     await register('report.json', Buffer.from('{"stages": {"map": '));
     await register('trajectories.json', Buffer.from('{"trajectories": [{"name": "refined", "xyz": [[0, 0]]}]}'));
+    await register('tiles_combined.tar', Buffer.from('not a tar archive'));
     await bare.api(`v1/worker/jobs/${job.id}/complete`, {method: 'POST', json: {lease_id: lease.lease_id}});
 
     const p = await browser.context.newPage();
@@ -462,6 +520,11 @@ async function badArtifactPages(p, bare, job) {
       assert.match(all, /map_combined\.drc could not be decoded/);
       assert.match(all, /map_lidar_h\.json is missing/);
       assert.match(all, /trajectories\.json: trajectories\[0\] \(refined\): xyz must be \[x, y, z\] numbers/);
+      // The map from its tiles: the tar has no tileset.json (the server answers 404).
+      await p.goto(`${bare.url}/#/jobs/${job.id}/viewer?lod=tiles`);
+      await p.waitForSelector('body[data-viewer-ready="true"]', {timeout: 60000});
+      const tilesMessages = (await p.$$eval('#viewer-messages .message', (ms) => ms.map((m) => m.textContent))).join('\n');
+      assert.match(tilesMessages, /map_combined cannot be shown.*tiles_combined\.tar: tileset\.json could not be loaded/s);
       await p.goto(`${bare.url}/#/jobs/${job.id}/report`);
       assert.match(await p.textContent('#report .message.error'), /report\.json cannot be read.*report\.json is not valid JSON/);
     }

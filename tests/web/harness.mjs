@@ -138,6 +138,13 @@ export class Server {
     return Buffer.from(await response.arrayBuffer());
   }
 
+  // One member of a tar artifact (GET /v1/artifacts/{id}/files/{path}), as bytes.
+  async artifactFile(artifact, member) {
+    const response = await this.api(`v1/artifacts/${artifact.id}/files/${member}`, {raw: true});
+    if (!response.ok) throw new Error(`${artifact.name}/${member}: HTTP ${response.status}`);
+    return Buffer.from(await response.arrayBuffer());
+  }
+
   async artifactJson(artifact) {
     return JSON.parse((await this.artifactBytes(artifact)).toString('utf8'));
   }
@@ -207,4 +214,26 @@ export function dracoVertexCount(bytes) {
   } finally {
     fs.rmSync(dir, {recursive: true, force: true});
   }
+}
+
+// A 3D Tiles point-cloud tile (.pnts) read as the 3D Tiles 1.0 spec lays it out (28-byte
+// header, feature table JSON, then its binary body): its point count and the z range of its
+// points (POSITION_QUANTIZED: offset + q / 65535 * scale, or float POSITION).
+export function readPnts(bytes) {
+  const buffer = Buffer.from(bytes);
+  if (buffer.length < 28 || buffer.toString('latin1', 0, 4) !== 'pnts') throw new Error('not a .pnts tile');
+  const jsonLength = buffer.readUInt32LE(12);
+  const table = JSON.parse(buffer.toString('utf8', 28, 28 + jsonLength));
+  const body = 28 + jsonLength;
+  const points = table.POINTS_LENGTH;
+  let zMin = Infinity;
+  let zMax = -Infinity;
+  for (let i = 0; i < points; i += 1) {
+    const z = table.POSITION_QUANTIZED
+      ? table.QUANTIZED_VOLUME_OFFSET[2] + buffer.readUInt16LE(body + table.POSITION_QUANTIZED.byteOffset + 6 * i + 4) / 65535 * table.QUANTIZED_VOLUME_SCALE[2]
+      : buffer.readFloatLE(body + table.POSITION.byteOffset + 12 * i + 8);
+    zMin = Math.min(zMin, z);
+    zMax = Math.max(zMax, z);
+  }
+  return {points, zMin, zMax};
 }

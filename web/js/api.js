@@ -93,7 +93,8 @@ export const jobsApi = {
   listPath: (state = '') => `v1/jobs?${new URLSearchParams(state ? {limit: 10000, state} : {limit: 10000})}`,
   get: (id) => getJson(`v1/jobs/${encodeURIComponent(id)}`),
   log: (id, from) => getJson(`v1/jobs/${encodeURIComponent(id)}/log?from=${from}`),
-  artifacts: (id) => getJson(`v1/jobs/${encodeURIComponent(id)}/artifacts`),
+  artifactsPath: (id) => `v1/jobs/${encodeURIComponent(id)}/artifacts`,
+  artifacts: (id) => getJson(jobsApi.artifactsPath(id)),
   cancel: (id) => postJson(`v1/jobs/${encodeURIComponent(id)}/cancel`),
   retry: (id) => postJson(`v1/jobs/${encodeURIComponent(id)}/retry`),
   // A new job on the same stored mission with the same stages and options: nothing is

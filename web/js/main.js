@@ -39,8 +39,9 @@ async function route() {
     unmount = null;
   }
   clear(app);
-  // The job list's request runs while its page's code loads.
+  // The job list's request (the viewer's artifact list) runs while its page's code loads.
   if (current.page === 'jobs' && session.token()) prefetchJson(jobsApi.listPath(current.query.get('state') || ''));
+  if (current.page === 'viewer' && session.token()) prefetchJson(jobsApi.artifactsPath(current.id));
   let module;
   try {
     module = await pages[current.page]();

@@ -70,3 +70,29 @@ test('Draco attribute ids come from the sidecar; position defaults to 0', () => 
   assert.deepEqual(taskConfigFor(null).attributeIDs, {position: 0});
   assert.equal(taskConfigFor({position_unique_id: 3}).attributeIDs.position, 3);
 });
+
+test('maps bigger than the point budget are drawn from their tiles, when they have them', async () => {
+  const {useTiles, BIG_DRACO_BYTES} = await import('../../../web/js/viewer/lod_choice.js');
+  const tiles = {name: 'tiles_combined.tar'};
+  const small = {full: {size: 1000}, tiles};
+  const big = {full: {size: BIG_DRACO_BYTES + 1}, tiles};
+  const budget = 3000000;
+  // By the sidecar's point count when there is one, else by the Draco file's size.
+  assert.equal(useTiles(small, {points: budget + 1}, {budget}), true);
+  assert.equal(useTiles(big, {points: budget}, {budget}), false);
+  assert.equal(useTiles(big, null, {budget}), true);
+  assert.equal(useTiles(small, null, {budget}), false);
+  // The URL's ?lod= overrides; without tiles there is no choice.
+  assert.equal(useTiles(small, null, {lod: 'tiles', budget}), true);
+  assert.equal(useTiles(big, null, {lod: 'draco', budget}), false);
+  assert.equal(useTiles({full: big.full, tiles: null}, null, {lod: 'tiles', budget}), false);
+});
+
+test('tileset extras give the legend its ranges and sensor names; a tileset without them, none', async () => {
+  const {tilesetInfo} = await import('../../../web/js/viewer/tiles_layer.js');
+  const tileset = {asset: {version: '1.0'}, extras: {keel: {map: 'combined', points: 14412345, tiles: 211,
+    sensors: ['lidar_h', 'sonar'], attributes: {intensity: {min: 0, max: 255}, sensor: {min: 0, max: 1}}}}};
+  assert.deepEqual(tilesetInfo(tileset), {points: 14412345, sensors: ['lidar_h', 'sonar'],
+                                          attributes: {intensity: {min: 0, max: 255}, sensor: {min: 0, max: 1}}});
+  assert.deepEqual(tilesetInfo({asset: {version: '1.0'}}), {points: NaN, attributes: {}, sensors: []});
+});

@@ -6,17 +6,21 @@
 // residuals as coloured points; point-to-point and point-to-CAD measurement; and the camera
 // in the URL. An artifact that is missing or does not decode is named in a message.
 //
-// Layers share one shape (object3d, status, message, boundingBox(), legend(), dispose()), so a
-// level-of-detail tiles layer can join them later without changing the page.
+// A big map that has level-of-detail tiles (tiles_<map>.tar) is drawn from them (TilesLayer:
+// the coarsest tiles first, then those the camera needs); a small one from its Draco file.
+// `?lod=tiles` or `?lod=draco` in the URL chooses for every map. Layers share one shape
+// (object3d, status, message, boundingBox(), legend(), dispose()).
 import * as THREE from 'three';
-import {ApiError, fetchArtifact, fetchArtifactJson, jobsApi} from '../api.js';
+import {ApiError, artifactUrl, fetchArtifact, fetchArtifactJson, jobsApi, session} from '../api.js';
 import {h, message} from '../dom.js';
 import {formatNumber} from '../format.js';
 import {jobHash, replaceQuery} from '../router.js';
+import {useTiles} from '../viewer/lod_choice.js';
 import {finiteRange, histogram} from '../viewer/colormap.js';
 import {drawHistogram, legendBox} from '../viewer/legend.js';
 import {MeshLayer} from '../viewer/mesh_layer.js';
-import {PointCloudLayer} from '../viewer/point_cloud_layer.js';
+import {pointMaterial} from '../viewer/materials.js';
+import {COLOR_MODES, PointCloudLayer} from '../viewer/point_cloud_layer.js';
 import {ResidualLayer, parseResiduals} from '../viewer/residual_layer.js';
 import {Scene3d} from '../viewer/scene.js';
 import {ShapesLayer, validateShapes} from '../viewer/shapes_layer.js';
@@ -32,7 +36,7 @@ export function mapsOf(byName) {
     if (!match || match[1].endsWith('_preview')) continue;
     const base = `map_${match[1]}`;
     maps.push({name: base, full: byName[name], preview: byName[`${base}_preview.drc`] || null,
-               sidecarArtifact: byName[`${base}.json`] || null});
+               sidecarArtifact: byName[`${base}.json`] || null, tiles: byName[`tiles_${match[1]}.tar`] || null});
   }
   return maps.sort((a, b) => (a.name === 'map_combined' ? -1 : b.name === 'map_combined' ? 1 : a.name.localeCompare(b.name)));
 }
@@ -50,8 +54,12 @@ export function mount(container, {id, query}) {
   container.append(h('div', {class: 'viewer'}, aside, stage));
 
   const state = {budget: Number(query.get('budget')) || DEFAULT_BUDGET, color: query.get('color') || 'height',
+                 lod: query.get('lod') || 'auto',
                  firstPictureMs: null, ready: false, cameraFromUrl: false, fitted: false, measure: null,
                  measurements: [], interacting: false};
+  // The artifact list is requested first: creating the WebGL context below can take a while.
+  const artifactList = jobsApi.artifacts(id);
+  artifactList.catch(() => {});  // handled in start()
   const scene = new Scene3d(canvas, {
     onCameraChange: (text) => saveUrl({cam: text}),
     onInteraction: (moving) => {
@@ -62,6 +70,17 @@ export function mount(container, {id, query}) {
     },
   });
   state.cameraFromUrl = scene.setCameraText(query.get('cam') || '');
+  // The Draco maps' shader (one program for them all), compiled and drawn once while the
+  // first map downloads (Scene3d.warmUp); tiles layers warm their own the same way.
+  let dracoWarm = null;
+  const warmMaterials = [];
+  const warmDraco = () => {
+    if (!dracoWarm) {
+      warmMaterials.push(pointMaterial());
+      dracoWarm = scene.warmUp(warmMaterials[0]);
+    }
+    return dracoWarm;
+  };
   const measureGroup = new THREE.Group();
   scene.add(measureGroup);
 
@@ -103,7 +122,13 @@ export function mount(container, {id, query}) {
     if (!layer.ui) return;
     const {count, status, row} = layer.ui;
     row.dataset.status = layer.status;
-    if (layer instanceof PointCloudLayer) {
+    if (layer.isTiles) {
+      count.textContent = layer.decodedPoints ? `${formatNumber(layer.drawnPoints)} / ${formatNumber(layer.decodedPoints)} pts` : '';
+      row.dataset.points = String(layer.decodedPoints);
+      row.dataset.drawn = String(layer.drawnPoints);
+      row.dataset.level = layer.level;
+      row.dataset.tiles = String(layer.tilesShown);
+    } else if (layer instanceof PointCloudLayer) {
       count.textContent = layer.decodedPoints ? `${formatNumber(layer.drawnPoints)} / ${formatNumber(layer.decodedPoints)} pts` : '';
       row.dataset.points = String(layer.decodedPoints);
       row.dataset.drawn = String(layer.drawnPoints);
@@ -123,20 +148,59 @@ export function mount(container, {id, query}) {
         : layer.status === 'error' ? h('span', {class: 'error'}, layer.message) : '');
   }
 
+  // Redrawn only when a legend changed (tiles report every tile they load; a repaint of the
+  // page costs the GPU process time that the 3D view waits for under software WebGL).
+  let legendsShown = '';
   function updateLegend() {
-    const boxes = [];
+    const shown = [];
     for (const layer of layers.values()) {
       if (!layer.object3d.visible || layer.status !== 'shown' || !layer.legend) continue;
       const legend = layer.legend();
-      if (legend) boxes.push(legendBox(legend, layer.name));
+      if (legend) shown.push([legend, layer.name]);
     }
-    legends.replaceChildren(...boxes);
-    legends.hidden = boxes.length === 0;
+    const key = JSON.stringify(shown);
+    if (key === legendsShown) return;
+    legendsShown = key;
+    legends.replaceChildren(...shown.map(([legend, name]) => legendBox(legend, name)));
+    legends.hidden = shown.length === 0;
   }
 
-  function onLayerChange(layer) {
+  function firstPicture() {
+    if (state.firstPictureMs !== null) return;
+    state.firstPictureMs = performance.now();
+    performance.mark('keel:first-picture');
+  }
+
+  // A tiles layer reports 'tileset' (its extent and attributes are known), 'first-tile' (the
+  // root tile can be drawn), 'settled' (the tiles of the first view have loaded), or nothing
+  // (more tiles, a new count).
+  function onTilesChange(layer, event) {
+    // The view is fitted to the tileset's cube first (the tiles to load depend on the camera),
+    // then to the extent of the points of the first tile (the whole map, thinned).
+    if ((event === 'tileset' || event === 'first-tile') && !state.cameraFromUrl && !state.userMoved) fitView();
+    if (event === 'tileset') {
+      addColorModes(layer.modes());
+      layer.setColorMode(state.color) || layer.setColorMode('height');
+    }
+    // The first picture is the first frame that drew some of the map's points.
+    const drawn = () => {
+      if (disposed || !layer.object3d.visible) return;
+      if (layer.drawnPoints > 0) firstPicture();
+      else scene.requestRender(drawn);
+    };
+    if (event === 'first-tile') scene.requestRender(drawn);
+    if (event === 'settled' || layer.status === 'error') scene.requestRender(() => settle());
+    if (layer.status === 'shown') updateLegend();  // the height range grows as tiles load
+  }
+
+  function onLayerChange(layer, event) {
     if (disposed) return;
     updateLayerUi(layer);
+    if (layer.isTiles) {
+      if (layer.status === 'error' && event === 'error') notice('error', `${layer.name} cannot be shown`, layer.message);
+      onTilesChange(layer, event);
+      return;
+    }
     if (layer.status === 'error') notice('error', `${layer.name} cannot be shown`, layer.message);
     if (layer.status === 'shown') {
       // Until the user moves the camera, each layer that arrives widens the view to it.
@@ -145,10 +209,7 @@ export function mount(container, {id, query}) {
       if (layer instanceof PointCloudLayer) {
         layer.setInteracting(true);
         scene.requestRender(() => {
-          if (state.firstPictureMs === null) {
-            state.firstPictureMs = performance.now();
-            performance.mark('keel:first-picture');
-          }
+          firstPicture();
           // Then the budgeted copy, one piece per frame.
           const more = () => {
             if (!layer.revealMore()) {
@@ -179,7 +240,7 @@ export function mount(container, {id, query}) {
     const box = new THREE.Box3();
     for (const layer of layers.values()) {
       if (!layer.object3d.visible) continue;
-      const b = layer.status !== 'shown' && !layer.sidecar?.bbox_min ? null : layer.boundingBox?.();
+      const b = layer.status !== 'shown' && !layer.sidecar?.bbox_min && !layer.isTiles ? null : layer.boundingBox?.();
       if (b && !b.isEmpty()) box.union(b);
     }
     if (box.isEmpty()) return;
@@ -188,10 +249,11 @@ export function mount(container, {id, query}) {
 
   // Everything shown by default has loaded (or failed): the page is ready.
   function settle() {
-    const pending = [...layers.values()].some((l) => l.object3d.visible && l.status === 'loading');
+    const pending = [...layers.values()].some((l) => l.object3d.visible && (l.status === 'loading' || l.settling));
     if (!pending && !state.ready && state.started) {
       state.ready = true;
       document.body.dataset.viewerReady = 'true';
+      performance.mark('keel:viewer-ready');
     }
     updateLegend();
   }
@@ -200,11 +262,14 @@ export function mount(container, {id, query}) {
   async function setupMaps(byName) {
     const maps = mapsOf(byName);
     if (maps.length === 0) return;
+    // The tiles renderer's code loads while the sidecars are read, when some map has tiles.
+    const tilesModule = maps.some((map) => map.tiles && state.lod !== 'draco') ? import('../viewer/tiles_layer.js') : null;
+    tilesModule?.catch(() => {});  // reported below, if a map needs it
     const el = section('maps', 'Maps');
     const colorSelect = h('select', {id: 'color-by', on: {change: () => {
       state.color = colorSelect.value;
       saveUrl({color: state.color});
-      for (const layer of layers.values()) if (layer instanceof PointCloudLayer) layer.setColorMode(state.color) || layer.setColorMode('height');
+      for (const layer of mapLayers()) layer.setColorMode(state.color) || layer.setColorMode('height');
       updateLegend();
       scene.requestRender();
     }}});
@@ -212,6 +277,8 @@ export function mount(container, {id, query}) {
                                     on: {change: () => {
       state.budget = Math.max(100000, Number(budgetInput.value) || DEFAULT_BUDGET);
       saveUrl({budget: state.budget === DEFAULT_BUDGET ? '' : state.budget});
+      for (const layer of layers.values()) if (layer.isTiles) layer.setBudget(state.budget);
+      scene.requestRender();
     }}});
     const sizeInput = h('input', {type: 'range', min: 1, max: 8, step: 1, value: 2, on: {input: () => {
       for (const layer of layers.values()) layer.setPointSize?.(Number(sizeInput.value));
@@ -221,21 +288,59 @@ export function mount(container, {id, query}) {
               h('label', null, 'Point budget ', budgetInput),
               h('label', null, 'Point size ', sizeInput));
 
+    // A map's sidecar, or the warning to show when it is drawn from its Draco file (tiles
+    // carry their attributes and ranges in tileset.json).
+    const problems = new Map();
     const sidecars = await Promise.all(maps.map(async (map) => {
       if (!map.sidecarArtifact) {
-        notice('warning', `${map.name}.json is missing`, `${map.name} is drawn by height only: its sidecar names the attributes and their ranges.`);
+        problems.set(map.name, [`${map.name}.json is missing`, `${map.name} is drawn by height only: its sidecar names the attributes and their ranges.`]);
         return null;
       }
       try {
         return await fetchArtifactJson(map.sidecarArtifact);
       } catch (e) {
-        notice('warning', `${map.name}.json cannot be read`, `${e.message}; ${map.name} is drawn by height only.`);
+        problems.set(map.name, [`${map.name}.json cannot be read`, `${e.message}; ${map.name} is drawn by height only.`]);
         return null;
       }
     }));
     const modes = new Set(['height']);
+    addColorModes = (more) => {
+      for (const m of more) {
+        if (modes.has(m)) continue;
+        modes.add(m);
+        colorSelect.append(h('option', {value: m}, m));
+        if (m === query.get('color')) state.color = colorSelect.value = m;
+      }
+    };
+    // 3d-tiles-renderer is loaded only for a map drawn from tiles; without it (web/ built
+    // before `npm ci` installed it) every map is drawn from its Draco file.
+    let TilesLayer = null;
+    if (maps.some((map, i) => useTiles(map, sidecars[i], {lod: state.lod, budget: state.budget}))) {
+      try {
+        ({TilesLayer} = await tilesModule);
+      } catch (e) {
+        notice('warning', 'The level-of-detail tiles cannot be drawn', `${e.message}; the maps are loaded from their Draco files.`);
+      }
+    }
     maps.forEach((map, i) => {
       const sidecar = sidecars[i];
+      const visible = i === 0;
+      if (TilesLayer && useTiles(map, sidecar, {lod: state.lod, budget: state.budget})) {
+        const url = new URL(`${artifactUrl(map.tiles)}/files/tileset.json`, location.href).href;
+        const layer = new TilesLayer({name: map.name, artifact: map.tiles, url, token: session.token()},
+                                     {scene, budget: state.budget, onChange: onLayerChange});
+        for (const m of COLOR_MODES) if (sidecar?.attributes?.[m]) modes.add(m);
+        el.append(layerRow(layer, {checked: visible, onToggle: (on) => {
+          layer.object3d.visible = on;
+          if (on && layer.status === 'idle') layer.load();
+          updateLegend();
+          scene.requestRender();
+        }}));
+        addLayer(layer, visible);
+        updateLayerUi(layer);
+        return;
+      }
+      if (problems.has(map.name)) notice('warning', ...problems.get(map.name));
       let preview = map.preview;
       if (sidecar?.preview?.file && !byName[sidecar.preview.file]) {
         notice('warning', `${sidecar.preview.file} is missing`, `${map.name}: its full map is loaded instead.`);
@@ -243,8 +348,8 @@ export function mount(container, {id, query}) {
       }
       const layer = new PointCloudLayer({name: map.name, sidecar, full: map.full, preview, fetchBytes},
                                         {budget: state.budget, onChange: onLayerChange});
+      layer.warm = warmDraco;
       for (const m of layer.modes()) modes.add(m);
-      const visible = i === 0;
       const fullButton = h('button', {type: 'button', class: 'load-full', hidden: true, on: {click: () => {
         layer.budget = state.budget;
         layer.load({full: true});
@@ -265,8 +370,12 @@ export function mount(container, {id, query}) {
     for (const m of modes) colorSelect.append(h('option', {value: m}, m));
     if (!modes.has(state.color)) state.color = 'height';
     colorSelect.value = state.color;
-    for (const layer of layers.values()) if (layer instanceof PointCloudLayer) layer.setColorMode(state.color);
+    for (const layer of mapLayers()) layer.setColorMode(state.color);
   }
+
+  const mapLayers = () => [...layers.values()].filter((l) => l instanceof PointCloudLayer || l.isTiles);
+  // Colourings found later (a tileset's attributes); set by setupMaps.
+  let addColorModes = () => {};
 
   // ---- hull -----------------------------------------------------------------------------
   // ba_solution.json's T_world_model: dvl_residuals.csv and cad_model.drc are in the CAD
@@ -492,6 +601,7 @@ export function mount(container, {id, query}) {
       if (!layer.object3d.visible || layer.status !== 'shown') continue;
       if (layer instanceof PointCloudLayer && layer.coarse)
         objects.push(...(state.interacting || !layer.details.length ? [layer.coarse] : layer.details));
+      if (layer.isTiles && layer.tiles) objects.push(layer.tiles.group);
       if (layer instanceof MeshLayer && layer.mesh && layer.kind !== 'cad') objects.push(layer.mesh);
       if (layer instanceof ResidualLayer) objects.push(layer.points);
     }
@@ -547,13 +657,14 @@ export function mount(container, {id, query}) {
   async function start() {
     let list;
     try {
-      ({artifacts: list} = await jobsApi.artifacts(id));
+      ({artifacts: list} = await artifactList);
     } catch (e) {
       if (!disposed && !(e instanceof ApiError && e.status === 401))
         aside.append(message('error', 'The artifacts could not be listed', e instanceof ApiError ? e.describe() : e.message));
       return;
     }
     if (disposed) return;
+    performance.mark('keel:viewer-artifacts');
     const byName = Object.fromEntries(list.map((a) => [a.name, a]));
     document.getElementById('viewer-status').textContent = `${list.length} artifacts`;
     state.T_world_model = await worldFromModel(byName);
@@ -592,6 +703,7 @@ export function mount(container, {id, query}) {
   return () => {
     disposed = true;
     for (const layer of layers.values()) layer.dispose();
+    for (const material of warmMaterials) material.dispose();
     scene.dispose();
     delete window.keelViewer;
     delete document.body.dataset.viewerReady;

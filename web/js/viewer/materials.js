@@ -21,14 +21,22 @@ uniform float threshold;
 uniform sampler2D ramp;
 varying vec3 vColor;
 vec3 rampColor() {
-  float v = useHeight == 1 ? position.z : value;
+#ifdef WORLD_HEIGHT
+  float z = (modelMatrix * vec4(position, 1.0)).z;  // tiles keep their offset in the object
+#else
+  float z = position.z;
+#endif
+  float v = useHeight == 1 ? z : value;
   if (abs(v) < threshold) return vec3(0.62);
   float t = clamp((v - vmin) / max(vmax - vmin, 1e-12), 0.0, 1.0);
   return texture2D(ramp, vec2(t, 0.5)).rgb;
 }`;
 
-export function pointMaterial() {
+// worldHeight: height colouring takes z after the object's transform (3D tiles place each
+// tile's points relative to its corner), else the attribute's own z.
+export function pointMaterial({worldHeight = false} = {}) {
   return new THREE.ShaderMaterial({
+    defines: worldHeight ? {WORLD_HEIGHT: 1} : {},
     uniforms: {
       vmin: {value: 0}, vmax: {value: 1}, useHeight: {value: 1}, threshold: {value: -1},
       ramp: {value: rampTexture('viridis')}, pointSize: {value: 2},

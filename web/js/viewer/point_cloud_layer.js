@@ -67,6 +67,7 @@ export class PointCloudLayer {
     const artifact = full || !this.source.preview ? this.source.full : this.source.preview;
     this.level = artifact === this.source.full ? 'full' : 'preview';
     this.status = 'loading';
+    this.warmed = this.warmed || this.warm?.();
     this.message = `downloading ${artifact.name}`;
     this.onChange?.(this);
     try {
@@ -83,6 +84,7 @@ export class PointCloudLayer {
       this.onChange?.(this);
       const geometry = await decodeDraco(bytes, this.sidecar, artifact.name);
       performance.mark(`keel:${this.name}:decoded`);
+      await this.warmed;  // the shader compiled and drawn once (started with the download)
       await this.show(geometry);
       performance.mark(`keel:${this.name}:thinned`);
       this.status = 'shown';

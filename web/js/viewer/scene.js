@@ -9,7 +9,13 @@ import {decodeCamera, encodeCamera} from './camera_url.js';
 export class Scene3d {
   constructor(canvas, {onCameraChange, onInteraction} = {}) {
     this.canvas = canvas;
+    const t0 = performance.now();
     this.renderer = new THREE.WebGLRenderer({canvas, antialias: false, powerPreference: 'high-performance'});
+    performance.measure('keel:webgl-context', {start: t0});
+    // three asks the GPU process whether each new program linked, several round trips that
+    // each wait for it (a second under software WebGL on a busy machine); warmUp asks once,
+    // early, for the maps' shaders.
+    this.renderer.debug.checkShaderErrors = false;
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
     this.renderer.setClearColor(0x1b2330);
     this.scene = new THREE.Scene();
@@ -21,6 +27,7 @@ export class Scene3d {
     this.controls.screenSpacePanning = true;
     this.frameCount = 0;
     this.afterRender = [];
+    this.beforeRender = new Set();  // per-frame updates of layers that stream (3D tiles)
     this.pending = false;
     this.flight = null;
     this.onCameraChange = onCameraChange;
@@ -66,11 +73,53 @@ export class Scene3d {
   renderNow() {
     this.pending = false;
     if (this.flight) this.stepFlight();
+    const t0 = performance.now();
+    for (const fn of this.beforeRender) fn();
+    const t1 = performance.now();
     this.renderer.render(this.scene, this.camera);
+    // Slow frames are named in the page's timeline (the benchmark prints them).
+    const t2 = performance.now();
+    if (t2 - t0 > 50) performance.measure(`keel:frame ${this.frameCount} (update ${(t1 - t0).toFixed(0)} ms)`, {start: t0, end: t2});
     this.frameCount += 1;
     const callbacks = this.afterRender;
     this.afterRender = [];
     for (const fn of callbacks) fn();
+  }
+
+  // Compiles a material's shaders early, while the data downloads, then draws a point with
+  // it (at the camera, so clipped: nothing shows) in a task of its own: what a first draw waits for the GPU process
+  // for (the program's link, the extensions three asks for when it first uploads a texture)
+  // is waited for there, not in the first frame that shows a map. Software WebGL here has no
+  // KHR_parallel_shader_compile, and each such wait can take a second on a busy machine.
+  // Resolves when the material can be drawn without those waits; a shader that does not link
+  // is a console error (three's own checks are off, above).
+  warmUp(material) {
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, 0], 3));
+    const probe = new THREE.Points(geometry, material);
+    const t0 = performance.now();
+    this.renderer.compile(probe, this.camera, this.scene);
+    const gl = this.renderer.getContext();
+    gl.flush();  // to the GPU process now, not with the next frame
+    return new Promise((resolve) => setTimeout(resolve, 50)).then(() => {
+      const t1 = performance.now();
+      // Drawn to the canvas, not a render target: three's program depends on the target's
+      // colour space, and the maps' program is the one to link.
+      const scene = new THREE.Scene();
+      probe.frustumCulled = false;
+      probe.position.copy(this.camera.position);
+      scene.add(probe);
+      this.renderer.render(scene, this.camera);
+      this.requestRender();  // the page's own picture again
+      performance.measure(`keel:first draw ${material.name || material.type}`, {start: t1});
+      const program = this.renderer.properties.get(material).currentProgram;
+      if (program) {
+        if (!gl.getProgramParameter(program.program, gl.LINK_STATUS))
+          console.error(`${material.name || material.type}: shader program not linked: ${gl.getProgramInfoLog(program.program)}`);
+      }
+      performance.measure(`keel:compile ${material.name || material.type}`, {start: t0});
+      geometry.dispose();
+    });
   }
 
   cameraText() {
