@@ -262,9 +262,11 @@ export function mount(container, {id, query}) {
   async function setupMaps(byName) {
     const maps = mapsOf(byName);
     if (maps.length === 0) return;
-    // The tiles renderer's code loads while the sidecars are read, when some map has tiles.
-    const tilesModule = maps.some((map) => map.tiles && state.lod !== 'draco') ? import('../viewer/tiles_layer.js') : null;
-    tilesModule?.catch(() => {});  // reported below, if a map needs it
+    // The tiles renderer's code loads while the sidecars are read when a map's Draco file
+    // already tells it is big; later, if a sidecar tells so; never for small maps.
+    const loadTilesModule = () => import('../viewer/tiles_layer.js');
+    let tilesModule = maps.some((map) => useTiles(map, null, {lod: state.lod, budget: state.budget})) ? loadTilesModule() : null;
+    tilesModule?.catch(() => {});  // reported below
     const el = section('maps', 'Maps');
     const colorSelect = h('select', {id: 'color-by', on: {change: () => {
       state.color = colorSelect.value;
@@ -317,7 +319,7 @@ export function mount(container, {id, query}) {
     let TilesLayer = null;
     if (maps.some((map, i) => useTiles(map, sidecars[i], {lod: state.lod, budget: state.budget}))) {
       try {
-        ({TilesLayer} = await tilesModule);
+        ({TilesLayer} = await (tilesModule || (tilesModule = loadTilesModule())));
       } catch (e) {
         notice('warning', 'The level-of-detail tiles cannot be drawn', `${e.message}; the maps are loaded from their Draco files.`);
       }
