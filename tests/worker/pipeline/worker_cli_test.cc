@@ -157,6 +157,13 @@ TEST_F(WorkerCliTest, ServeKeepsRetryingAnUnreachableServerAndStopsCleanlyOnSigt
   Child child({"serve", "--server", "http://127.0.0.1:9", "--token", "t", "--cache-dir",
                (dir_ / "cache").string(), "--poll-seconds", "0.1"},
               dir_ / "stdout.txt", dir_ / "stderr.txt");
+  // Signal only once it has retried (its stop handlers are in place by then; a loaded machine
+  // may take seconds to get there), and check it is still retrying after that.
+  auto retried = [&] {
+    return (read_text(dir_ / "stdout.txt") + err()).find("lease failed") != std::string::npos;
+  };
+  for (int i = 0; i < 6000 && !retried(); ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_TRUE(retried()) << "no retry logged within 60 s: " << err();
   EXPECT_EQ(child.wait(1500ms), -1) << "exited although it should retry: " << err();
   child.signal(SIGTERM);
   EXPECT_EQ(child.wait(30s), 0) << err();
