@@ -47,7 +47,7 @@ else
   echo "keel setup: done"
 fi
 
-# three.js, uPlot and playwright-core for web/, exactly as package-lock.json pins them (the
+# three.js, uPlot, 3d-tiles-renderer and playwright-core for web/, as package-lock.json pins them (the
 # build copies what the pages load from web/node_modules; nothing is fetched at build time).
 web="$(cd "$(dirname "$0")/../web" && pwd)"
 if [ ! -f "$web/node_modules/.package-lock.json" ] ||
