@@ -57,6 +57,7 @@ echo "== fetching artifacts"
 ls -l "$out/artifacts"
 /usr/bin/python3 "$here/deploy/demo_summary.py" "$out/artifacts/report.json"
 echo "== done: artifacts in $out/artifacts, report at $out/artifacts/report.json"
+echo "   the same figures as one self-contained page: $out/artifacts/report.html"
 echo "   web dashboard of this job: $KEEL_URL/#/jobs/$job  (report: #/jobs/$job/report, 3D: #/jobs/$job/viewer)"
 echo "   sign in with the token in $KEEL_TOKEN_FILE"
 # On a terminal the server stays up for the dashboard until Ctrl-C (KEEL_DEMO_SERVE=0: exit now).

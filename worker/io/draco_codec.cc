@@ -12,10 +12,14 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
 
+#include <nlohmann/json.hpp>
+
+#include "worker/io/draco_geometry_summary.h"
 #include "worker/io/replaced_file.h"
 
 namespace keel::io {
@@ -65,9 +69,13 @@ draco::Encoder make_encoder(const DracoOptions& options) {
   return encoder;
 }
 
-void name_attribute(draco::PointCloud* geometry, int attribute_id, const std::string& name) {
+void name_attribute(draco::PointCloud* geometry, int attribute_id, const std::string& name,
+                    const std::vector<std::string>& labels = {},
+                    std::optional<float> no_data = std::nullopt) {
   auto metadata = std::make_unique<draco::AttributeMetadata>();
   metadata->AddEntryString(kNameEntry, name);
+  if (!labels.empty()) metadata->AddEntryString(kDracoLabelsEntry, nlohmann::json(labels).dump());
+  if (no_data) metadata->AddEntryString(kDracoNoDataEntry, nlohmann::json(*no_data).dump());
   geometry->AddAttributeMetadata(attribute_id, std::move(metadata));
 }
 
@@ -373,6 +381,7 @@ void add_scalar_attribute(draco::Mesh* mesh, const ScalarField& field) {
 struct FieldParts {
   std::string name;
   std::vector<const std::vector<float>*> parts;
+  std::optional<float> no_data;
 };
 
 // Appends each part's values to the attribute's buffer (one contiguous block per part, as
@@ -395,11 +404,35 @@ int add_attribute(draco::PointCloud* cloud, draco::GeometryAttribute::Type type,
   return cloud->AddAttribute(attribute, true, cloud->num_points());
 }
 
+// A label attribute over parts: `counts[k]` points holding `values[k]`, in part order.
+struct LabelParts {
+  std::string name;
+  std::vector<std::string> labels;
+  std::vector<size_t> counts;
+  std::vector<uint8_t> values;
+};
+
+void add_label_attribute(draco::PointCloud* cloud, const LabelParts& label) {
+  draco::GeometryAttribute attribute;
+  attribute.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, draco::DT_UINT8, false, 1, 0);
+  const int id = cloud->AddAttribute(attribute, true, cloud->num_points());
+  int64_t offset = 0;
+  for (size_t k = 0; k < label.counts.size(); ++k) {
+    const std::vector<uint8_t> block(std::min<size_t>(label.counts[k], 1 << 16), label.values[k]);
+    for (size_t done = 0; done < label.counts[k]; done += block.size()) {
+      const size_t n = std::min(block.size(), label.counts[k] - done);
+      cloud->attribute(id)->buffer()->Write(offset, block.data(), n);
+      offset += static_cast<int64_t>(n);
+    }
+  }
+  name_attribute(cloud, id, label.name, label.labels);
+}
+
 // The encoding of the concatenated parts (the same draco::PointCloud, hence the same bytes as
 // encoding the concatenated cloud); `bytes` only.
 DracoEncoded encode_cloud_bytes(const PositionParts& positions,
-                                const std::vector<FieldParts>& fields,
-                                const DracoOptions& options) {
+                                const std::vector<FieldParts>& fields, const DracoOptions& options,
+                                const LabelParts* label = nullptr) {
   check_options(options);
   size_t n = 0;
   for (const std::vector<Eigen::Vector3f>* part : positions) n += part->size();
@@ -419,8 +452,9 @@ DracoEncoded encode_cloud_bytes(const PositionParts& positions,
   for (const auto& field : fields) {
     const int id = add_attribute(cloud.get(), draco::GeometryAttribute::GENERIC, 1);
     fill_attribute(cloud->attribute(id), field.parts);
-    name_attribute(cloud.get(), id, field.name);
+    name_attribute(cloud.get(), id, field.name, {}, field.no_data);
   }
+  if (label != nullptr) add_label_attribute(cloud.get(), *label);
 
   draco::Encoder encoder = make_encoder(options);
   draco::EncoderBuffer buffer;
@@ -446,6 +480,7 @@ void measure_cloud(const PositionParts& positions, const DracoOptions& options,
     throw std::runtime_error("draco round trip: " + std::to_string(n) + " points encoded, " +
                              std::to_string(decoded_cloud.num_points()) + " decoded");
   }
+  result.summary = summarize_geometry(decoded_cloud, false, 0);
   const PositionBounds bounds = position_bounds(positions);
   const double tolerance = error_tolerance(bounds, options, &result);
   if (!measure_error_by_replica(positions, bounds, decoded_cloud, options, tolerance, &result)) {
@@ -461,22 +496,25 @@ void measure_cloud(const PositionParts& positions, const DracoOptions& options,
 }
 
 DracoEncoded encode_cloud_parts(const PositionParts& positions,
-                                const std::vector<FieldParts>& fields,
-                                const DracoOptions& options) {
-  DracoEncoded result = encode_cloud_bytes(positions, fields, options);
+                                const std::vector<FieldParts>& fields, const DracoOptions& options,
+                                const LabelParts* label = nullptr) {
+  DracoEncoded result = encode_cloud_bytes(positions, fields, options, label);
   measure_cloud(positions, options, &result);
   return result;
 }
 
-// A cloud given as parts: positions, and intensity when every non-empty part has it.
+// A cloud given as parts: positions, intensity when every non-empty part has it, and the
+// PartsAttributes (a label, whole-cloud fields).
 struct CloudParts {
   PositionParts positions;
   std::vector<FieldParts> fields;
+  std::optional<LabelParts> label;
 };
 
-CloudParts cloud_parts(const std::vector<const PointCloud*>& parts) {
+CloudParts cloud_parts(const std::vector<const PointCloud*>& parts,
+                       const PartsAttributes& attributes = {}) {
   CloudParts out;
-  FieldParts intensity{"intensity", {}};
+  FieldParts intensity{"intensity", {}, std::nullopt};
   bool all_intensity = true;
   for (const PointCloud* part : parts) {
     if (part->empty()) continue;
@@ -491,6 +529,36 @@ CloudParts cloud_parts(const std::vector<const PointCloud*>& parts) {
   if (out.positions.empty())
     throw std::invalid_argument("encode_draco_point_cloud: no points to encode");
   if (all_intensity) out.fields.push_back(std::move(intensity));
+  size_t n = 0;
+  for (const std::vector<Eigen::Vector3f>* part : out.positions) n += part->size();
+  std::vector<std::string> reserved = {"intensity"};
+  if (!attributes.label_name.empty()) reserved.push_back(attributes.label_name);
+  check_scalar_fields(attributes.fields, n, reserved);
+  if (!attributes.fields_no_data.empty() &&
+      attributes.fields_no_data.size() != attributes.fields.size())
+    throw std::invalid_argument(
+        "encode_draco_point_cloud: " + std::to_string(attributes.fields_no_data.size()) +
+        " no_data values for " + std::to_string(attributes.fields.size()) + " fields");
+  for (size_t f = 0; f < attributes.fields.size(); ++f)
+    out.fields.push_back({attributes.fields[f].name,
+                          {&attributes.fields[f].values},
+                          attributes.fields_no_data.empty()
+                              ? std::nullopt
+                              : std::optional<float>(attributes.fields_no_data[f])});
+  if (!attributes.label_name.empty()) {
+    if (attributes.part_labels.size() != parts.size() || parts.size() > 256)
+      throw std::invalid_argument("encode_draco_point_cloud: label '" + attributes.label_name +
+                                  "' needs one label per part (at most 256), got " +
+                                  std::to_string(attributes.part_labels.size()) + " for " +
+                                  std::to_string(parts.size()) + " parts");
+    LabelParts label{attributes.label_name, attributes.part_labels, {}, {}};
+    for (size_t k = 0; k < parts.size(); ++k) {
+      if (parts[k]->empty()) continue;
+      label.counts.push_back(parts[k]->size());
+      label.values.push_back(static_cast<uint8_t>(k));
+    }
+    out.label = std::move(label);
+  }
   return out;
 }
 
@@ -503,7 +571,8 @@ DracoEncoded encode_draco_point_cloud(const std::vector<Eigen::Vector3f>& positi
   check_positions(positions, "encode_draco_point_cloud");
   check_scalar_fields(fields, positions.size(), {});
   std::vector<FieldParts> field_parts;
-  for (const auto& field : fields) field_parts.push_back({field.name, {&field.values}});
+  for (const auto& field : fields)
+    field_parts.push_back({field.name, {&field.values}, std::nullopt});
   return encode_cloud_parts({&positions}, field_parts, options);
 }
 
@@ -517,15 +586,19 @@ DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
 }
 
 DracoEncoded encode_draco_point_cloud(const std::vector<const PointCloud*>& parts,
-                                      const DracoOptions& options) {
-  const CloudParts cloud = cloud_parts(parts);
-  return encode_cloud_parts(cloud.positions, cloud.fields, options);
+                                      const DracoOptions& options,
+                                      const PartsAttributes& attributes) {
+  const CloudParts cloud = cloud_parts(parts, attributes);
+  return encode_cloud_parts(cloud.positions, cloud.fields, options,
+                            cloud.label ? &*cloud.label : nullptr);
 }
 
 DracoEncoded encode_draco_point_cloud_bytes(const std::vector<const PointCloud*>& parts,
-                                            const DracoOptions& options) {
-  const CloudParts cloud = cloud_parts(parts);
-  return encode_cloud_bytes(cloud.positions, cloud.fields, options);
+                                            const DracoOptions& options,
+                                            const PartsAttributes& attributes) {
+  const CloudParts cloud = cloud_parts(parts, attributes);
+  return encode_cloud_bytes(cloud.positions, cloud.fields, options,
+                            cloud.label ? &*cloud.label : nullptr);
 }
 
 void measure_draco_point_cloud(const std::vector<const PointCloud*>& parts,
@@ -587,6 +660,7 @@ DracoEncoded encode_draco_mesh(const TriangleMesh& mesh,
   decoded_positions.reserve(decoded.mesh.vertices.size());
   for (const auto& v : decoded.mesh.vertices) decoded_positions.push_back(v.cast<float>());
   measure_error(mesh.vertices, &used, decoded_positions, options, &result);
+  result.summary = summarize_draco(result.bytes, "encoded mesh");
   return result;
 }
 

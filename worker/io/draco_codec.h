@@ -5,11 +5,13 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "worker/core/point_cloud.h"
 #include "worker/core/triangle_mesh.h"
+#include "worker/io/draco_summary.h"
 #include "worker/io/mesh_scalar_field.h"
 
 namespace keel::io {
@@ -35,6 +37,24 @@ struct DracoEncoded {
   // "nearest_decoded" (meshes, or a replica mismatch: the nearest decoded point to each input
   // point, found on a hash grid).
   std::string error_method;
+  // What the file holds, from the same decoding (counts, box, attribute ids and value ranges).
+  DracoSummary summary;
+};
+
+// Attributes of a cloud given as parts, beyond intensity.
+struct PartsAttributes {
+  // A label attribute (GENERIC, uint8, stored losslessly) when label_name is not empty: every
+  // point of parts[k] holds k, and part_labels (one per part, at most 256) are stored as the
+  // attribute's metadata entry kDracoLabelsEntry (a JSON array). A combined map's `sensor`.
+  std::string label_name;
+  std::vector<std::string> part_labels;
+  // Float fields over the concatenated parts (one value per point, in part order), quantized
+  // like every scalar field (DracoOptions::field_bits).
+  std::vector<ScalarField> fields;
+  // Empty, or per field a value meaning "undefined here", stored as the field's metadata entry
+  // kDracoNoDataEntry. Keep it below every defined value: quantization returns the attribute's
+  // minimum exactly.
+  std::vector<float> fields_no_data;
 };
 
 // Positions plus per-point scalar fields (stored as generic attributes named by metadata
@@ -53,12 +73,14 @@ DracoEncoded encode_draco_point_cloud(const PointCloud& cloud,
 // the same bytes and figures as encoding the concatenated cloud. Intensity is stored when every
 // non-empty part has it (as mapping::append_points merges clouds). Throws as above.
 DracoEncoded encode_draco_point_cloud(const std::vector<const PointCloud*>& parts,
-                                      const DracoOptions& options = {});
+                                      const DracoOptions& options = {},
+                                      const PartsAttributes& attributes = {});
 // The same in two steps, to run on different threads: the encoding (`bytes` only), then the
 // round trip that fills the other fields (throwing as the encoder does). `parts` and `options`
 // must be the same in both.
 DracoEncoded encode_draco_point_cloud_bytes(const std::vector<const PointCloud*>& parts,
-                                            const DracoOptions& options = {});
+                                            const DracoOptions& options = {},
+                                            const PartsAttributes& attributes = {});
 void measure_draco_point_cloud(const std::vector<const PointCloud*>& parts,
                                const DracoOptions& options, DracoEncoded* encoded);
 

@@ -236,7 +236,7 @@ void LeasedJob::upload_artifact(const std::string& stage, const std::string& nam
   log(stage + ": uploaded " + name + " (" + std::to_string(fs::file_size(file)) + " bytes)");
 }
 
-void LeasedJob::upload_report(const std::string& stage) {
+pipeline::ReportInput LeasedJob::report_input() const {
   pipeline::ReportInput input;
   const proto::Job& job = lease_.job;
   input.job = {{"id", job.id},
@@ -248,10 +248,30 @@ void LeasedJob::upload_report(const std::string& stage) {
   input.stage_order = job.stages;
   input.stages = reports_;
   input.stage_seconds = stage_seconds_;
-  pipeline::write_json_atomically(work_dir_ / pipeline::kReportFileName,
-                                  pipeline::build_report(input));
-  upload_artifact(stage, pipeline::kReportFileName);
+  return input;
+}
+
+void LeasedJob::upload_report(const std::string& stage) {
+  for (const auto& name :
+       pipeline::write_report_files(work_dir_, pipeline::build_report(report_input())))
+    upload_artifact(stage, name);
   report_uploaded_ = true;
+}
+
+void LeasedJob::upload_failure_report(const std::string& failed_stage, const std::string& error) {
+  pipeline::ReportInput input = report_input();
+  input.stage_order.clear();  // the stages that finished, in the job's order
+  for (const auto& stage : lease_.job.stages)
+    if (reports_.contains(stage)) input.stage_order.push_back(stage);
+  input.failure = {{"stage", failed_stage}, {"error", error}};
+  // Under the last stage, as a finished job's report: a retry that succeeds replaces it.
+  try {
+    for (const auto& name : pipeline::write_report_files(work_dir_, pipeline::build_report(input)))
+      upload_artifact(lease_.job.stages.back(), name);
+  } catch (const std::exception& e) {
+    // The failure itself still gets posted; the report is a courtesy.
+    log("could not upload the failed job's report: " + std::string(e.what()));
+  }
 }
 
 JobEnd LeasedJob::finish(const pipeline::JobResult& result) {
@@ -261,6 +281,7 @@ JobEnd LeasedJob::finish(const pipeline::JobResult& result) {
       if (heartbeat_->canceled()) return JobEnd::kCanceled;  // the server knows; say nothing more
       return abandon("worker stopping");
     case pipeline::JobOutcome::kFailed:
+      if (!lease_.job.stages.empty()) upload_failure_report(result.failed_stage, result.error);
       return fail(result.error);
     case pipeline::JobOutcome::kSucceeded:
       break;

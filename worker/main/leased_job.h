@@ -4,8 +4,9 @@
 //      fetch the CAD mesh, if any; download the artifacts of stages finished by earlier
 //      attempts into the work folder, so the job resumes after them;
 //   3. run the JobRunner; after each stage upload and register its artifacts (and, after
-//      the last one, report.json), then post the stage's completion;
-//   4. post complete or fail.
+//      the last one, report.json and report.html), then post the stage's completion;
+//   4. post complete or fail (a stage's failure first uploads report.json and report.html of
+//      the stages that finished, with the error, under the job's last stage).
 // Nothing escapes run(): a job's error fails that job only. Server trouble (unreachable,
 // 5xx, lease lost) and a stop request abandon the job instead: its lease expires and
 // another worker resumes it after its last completed stage.
@@ -20,6 +21,7 @@
 #include "proto/worker_protocol.h"
 #include "worker/main/blob_cache.h"
 #include "worker/pipeline/job_runner.h"
+#include "worker/pipeline/report.h"
 
 namespace keel::worker {
 
@@ -49,7 +51,9 @@ class LeasedJob {
   void download_completed_artifacts(const std::filesystem::path& work_dir);
   void on_stage_done(const std::string& stage, const pipeline::StageResult& result, double seconds);
   void upload_artifact(const std::string& stage, const std::string& name);
+  pipeline::ReportInput report_input() const;
   void upload_report(const std::string& stage);
+  void upload_failure_report(const std::string& failed_stage, const std::string& error);
   JobEnd finish(const pipeline::JobResult& result);
   JobEnd fail(const std::string& error);
   JobEnd abandon(const std::string& why);

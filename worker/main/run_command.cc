@@ -14,6 +14,7 @@
 #include "worker/pipeline/bundle_unpack.h"
 #include "worker/pipeline/job_runner.h"
 #include "worker/pipeline/report.h"
+#include "worker/pipeline/report_html.h"
 
 namespace keel::worker {
 
@@ -97,6 +98,7 @@ int run_local(const RunArgs& args) {
   if (ec) return usage_error("--out " + args.out + ": " + ec.message());
   const fs::path report_path = spec.work_dir / pipeline::kReportFileName;
   fs::remove(report_path, ec);  // a report from an earlier run must not pass for this one's
+  fs::remove(spec.work_dir / pipeline::kReportHtmlFileName, ec);
 
   try {
     if (fs::is_directory(args.mission)) {
@@ -119,29 +121,33 @@ int run_local(const RunArgs& args) {
   hooks.canceled = stop_requested;
   const pipeline::JobResult result = pipeline::JobRunner().run(spec, hooks);
 
-  switch (result.outcome) {
-    case pipeline::JobOutcome::kCanceled:
-      std::cerr << "keel-worker run: interrupted during " << result.failed_stage << "\n";
-      return kExitInterrupted;
-    case pipeline::JobOutcome::kFailed:
-      std::cerr << "keel-worker run: " << result.error << "\n";
-      return kExitStageFailed;
-    case pipeline::JobOutcome::kSucceeded:
-      break;
+  if (result.outcome == pipeline::JobOutcome::kCanceled) {
+    std::cerr << "keel-worker run: interrupted during " << result.failed_stage << "\n";
+    return kExitInterrupted;
   }
   pipeline::ReportInput input;
   input.job = {{"id", "local"}, {"stages", spec.stages}, {"options", spec.options}};
   input.mission = {{"path", spec.mission_dir.string()}, {"cad", spec.cad_path.string()}};
-  input.stage_order = spec.stages;
   input.stages = result.reports;
   input.stage_seconds = result.stage_seconds;
+  // A failed run's report holds the stages that finished, and the error.
+  for (const auto& stage : spec.stages)
+    if (result.reports.contains(stage)) input.stage_order.push_back(stage);
+  if (result.outcome == pipeline::JobOutcome::kFailed)
+    input.failure = {{"stage", result.failed_stage}, {"error", result.error}};
   try {
-    pipeline::write_json_atomically(report_path, pipeline::build_report(input));
+    pipeline::write_report_files(spec.work_dir, pipeline::build_report(input));
   } catch (const std::exception& e) {
     std::cerr << "keel-worker run: " << e.what() << "\n";
     return kExitStageFailed;
   }
-  std::cout << "report: " << report_path.string() << std::endl;
+  if (result.outcome == pipeline::JobOutcome::kFailed) {
+    std::cerr << "keel-worker run: " << result.error << "\n";
+    return kExitStageFailed;
+  }
+  std::cout << "report: " << report_path.string()
+            << "\nreport.html: " << (spec.work_dir / pipeline::kReportHtmlFileName).string()
+            << std::endl;
   return kExitOk;
 }
 

@@ -21,6 +21,7 @@
 #include "proto/contract_error.h"
 #include "worker/ba/model_assisted_ba.h"
 #include "worker/core/robust_spread.h"
+#include "worker/io/draco_codec.h"
 #include "worker/io/mesh_reader.h"
 #include "worker/io/mission_reader.h"
 #include "worker/io/text_writer.h"
@@ -28,8 +29,10 @@
 #include "worker/io/yaml_json.h"
 #include "worker/mapping/odometry_correction.h"
 #include "worker/mapping/stamped_transforms.h"
+#include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/report.h"
 #include "worker/pipeline/servo_tray.h"
+#include "worker/pipeline/trajectories_file.h"
 
 namespace keel::pipeline {
 
@@ -381,6 +384,31 @@ void write_dvl_residuals(const fs::path& path, const ba::BaModeResult& m,
   w.close();
 }
 
+// trajectories.json's `ba`: the keyframe poses in the CAD model frame (x_gM^-1 T_world_vehicle),
+// where the hull products of ba are; T_world_model places them in the world.
+void write_model_frame_trajectory(const fs::path& work_dir, const ba::BaModeResult& m,
+                                  const std::vector<ba::BaKeyframe>& keyframes) {
+  const Pose3 T_model_world = m.T_world_model.inverse();
+  Trajectory in_model;
+  for (size_t i = 0; i < keyframes.size(); ++i)
+    in_model.push_back({keyframes[i].t_ns, T_model_world * m.T_world_vehicle[i]});
+  add_to_trajectories_file(work_dir, {{"ba", "model", in_model, {}}}, m.T_world_model);
+}
+
+// cad_model.drc (the job's CAD mesh as given, model frame) and its sidecar; report figures.
+json write_cad_model(const fs::path& work_dir, const TriangleMesh& cad,
+                     const BaStageOptions& options) {
+  io::DracoOptions draco;
+  draco.position_bits = options.cad_draco_position_bits;
+  const io::DracoEncoded encoded = io::encode_draco_mesh(cad, {}, draco);
+  io::write_draco_file(work_dir / kCadModelFile, encoded.bytes);
+  return {{"file", kCadModelFile},
+          {"bytes", encoded.bytes.size()},
+          {"max_position_error_m", encoded.max_position_error_m},
+          {"position_error_bound_m", encoded.position_error_bound_m},
+          {"sidecar", write_draco_sidecar(work_dir, kCadModelFile, encoded.summary, "model")}};
+}
+
 BaSolution solution_of(const ba::BaModeResult& m, const std::vector<ba::BaKeyframe>& keyframes) {
   BaSolution s;
   s.mode = ba::to_string(m.mode);
@@ -450,10 +478,13 @@ class BaStage : public Stage {
         nlohmann::ordered_json(ba_solution_to_json(solution_of(*chosen, problem.keyframes))));
 
     write_dvl_residuals(context.work_dir / kBaDvlResidualsFile, *chosen, problem.keyframes);
+    write_model_frame_trajectory(context.work_dir, *chosen, problem.keyframes);
+    const json cad_model = write_cad_model(context.work_dir, problem.cad_mesh, options);
 
     const std::optional<Pose3> truth = truth_T_world_cad(mission);
     StageResult out;
-    out.artifacts = {kBaTrajectoryFile, kBaSolutionFile, kBaDvlResidualsFile};
+    out.artifacts = {kBaTrajectoryFile, kBaSolutionFile, kBaDvlResidualsFile,
+                     kTrajectoriesFile, kCadModelFile,   cad_model["sidecar"].get<std::string>()};
     json& r = out.report;
     r["input"] = keyframes.report;
     r["input"]["tracks_source"] = frontend ? "frontend (SIFT on the images, Sec. 2.7)"
@@ -490,6 +521,7 @@ class BaStage : public Stage {
     for (const auto& m : result.modes)
       r["modes"][ba::to_string(m.mode)] = mode_report(m, truth, options);
     r["solution_mode"] = ba::to_string(chosen->mode);
+    r["cad_model"] = cad_model;
     context.progress(1.0);
     return out;
   }
@@ -522,6 +554,7 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
   o.dvl_range_normal = r.optional<std::string>("dvl_range_normal", o.dvl_range_normal);
   o.histogram_bin_m = r.optional<double>("histogram_bin_m", o.histogram_bin_m);
   o.histogram_range_m = r.optional<double>("histogram_range_m", o.histogram_range_m);
+  o.cad_draco_position_bits = r.optional<int>("cad_draco_position_bits", o.cad_draco_position_bits);
   r.finish();
   require(o.mode == "all" || o.mode == "proposed" || o.mode == "geva" || o.mode == "naive", "mode",
           "proposed, geva, naive or all, got '" + o.mode + "'");
@@ -551,6 +584,8 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
   require(std::isfinite(o.histogram_range_m) && o.histogram_range_m >= o.histogram_bin_m &&
               o.histogram_range_m / o.histogram_bin_m <= 10000,
           "histogram_range_m", "a number in [histogram_bin_m, 10000 * histogram_bin_m]");
+  require(o.cad_draco_position_bits >= 1 && o.cad_draco_position_bits <= 30,
+          "cad_draco_position_bits", "an integer in [1, 30]");
   return o;
 }
 

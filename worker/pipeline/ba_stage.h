@@ -10,9 +10,11 @@
 //
 // Artifacts: `trajectory_ba.tum` (keyframe poses of the `proposed` mode, else of the last mode
 // run) and `ba_solution.json` (that mode's landmarks, camera poses and x_gM, which the
-// `inspect` stage reads). The report has one section per mode: iterations, time, cost, the
-// lambda = 1 fraction per iteration (Fig. 16), the DVL range residuals after GICP alone and
-// after the mode (Fig. 18), and x_gM against truth.yaml's T_world_cad when present.
+// `inspect` stage reads); that mode's trajectory in the model frame added to
+// `trajectories.json` as `ba`; `cad_model.drc` (+ sidecar `cad_model.json`). The report has one
+// section per mode: iterations, time, cost, the lambda = 1 fraction per iteration (Fig. 16), the
+// DVL range residuals after GICP alone and after the mode (Fig. 18), and x_gM against truth.yaml's
+// T_world_cad when present.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -32,6 +34,9 @@ inline constexpr const char* kBaSolutionFile = "ba_solution.json";
 // Fig. 18(a)-(b): each DVL beam's residual where it meets the CAD mesh, after GICP and after the
 // BA (the artifacts' mode): `state,t,x_model_m,y_model_m,z_model_m,residual_m`.
 inline constexpr const char* kBaDvlResidualsFile = "dvl_residuals.csv";
+// The job's CAD mesh as a Draco mesh in its own (model) frame, for measuring against it in a
+// viewer; its sidecar is cad_model.json.
+inline constexpr const char* kCadModelFile = "cad_model.drc";
 
 // `--set ba.<name>=<value>`.
 struct BaStageOptions {
@@ -63,6 +68,9 @@ struct BaStageOptions {
   // Fig. 18 histogram of DVL range residuals: bins of this width over [-range, +range].
   double histogram_bin_m = 0.005;
   double histogram_range_m = 0.05;
+  // cad_model.drc: 16 bits keep the quantization error <= sqrt(3)/2 * 30 m / (2^16 - 1) = 0.4 mm
+  // on a 30 m hull (as inspect's mesh_remeshed.drc).
+  int cad_draco_position_bits = 16;
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static BaStageOptions from_json(const nlohmann::json& options);

@@ -21,6 +21,7 @@
 #include "worker/io/mission.h"
 #include "worker/io/yaml_json.h"
 #include "worker/pipeline/ba_stage.h"
+#include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/report.h"
 
 namespace keel::pipeline {
@@ -171,6 +172,8 @@ class InspectStage : public Stage {
     io::write_draco_file(context.work_dir / kRemeshedDracoFile, encoded.bytes);
     StageResult out;
     out.artifacts.push_back(kRemeshedDracoFile);
+    out.artifacts.push_back(
+        write_draco_sidecar(context.work_dir, kRemeshedDracoFile, encoded.summary, "world"));
     if (options.write_ply) {
       io::write_ply_mesh(context.work_dir / kRemeshedPlyFile, result.remeshed, fields);
       out.artifacts.push_back(kRemeshedPlyFile);
@@ -205,6 +208,8 @@ class InspectStage : public Stage {
            {"height_m", s.max_deviation_m},
            {"mean_deviation_m", s.mean_deviation_m},
            {"centroid_world", {s.centroid_world.x(), s.centroid_world.y(), s.centroid_world.z()}},
+           {"extent_m", {s.extent_m().x(), s.extent_m().y(), s.extent_m().z()}},
+           {"views", s.views.size()},
            {"landmarks", s.num_landmarks},
            {"detections", s.num_detections}});
     r["shapes"] = shapes;

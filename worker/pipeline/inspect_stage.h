@@ -3,9 +3,10 @@
 // moved into the world frame by x_gM, shapes are detected per view (Algorithm 1) and fused into
 // the prior (Algorithm 2, Eq. 15) by keel::inspect::run_inspect.
 //
-// Artifacts: mesh_remeshed.drc (Draco, per-vertex `deviation` in m), mesh_remeshed.ply (same
-// field) and shapes.json (keel::inspect::shapes_to_json). Report: the shapes with their heights
-// and, when truth.yaml lists foreign_objects, each object matched to the nearest shape
+// Artifacts (world frame, the CAD moved by x_gM): mesh_remeshed.drc (Draco, per-vertex
+// `deviation` in m) with its sidecar mesh_remeshed.json, mesh_remeshed.ply (same field) and
+// shapes.json (keel::inspect::shapes_to_json). Report: the shapes with their heights, extents
+// and views and, when truth.yaml lists foreign_objects, each object matched to the nearest shape
 // (found / missed, measured vs true height) and the count of shapes matching no object.
 #pragma once
 

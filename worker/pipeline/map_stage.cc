@@ -38,6 +38,8 @@
 #include "worker/mapping/slam_map.h"
 #include "worker/mapping/transform_tree.h"
 #include "worker/mapping/voxel_accumulator.h"
+#include "worker/pipeline/draco_sidecar.h"
+#include "worker/pipeline/map_outputs.h"
 #include "worker/pipeline/output_runner.h"
 #include "worker/pipeline/refine_stage.h"
 #include "worker/pipeline/tiled_maps.h"
@@ -159,6 +161,14 @@ SensorSelection select_sensors(const io::MissionReader& reader, const MapStageOp
       continue;
     }
     selection.mapped.push_back({spec->name, proto::to_string(spec->type), *T_body_sensor});
+  }
+  // map_<a>_preview.drc would be both a's (or the combined map's) preview and b's map.
+  for (const auto& b : selection.mapped) {
+    bool clash = b.name == std::string(kCombinedMapName) + "_preview";
+    for (const auto& a : selection.mapped) clash = clash || b.name == a.name + "_preview";
+    if (clash)
+      throw ContractError("sensor '" + b.name + "': map_" + b.name +
+                          ".drc would also name a preview; rename the sensor in mission.yaml");
   }
   if (selection.mapped.empty())
     throw std::runtime_error(
@@ -285,6 +295,18 @@ struct MapOutput {
   std::vector<std::string> artifacts;
 };
 
+// A preview (map_outputs.h) as a map output: report {"preview": {...}}.
+MapOutput preview_output(PreviewOutput preview) {
+  return {{{"preview", std::move(preview.report)}}, std::move(preview.artifacts)};
+}
+
+// Per-point metrics of a whole map (every point a query point, ~1600 neighbours each within
+// 0.25 m on a 2 cm map): ~4 us and the cell grid per point, plus 12 bytes of fields.
+constexpr double kPointMetricsSecondsPerPoint = 4e-6;
+constexpr double kPointMetricsBytesPerPoint = kMetricsBytesPerPoint + 12.0;
+// A preview's thinned copy (~20 bytes per point) and its encoding.
+constexpr double kPreviewBytesPerPoint = kDracoBytesPerPoint + 20.0;
+
 io::DracoOptions draco_options(const MapStageOptions& options) {
   io::DracoOptions draco;
   draco.position_bits = options.draco_position_bits;
@@ -301,6 +323,9 @@ MapOutput write_map_draco(const io::DracoEncoded& encoded, size_t points,
   io::write_draco_file(work_dir / map_draco_file(name), encoded.bytes);
   MapOutput out;
   out.artifacts.push_back(map_draco_file(name));
+  out.artifacts.push_back(
+      write_draco_sidecar(work_dir, map_draco_file(name), encoded.summary, "world",
+                          preview_entry(name, points, options.preview_max_points)));
   out.report = {{"points", points},
                 {"draco",
                  {{"file", map_draco_file(name)},
@@ -312,7 +337,8 @@ MapOutput write_map_draco(const io::DracoEncoded& encoded, size_t points,
                   {"max_position_error_m", encoded.max_position_error_m},
                   {"position_error_bound_m", encoded.position_error_bound_m},
                   {"error_method", encoded.error_method},
-                  {"encode_seconds", earlier_seconds + seconds_since(start)}}}};
+                  {"encode_seconds", earlier_seconds + seconds_since(start)}}},
+                {"sidecar", out.artifacts.back()}};
   return out;
 }
 
@@ -574,6 +600,7 @@ class MapRun {
       drc_[s.name];
       ply_[s.name];
       tiles_[s.name];
+      preview_[s.name];
     }
     runner_.emplace(*task_log_);
     // Early outputs take one thread beside the scans' `threads` (none when threads = 1).
@@ -761,6 +788,7 @@ class MapRun {
     for (const auto& name : built_) {
       if (map_points(name) == 0) continue;
       combined_parts_.push_back(name);
+      combined_attributes_.part_labels.push_back(name);
       combined_points_ += map_points(name);
     }
     if (combined_points_ == 0)
@@ -805,8 +833,44 @@ class MapRun {
 
   // Bytes of a Draco file of n points made in memory (the map gathered, then encoded), or 0
   // when it would not fit the budget's output share.
+  // With write_point_metrics the metrics' grid and fields, and a large map's preview, are made
+  // in the same task from the same gathered map.
   double draco_bytes(size_t points) const {
-    return (kGatheredBytesPerPoint + kDracoBytesPerPoint) * static_cast<double>(points);
+    const double n = static_cast<double>(points);
+    double bytes = (kGatheredBytesPerPoint + kDracoBytesPerPoint) * n;
+    if (options_.write_point_metrics) bytes += kPointMetricsBytesPerPoint * n;
+    if (points > options_.preview_max_points)
+      bytes += kPreviewBytesPerPoint * static_cast<double>(options_.preview_max_points);
+    return bytes;
+  }
+  // Seconds of the same (before the combined map's check).
+  double draco_seconds(size_t points, double encode_seconds_per_point) const {
+    const double n = static_cast<double>(points);
+    double seconds = encode_seconds_per_point * n;
+    if (options_.write_point_metrics) seconds += kPointMetricsSecondsPerPoint * n;
+    if (points > options_.preview_max_points)
+      seconds += kDracoSecondsPerPoint * static_cast<double>(options_.preview_max_points);
+    return seconds;
+  }
+
+  // Per-point metrics (Eqs. 23-26) of positions as Draco fields, into `attributes`.
+  void add_point_metrics(const std::vector<Eigen::Vector3f>& xyz,
+                         io::PartsAttributes& attributes) const {
+    mapping::MapMetricsOptions metrics;
+    metrics.check_canceled = cancel_check();
+    metrics.radius_m = options_.metrics_radius_m;
+    metrics.threads = options_.threads;
+    PointMetricFields fields = point_metric_fields(xyz, metrics);
+    attributes.fields = std::move(fields.fields);
+    attributes.fields_no_data = std::move(fields.no_data);
+  }
+
+  // map_<name>_preview.drc of a map larger than preview_max_points, from its gathered parts.
+  MapOutput write_preview(const std::vector<const PointCloud*>& parts,
+                          const io::PartsAttributes& attributes, const std::string& name) const {
+    return preview_output(write_map_preview(parts, attributes, options_.preview_max_points,
+                                            draco_options(options_), map_preview_file(name),
+                                            context_.work_dir));
   }
   bool draco_fits(size_t points) const { return draco_bytes(points) <= output_budget_; }
 
@@ -820,14 +884,20 @@ class MapRun {
     if (n == 0) return tasks;
     const double tile_bytes = static_cast<double>(tiled_->options().tile_budget_bytes);
     if (draco_fits(n)) {
-      tasks.push_back({"draco " + name, kDracoSecondsPerPoint * n, draco_bytes(n), [this, name, n] {
+      tasks.push_back({"draco " + name, draco_seconds(n, kDracoSecondsPerPoint), draco_bytes(n),
+                       [this, name, n] {
                          const auto start = std::chrono::steady_clock::now();
                          const std::vector<std::string> parts = {name};
                          const PointCloud map =
                              gather_tiled_map(*tiled_, parts, tiled_->output_partition(parts));
-                         drc_.at(name) = write_map_draco(
-                             io::encode_draco_point_cloud(map, {}, draco_options(options_)), n,
-                             start, 0.0, name, options_, context_.work_dir);
+                         io::PartsAttributes attributes;
+                         if (options_.write_point_metrics) add_point_metrics(map.xyz, attributes);
+                         drc_.at(name) =
+                             write_map_draco(io::encode_draco_point_cloud(
+                                                 {&map}, draco_options(options_), attributes),
+                                             n, start, 0.0, name, options_, context_.work_dir);
+                         if (n > options_.preview_max_points)
+                           preview_.at(name) = write_preview({&map}, attributes, name);
                        }});
     } else {
       drc_.at(name) = draco_not_written(n, draco_bytes(n), output_budget_);
@@ -872,21 +942,31 @@ class MapRun {
     const double n_combined = static_cast<double>(combined_points_);
     const double tile_bytes = static_cast<double>(tiled_->options().tile_budget_bytes);
     if (draco_fits(combined_points_)) {
-      tasks.push_back({"draco combined (encode)", kDracoEncodeSecondsPerPoint * n_combined,
-                       draco_bytes(combined_points_), [this] {
-                         const auto start = std::chrono::steady_clock::now();
-                         for (const auto& name : combined_parts_) {
-                           const std::vector<std::string> parts = {name};
-                           combined_maps_.push_back(
-                               gather_tiled_map(*tiled_, parts, tiled_->output_partition(parts)));
-                         }
-                         std::vector<const PointCloud*> parts;
-                         for (const auto& map : combined_maps_) parts.push_back(&map);
-                         combined_encoded_ =
-                             io::encode_draco_point_cloud_bytes(parts, draco_options(options_));
-                         combined_encode_seconds_ = seconds_since(start);
-                         runner_->add(guarded({combined_draco_check()}));
-                       }});
+      tasks.push_back(
+          {"draco combined (encode)", draco_seconds(combined_points_, kDracoEncodeSecondsPerPoint),
+           draco_bytes(combined_points_), [this] {
+             const auto start = std::chrono::steady_clock::now();
+             for (const auto& name : combined_parts_) {
+               const std::vector<std::string> parts = {name};
+               combined_maps_.push_back(
+                   gather_tiled_map(*tiled_, parts, tiled_->output_partition(parts)));
+             }
+             std::vector<const PointCloud*> parts;
+             for (const auto& map : combined_maps_) parts.push_back(&map);
+             if (options_.write_point_metrics) {
+               std::vector<Eigen::Vector3f> positions;
+               positions.reserve(combined_points_);
+               for (const PointCloud* part : parts)
+                 positions.insert(positions.end(), part->xyz.begin(), part->xyz.end());
+               add_point_metrics(positions, combined_attributes_);
+             }
+             combined_encoded_ = io::encode_draco_point_cloud_bytes(parts, draco_options(options_),
+                                                                    combined_attributes_);
+             if (combined_points_ > options_.preview_max_points)
+               combined_preview_ = write_preview(parts, combined_attributes_, kCombinedMapName);
+             combined_encode_seconds_ = seconds_since(start);
+             runner_->add(guarded({combined_draco_check()}));
+           }});
     } else {
       combined_output_ =
           draco_not_written(combined_points_, draco_bytes(combined_points_), output_budget_);
@@ -937,12 +1017,14 @@ class MapRun {
       MapOutput& map_output = drc_.at(name);
       merge_output(map_output, ply_.at(name));
       merge_output(map_output, tiles_.at(name));
+      merge_output(map_output, preview_.at(name));
       out.report["sensors"][name]["map"] = map_output.report;
       out.artifacts.insert(out.artifacts.end(), map_output.artifacts.begin(),
                            map_output.artifacts.end());
     }
     merge_output(combined_output_, combined_ply_);
     merge_output(combined_output_, combined_tiles_);
+    merge_output(combined_output_, combined_preview_);
     if (!combined_output_.report.contains("points"))
       combined_output_.report["points"] = combined_points_;
     out.report["combined"] = combined_output_.report;
@@ -955,8 +1037,9 @@ class MapRun {
   // first; they record what they wrote in drc_, ply_ and the combined outputs.
   void remove_written_maps() {
     runner_.reset();
-    std::vector<const MapOutput*> outputs = {&combined_output_, &combined_ply_, &combined_tiles_};
-    for (const auto* by_sensor : {&drc_, &ply_, &tiles_})
+    std::vector<const MapOutput*> outputs = {&combined_output_, &combined_ply_, &combined_tiles_,
+                                             &combined_preview_};
+    for (const auto* by_sensor : {&drc_, &ply_, &tiles_, &preview_})
       for (const auto& [name, output] : *by_sensor) outputs.push_back(&output);
     std::error_code ignored;  // best effort: the stage's own error is the one to report
     for (const MapOutput* output : outputs)
@@ -1042,10 +1125,12 @@ class MapRun {
   std::string primary_ = "inspection_combined";  // Table V's inspection map
   std::chrono::steady_clock::time_point outputs_start_;
   double outputs_cpu_start_ = 0.0;
-  std::map<std::string, MapOutput> drc_, ply_, tiles_;
-  MapOutput combined_output_, combined_ply_, combined_tiles_;
+  std::map<std::string, MapOutput> drc_, ply_, tiles_, preview_;
+  MapOutput combined_output_, combined_ply_, combined_tiles_, combined_preview_;
   std::vector<std::string> combined_parts_;  // the sensor maps of the combined map
-  std::vector<PointCloud> combined_maps_;    // gathered for its Draco file
+  // Its Draco attributes: each point's sensor (label), and per-point metrics when written.
+  io::PartsAttributes combined_attributes_{kSensorAttribute, {}, {}, {}};
+  std::vector<PointCloud> combined_maps_;  // gathered for its Draco file
   size_t combined_points_ = 0;
   io::DracoEncoded combined_encoded_;
   double combined_encode_seconds_ = 0.0;
@@ -1091,6 +1176,12 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.draco_position_bits = r.optional<int>("draco_position_bits", o.draco_position_bits);
   o.draco_compression_level = r.optional<int>("draco_compression_level", o.draco_compression_level);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);
+  o.write_point_metrics = r.optional<bool>("write_point_metrics", o.write_point_metrics);
+  const long long preview_max =
+      r.optional<long long>("preview_max_points", static_cast<long long>(o.preview_max_points));
+  require(preview_max >= 1000 && preview_max <= 1000000000LL, "preview_max_points",
+          "an integer in [1000, 1e9]");
+  o.preview_max_points = static_cast<size_t>(preview_max);
   o.metrics_radius_m = r.optional<double>("metrics_radius_m", o.metrics_radius_m);
   const long long max_points =
       r.optional<long long>("metrics_max_points", static_cast<long long>(o.metrics_max_points));
@@ -1180,6 +1271,8 @@ json MapStageOptions::to_json() const {
           {"draco_position_bits", draco_position_bits},
           {"draco_compression_level", draco_compression_level},
           {"write_ply", write_ply},
+          {"write_point_metrics", write_point_metrics},
+          {"preview_max_points", preview_max_points},
           {"metrics_radius_m", metrics_radius_m},
           {"metrics_max_points", metrics_max_points},
           {"slam_sensor", slam_sensor},

@@ -7,8 +7,10 @@
 // report compares both maps by the metrics of Eqs. (23)-(26), as Table V does.
 //
 // Artifacts: map_<sensor>.drc / .ply / tiles_<sensor>.tar per sensor, and the same for the
-// combined map (Eq. (21)). The maps are kept out of core, in tiles within map.memory_budget_mb
-// (tiled_maps.h); a map too large for the budget has no single Draco file.
+// combined map (Eq. (21), each point with its `sensor`). The maps are kept out of core, in tiles
+// within map.memory_budget_mb (tiled_maps.h); a map too large for the budget has no single
+// Draco file. Each .drc has its sidecar map_<sensor>.json, and a map larger than
+// preview_max_points map_<sensor>_preview.drc with its own sidecar (map_outputs.h).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -69,6 +71,15 @@ struct MapStageOptions {
   // (1.45 s vs 1.93 s) for files 1 % larger (2.37 vs 2.35 bytes per point).
   int draco_compression_level = 5;
   bool write_ply = true;
+  // Density, roughness and planarity (Eqs. (23)-(26)) of every point of every map, stored as
+  // the Draco attributes "density", "roughness" and "planarity" for a viewer to colour by (where
+  // undefined, the value the sidecar gives as the attribute's no_data). Every point is then a query
+  // point: on a 2 cm map that costs far more than the sampled metrics of Table V
+  // (metrics_max_points), hence off by default.
+  bool write_point_metrics = false;
+  // A map larger than this also gets map_<sensor>_preview.drc, an even thinning to this many
+  // points that a viewer opens first (software WebGL draws ~2 M points in about a second).
+  size_t preview_max_points = 2000000;
 
   // Table V metrics (Eqs. (23)-(26)).
   double metrics_radius_m = 0.25;

@@ -26,6 +26,7 @@
 #include "worker/io/tum.h"
 #include "worker/io/yaml_json.h"
 #include "worker/pipeline/servo_tray.h"
+#include "worker/pipeline/trajectories_file.h"
 #include "worker/slam/gicp_odometry.h"
 #include "worker/slam/map_agreement.h"
 #include "worker/slam/so3.h"
@@ -607,6 +608,25 @@ json evaluation_json(const Trajectory& truth, const Trajectory& map_poses,
   return out;
 }
 
+// trajectories.json: the recorded MAP poses of the keyframes used (Table II's MAP row), the
+// written refinement, the one without DVL when both were solved, and the ground truth; each
+// estimate with its per-pose ATE under the report's alignment when there is ground truth.
+void write_trajectories(const std::filesystem::path& work_dir, const Trajectory& recorded,
+                        const Trajectory& refined, const Trajectory* refined_no_dvl,
+                        const Trajectory& truth, const RefineStageOptions& options) {
+  slam::AssociationOptions association;
+  association.max_difference_s = options.ate_max_time_difference_s;
+  auto entry = [&](const std::string& name, const Trajectory& poses) {
+    TrajectoryEntry e{name, "world", poses, {}};
+    if (!truth.empty()) e.ate_m = per_pose_ate(truth, poses, association);
+    return e;
+  };
+  std::vector<TrajectoryEntry> entries = {entry("recorded", recorded), entry("refined", refined)};
+  if (refined_no_dvl) entries.push_back(entry("refined_no_dvl", *refined_no_dvl));
+  if (!truth.empty()) entries.push_back({"ground_truth", "world", truth, {}});
+  add_to_trajectories_file(work_dir, entries);
+}
+
 std::string ground_truth_source(const io::Mission& mission) {
   const auto& spec = mission.manifest.trajectories.at("ground_truth");
   return spec.topic.empty() ? spec.file : "topic " + spec.topic;
@@ -755,15 +775,18 @@ class RefineStage : public Stage {
           with_dvl->summary.num_dvl_intervals_skipped;
     }
     r["evaluation"] = nullptr;
+    const Trajectory refined_without = without_dvl ? without_dvl->trajectory() : Trajectory{};
+    const Trajectory truth = has_truth ? reader.read_trajectory("ground_truth") : Trajectory{};
     if (has_truth) {
       context.check_canceled();
-      const Trajectory truth = reader.read_trajectory("ground_truth");
-      const Trajectory map_used = in.solver.keyframes;  // the recorded poses of the keyframes
-      const Trajectory refined_without = without_dvl ? without_dvl->trajectory() : Trajectory{};
+      const Trajectory& map_used = in.solver.keyframes;  // the recorded poses of the keyframes
       r["evaluation"] = evaluation_json(truth, map_used, without_dvl ? &refined_without : nullptr,
                                         with_dvl ? &refined : nullptr, options,
                                         ground_truth_source(reader.mission()));
     }
+    write_trajectories(context.work_dir, in.solver.keyframes, refined,
+                       with_dvl && without_dvl ? &refined_without : nullptr, truth, options);
+    out.artifacts.push_back(kTrajectoriesFile);
     r["warnings"] = in.warnings;
     context.progress(1.0);
     return out;

@@ -6,8 +6,12 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <set>
 #include <stdexcept>
+
+#include "worker/pipeline/report_html.h"
+#include "worker/pipeline/trajectories_file.h"
 
 namespace keel::pipeline {
 
@@ -24,6 +28,32 @@ void write_all(int fd, const std::string& bytes, const std::filesystem::path& pa
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) throw io_error(path, "write failed");
     done += static_cast<size_t>(n);
+  }
+}
+
+// Writes `text` to `path` atomically: a temporary file in the same folder, flushed, renamed.
+void write_text_atomically(const std::filesystem::path& path, const std::string& text) {
+  static std::atomic<unsigned> counter{0};
+  const std::filesystem::path temp =
+      path.string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw io_error(temp, "cannot create");
+  try {
+    write_all(fd, text, temp);
+    if (::fsync(fd) != 0) throw io_error(temp, "fsync failed");
+  } catch (...) {
+    ::close(fd);
+    ::unlink(temp.c_str());
+    throw;
+  }
+  if (::close(fd) != 0) {
+    ::unlink(temp.c_str());
+    throw io_error(temp, "close failed");
+  }
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    const auto error = io_error(path, "cannot rename " + temp.filename().string() + " over it");
+    ::unlink(temp.c_str());
+    throw error;
   }
 }
 
@@ -59,34 +89,25 @@ nlohmann::ordered_json build_report(const ReportInput& input) {
   report["mission"] = nlohmann::ordered_json(input.mission);
   report["stages"] = std::move(stages);
   report["stage_seconds"] = std::move(seconds);
+  if (!input.failure.is_null()) report["failed"] = nlohmann::ordered_json(input.failure);
   return report;
 }
 
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document) {
-  static std::atomic<unsigned> counter{0};
-  const std::string text = document.dump(2) + "\n";
-  const std::filesystem::path temp =
-      path.string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw io_error(temp, "cannot create");
-  try {
-    write_all(fd, text, temp);
-    if (::fsync(fd) != 0) throw io_error(temp, "fsync failed");
-  } catch (...) {
-    ::close(fd);
-    ::unlink(temp.c_str());
-    throw;
-  }
-  if (::close(fd) != 0) {
-    ::unlink(temp.c_str());
-    throw io_error(temp, "close failed");
-  }
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const auto error = io_error(path, "cannot rename " + temp.filename().string() + " over it");
-    ::unlink(temp.c_str());
-    throw error;
-  }
+  write_text_atomically(path, document.dump(2) + "\n");
+}
+
+std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
+                                            const nlohmann::ordered_json& report) {
+  write_json_atomically(work_dir / kReportFileName, report);
+  // The ATE over time comes from trajectories.json; a page without it beats no page.
+  nlohmann::json trajectories = nullptr;
+  std::ifstream in(work_dir / kTrajectoriesFile);
+  if (in) trajectories = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (trajectories.is_discarded()) trajectories = nullptr;
+  write_text_atomically(work_dir / kReportHtmlFileName, render_report_html(report, trajectories));
+  return {kReportFileName, kReportHtmlFileName};
 }
 
 }  // namespace keel::pipeline

@@ -3,7 +3,8 @@
 //   {"keel_report": 1,
 //    "job": {...}, "mission": {...},
 //    "stages": {"ingest": {...}, "refine": {...}},   // in pipeline order
-//    "stage_seconds": {"ingest": 0.41, ...}}
+//    "stage_seconds": {"ingest": 0.41, ...},
+//    "failed": {"stage": "map", "error": "..."}}      // only when the job failed
 //
 // Keys keep this order in the file (ordered_json) so people can read it top to bottom.
 #pragma once
@@ -26,6 +27,8 @@ struct ReportInput {
   std::vector<std::string> stage_order;               // the job's stages, in order
   nlohmann::json stages = nlohmann::json::object();   // stage name -> its report section
   std::map<std::string, double> stage_seconds;
+  // A failed job's report: {"stage", "error"}; stage_order then lists the stages that finished.
+  nlohmann::json failure = nullptr;
 };
 
 // Fails (std::invalid_argument naming the stage) when a stage of stage_order has no section,
@@ -36,5 +39,11 @@ nlohmann::ordered_json build_report(const ReportInput& input);
 // folder, flushed, then renamed over `path`. Throws std::runtime_error naming the file.
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document);
+
+// Writes report.json and report.html (render_report_html, with the work folder's
+// trajectories.json when one parses) into `work_dir`; returns their file names. Throws
+// std::runtime_error naming the file that could not be written.
+std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
+                                            const nlohmann::ordered_json& report);
 
 }  // namespace keel::pipeline

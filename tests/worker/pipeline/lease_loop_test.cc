@@ -129,14 +129,18 @@ TEST_F(LeaseLoopTest, JobSucceedsWithReportArtifact) {
   EXPECT_EQ(done.state, proto::JobState::kSucceeded) << done.error;
   EXPECT_EQ(done.completed_stages, std::vector<std::string>{"ingest"});
   const auto artifacts = api_->list_artifacts(job.id);
-  ASSERT_EQ(artifacts.size(), 1u);
+  ASSERT_EQ(artifacts.size(), 2u);
   EXPECT_EQ(artifacts[0].name, "report.json");
-  EXPECT_EQ(artifacts[0].stage, "ingest");
-  api_->download("/v1/artifacts/" + artifacts[0].id, dir_ / "report.json", artifacts[0].sha256);
+  EXPECT_EQ(artifacts[1].name, "report.html");
+  for (const auto& artifact : artifacts) {
+    EXPECT_EQ(artifact.stage, "ingest");
+    api_->download("/v1/artifacts/" + artifact.id, dir_ / artifact.name, artifact.sha256);
+  }
   const auto report = nlohmann::json::parse(read_text(dir_ / "report.json"));
   EXPECT_EQ(report["keel_report"], 1);
   EXPECT_EQ(report["job"]["id"], job.id);
   EXPECT_EQ(report["stages"]["ingest"]["sensors"]["imu"]["count"], 6);
+  EXPECT_NE(read_text(dir_ / "report.html").find(job.id), std::string::npos);
 
   // The job log carries the worker's lines, delivered by heartbeats.
   std::string log;
@@ -157,6 +161,14 @@ TEST_F(LeaseLoopTest, StageErrorFailsTheJobAndTheWorkerTakesTheNext) {
   EXPECT_EQ(failed.state, proto::JobState::kFailed);
   EXPECT_EQ(failed.error.rfind("ingest: ", 0), 0u) << failed.error;
   EXPECT_NE(failed.error.find("imu.csv"), std::string::npos) << failed.error;
+  // The failed job's report names the stage and the error.
+  const auto artifacts = api_->list_artifacts(broken.id);
+  ASSERT_EQ(artifacts.size(), 2u);
+  EXPECT_EQ(artifacts[0].name, "report.json");
+  api_->download("/v1/artifacts/" + artifacts[0].id, dir_ / "failed.json", artifacts[0].sha256);
+  const auto report = nlohmann::json::parse(read_text(dir_ / "failed.json"));
+  EXPECT_EQ(report["failed"]["stage"], "ingest");
+  EXPECT_EQ(report["failed"]["error"], failed.error);
 
   const proto::Job good = submit(dir_ / "tiny");
   EXPECT_EQ(wait_job(good.id, finished).state, proto::JobState::kSucceeded) << worker_log("w1");

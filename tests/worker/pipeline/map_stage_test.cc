@@ -118,12 +118,13 @@ TEST_F(MapStageTest, MapsFromTrueTrajectoryLieOnTheSceneAndBeatTheSlamMap) {
   const StageRun run = run_stage(mission, {{"metrics_max_points", 100000}}, work);
   const json& report = run.result.report;
 
-  // Artifacts: Draco and PLY per sensor and combined.
+  // Artifacts: Draco, its sidecar and PLY per sensor and combined.
   for (const std::string name : {"lidar_h", "lidar_v", "sonar", "combined"}) {
     EXPECT_TRUE(fs::exists(work / map_draco_file(name))) << name;
+    EXPECT_TRUE(fs::exists(work / ("map_" + name + ".json"))) << name;
     EXPECT_TRUE(fs::exists(work / map_ply_file(name))) << name;
   }
-  EXPECT_EQ(run.result.artifacts.size(), 12u);  // and tiles_<map>.tar
+  EXPECT_EQ(run.result.artifacts.size(), 16u);  // and tiles_<map>.tar
   EXPECT_EQ(report["poses"]["keyframes"]["source"], kRefinedTrajectoryFile);
 
   // Every scan of every sensor was fed, as the index files list them.

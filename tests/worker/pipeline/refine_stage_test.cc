@@ -14,6 +14,7 @@
 #include "tests/sim/simulator.h"
 #include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/tum.h"
+#include "worker/pipeline/trajectories_file.h"
 #include "worker/slam/trajectory_metrics.h"
 
 namespace keel::pipeline {
@@ -73,7 +74,7 @@ TEST_F(RefineStageTest, RefinedKeyframesBeatMapPosesAndTheRefinementWithoutDvl) 
 
   // One pose per keyframe, at the keyframes' exact stamps.
   ASSERT_EQ(run.result.artifacts,
-            (std::vector<std::string>{kRefinedTrajectoryFile, kSelfCheckFile}));
+            (std::vector<std::string>{kRefinedTrajectoryFile, kSelfCheckFile, kTrajectoriesFile}));
   const Trajectory refined = io::read_tum(work / kRefinedTrajectoryFile);
   const Trajectory map = io::read_tum(mission / "map_poses.tum");
   ASSERT_EQ(refined.size(), map.size());

@@ -98,7 +98,14 @@ TEST_F(WorkerCliTest, StageFailureExitsTwoWithTheStageMessage) {
       run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out.string()}), 2);
   EXPECT_NE(err().find("ingest: "), std::string::npos) << err();
   EXPECT_NE(err().find("imu.csv"), std::string::npos) << err();
-  EXPECT_FALSE(fs::exists(out / "report.json"));
+  // The report says which stage failed and why, with no section for it.
+  const auto report = nlohmann::json::parse(read_text(out / "report.json"));
+  EXPECT_EQ(report["failed"]["stage"], "ingest");
+  EXPECT_NE(report["failed"]["error"].get<std::string>().find("imu.csv"), std::string::npos);
+  EXPECT_TRUE(report["stages"].empty());
+  const std::string html = read_text(out / "report.html");
+  EXPECT_NE(html.find("id=\"failure\""), std::string::npos);
+  EXPECT_NE(html.find("imu.csv"), std::string::npos);
 }
 
 TEST_F(WorkerCliTest, BadStageOptionFailsTheStage) {
