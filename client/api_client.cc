@@ -195,9 +195,30 @@ proto::Job ApiClient::retry_job(const std::string& job_id) {
   return parse_answer<proto::Job>(post_json(target, nlohmann::json::object()), "POST " + target);
 }
 
-std::vector<proto::Job> ApiClient::reprocess(const proto::ReprocessRequest& request) {
-  return parse_list<proto::Job>(post_json("/v1/reprocess", request.to_json()), "jobs",
-                                "POST /v1/reprocess");
+ApiClient::Reprocessed ApiClient::reprocess(const proto::ReprocessRequest& request) {
+  const nlohmann::json body = post_json("/v1/reprocess", request.to_json());
+  Reprocessed out;
+  if (body.is_object() && body.contains("batch")) {
+    try {
+      out.batch = proto::Batch::from_json(body["batch"], "batch");
+    } catch (const proto::ContractError& e) {
+      throw ApiCallError(0, "bad_response",
+                         std::string("POST /v1/reprocess: unexpected answer: ") + e.what());
+    }
+  }
+  out.jobs = parse_list<proto::Job>(body, "jobs", "POST /v1/reprocess");
+  return out;
+}
+
+proto::Batch ApiClient::get_batch(const std::string& batch_id) {
+  const std::string target = "/v1/batches/" + encode_path(batch_id);
+  return parse_answer<proto::Batch>(get_json(target), "GET " + target);
+}
+
+std::vector<proto::Job> ApiClient::list_batch_jobs(const std::string& batch_id, int limit) {
+  const std::string target =
+      "/v1/jobs?batch_id=" + url_encode(batch_id) + "&limit=" + std::to_string(limit);
+  return parse_list<proto::Job>(get_json(target), "jobs", "GET " + target);
 }
 
 proto::LogPage ApiClient::read_log(const std::string& job_id, int64_t from) {
@@ -238,6 +259,13 @@ void ApiClient::complete_stage(const std::string& job_id, const std::string& sta
   post_json(
       "/v1/worker/jobs/" + encode_path(job_id) + "/stages/" + encode_path(stage) + "/complete",
       completion.to_json());
+}
+
+proto::Job ApiClient::release_job(const std::string& job_id, const std::string& lease_id) {
+  const std::string target = "/v1/worker/jobs/" + encode_path(job_id) + "/release";
+  proto::JobFinish release;
+  release.lease_id = lease_id;
+  return parse_answer<proto::Job>(post_json(target, release.to_json()), "POST " + target);
 }
 
 proto::Job ApiClient::finish_job(const std::string& job_id, const proto::JobFinish& finish,

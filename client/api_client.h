@@ -103,7 +103,16 @@ class ApiClient {
   std::vector<proto::Job> list_jobs(const std::string& state = "");
   proto::Job cancel_job(const std::string& job_id);
   proto::Job retry_job(const std::string& job_id);
-  std::vector<proto::Job> reprocess(const proto::ReprocessRequest& request);
+  // POST /v1/reprocess: the batch (made in one transaction) and, for batches of up to
+  // 10,000 jobs, its jobs.
+  struct Reprocessed {
+    proto::Batch batch;
+    std::vector<proto::Job> jobs;
+  };
+  Reprocessed reprocess(const proto::ReprocessRequest& request);
+  proto::Batch get_batch(const std::string& batch_id);
+  // GET /v1/jobs?batch_id=: the batch's jobs, newest first (at most `limit`).
+  std::vector<proto::Job> list_batch_jobs(const std::string& batch_id, int limit = 10000);
   proto::LogPage read_log(const std::string& job_id, int64_t from);
   std::vector<proto::Artifact> list_artifacts(const std::string& job_id);
 
@@ -115,6 +124,8 @@ class ApiClient {
   void complete_stage(const std::string& job_id, const std::string& stage,
                       const proto::StageCompletion& completion);
   proto::Job finish_job(const std::string& job_id, const proto::JobFinish& finish, bool succeeded);
+  // Gives the lease back (the worker is stopping): the job is queued again at once.
+  proto::Job release_job(const std::string& job_id, const std::string& lease_id);
 
  private:
   struct Connection;

@@ -35,8 +35,12 @@ int run_reprocess(CliContext& context, const MissionArgs& args) {
   request.stages = proto::parse_stage_list(args.stages);
   for (const auto& assignment : args.assignments)
     proto::apply_option_assignment(request.options, assignment);
-  for (const proto::Job& job : context.api().reprocess(request))
-    std::printf("%s\n", job.id.c_str());
+  // The server makes every job in one transaction and answers at once, whatever the count.
+  const auto reprocessed = context.api().reprocess(request);
+  for (const proto::Job& job : reprocessed.jobs) std::printf("%s\n", job.id.c_str());
+  std::fprintf(stderr, "batch %s: %ld jobs queued; follow it with: keel jobs --batch %s\n",
+               reprocessed.batch.id.c_str(), long(reprocessed.batch.jobs),
+               reprocessed.batch.id.c_str());
   return 0;
 }
 

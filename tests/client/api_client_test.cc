@@ -86,7 +86,7 @@ TEST(ApiClient, PostAfterAnIdleCloseUsesANewConnection) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the FIN arrives
     proto::ReprocessRequest request;
     request.stages = {"ingest"};
-    EXPECT_TRUE(client.reprocess(request).empty());
+    EXPECT_TRUE(client.reprocess(request).jobs.empty());
     EXPECT_EQ(client.stats().connections, 2);
   }
   EXPECT_EQ(server.requests().size(), 2u);  // the POST was sent exactly once

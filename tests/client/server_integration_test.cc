@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <random>
+#include <thread>
 
 #include "client/api_client.h"
 #include "client/submit.h"
@@ -198,8 +199,12 @@ TEST_F(ServerIntegration, ClientAndWorkerCallsRoundTrip) {
     EXPECT_EQ(e.status(), 409);
   }
   const auto batch = client.reprocess(proto::ReprocessRequest{{}, "usv-", {"ingest"}, {}});
-  ASSERT_EQ(batch.size(), 1u);
-  EXPECT_NE(batch[0].id, first.job.id);
+  ASSERT_EQ(batch.jobs.size(), 1u);
+  EXPECT_NE(batch.jobs[0].id, first.job.id);
+  EXPECT_EQ(batch.batch.jobs, 1);
+  EXPECT_EQ(batch.jobs[0].batch_id, batch.batch.id);
+  EXPECT_EQ(client.get_batch(batch.batch.id).jobs_by_state.at("queued"), 1);
+  EXPECT_EQ(client.list_batch_jobs(batch.batch.id).size(), 1u);
 }
 
 // Runs the keel CLI with the server's URL and token in the environment; returns the exit
@@ -239,6 +244,60 @@ TEST_F(ServerIntegration, CliSubmitIsIdempotentAndExitCodesTellWhatWentWrong) {
   EXPECT_EQ(run_cli(env, "submit --stages nope " + mission.string()).first, 1) << "usage";
   EXPECT_EQ(run_cli(env, "--token wrong jobs").first, 2) << "401";
   EXPECT_EQ(run_cli(env, "--url http://127.0.0.1:1 jobs").first, 3) << "unreachable";
+}
+
+
+// keel reprocess makes a batch; keel jobs --batch counts it by state (exit 4 once a job of
+// it failed) and --follow returns when nothing of it is queued or running.
+TEST_F(ServerIntegration, CliFollowsAReprocessBatch) {
+  if (std::string(kCliBinary).empty() || !fs::exists(kCliBinary)) GTEST_SKIP() << "keel not built";
+  const std::string env = "HOME=" + dir_.path().string() +
+                          " XDG_CONFIG_HOME= XDG_CACHE_HOME= KEEL_URL=" + server_->url() +
+                          " KEEL_TOKEN=" + server_->token();
+  for (const char* name : {"usv-a", "usv-b", "usv-c"})
+    ASSERT_EQ(run_cli(env, "submit -q " + make_mission(name).string()).first, 0);
+  ApiClient client(config());
+  for (const proto::Job& job : client.list_jobs("queued")) client.cancel_job(job.id);
+
+  const auto reprocessed = run_cli(env, "reprocess --prefix usv- --stages ingest");
+  ASSERT_EQ(reprocessed.first, 0);
+  const std::vector<proto::Job> jobs = client.list_jobs("queued");
+  ASSERT_EQ(jobs.size(), 3u);
+  const std::string batch = jobs[0].batch_id;
+  ASSERT_FALSE(batch.empty());
+  for (const proto::Job& job : jobs) EXPECT_EQ(job.batch_id, batch);
+
+  auto counts = run_cli(env, "jobs --batch " + batch);
+  EXPECT_EQ(counts.first, 0) << counts.second;
+  EXPECT_NE(counts.second.find("3 jobs, 3 queued, 0 running"), std::string::npos)
+      << counts.second;
+
+  // One succeeds, one fails, one is left queued: counts move, and a failure gives exit 4.
+  auto finish_next = [&](bool succeeded) {
+    const auto lease = client.lease(proto::LeaseRequest{"test:1", 30});
+    ASSERT_TRUE(lease.has_value());
+    client.finish_job(lease->job.id, {lease->lease_id, succeeded ? "" : "bad imu.csv"},
+                      succeeded);
+  };
+  finish_next(true);
+  finish_next(false);
+  counts = run_cli(env, "jobs --batch " + batch);
+  EXPECT_EQ(counts.first, 4) << counts.second;
+  EXPECT_NE(counts.second.find("1 queued, 0 running, 1 succeeded, 1 failed"), std::string::npos)
+      << counts.second;
+  EXPECT_NE(counts.second.find("over 2 finished"), std::string::npos) << counts.second;
+
+  // --follow prints until the last job is done (finished here while it follows).
+  std::thread last([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(600));
+    finish_next(true);
+  });
+  counts = run_cli(env, "jobs --batch " + batch + " --follow --interval 0.2");
+  last.join();
+  EXPECT_EQ(counts.first, 4) << "a job of the batch failed";
+  EXPECT_NE(counts.second.find("2 succeeded, 1 failed"), std::string::npos) << counts.second;
+  EXPECT_NE(counts.second.find("finished"), std::string::npos) << counts.second;
+  EXPECT_EQ(run_cli(env, "jobs --batch b_0000000000000000").first, 2) << "unknown batch: 404";
 }
 
 }  // namespace
