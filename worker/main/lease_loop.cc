@@ -27,6 +27,16 @@ void pause(double seconds, const std::function<bool()>& stop_requested) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 
+void release_unstarted(client::ApiClient& api, const proto::Lease& lease) {
+  try {
+    api.release_job(lease.job.id, lease.lease_id);
+    spdlog::info("job {}: lease given back unrun (stopping)", lease.job.id);
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: could not give the lease back ({}); it will expire", lease.job.id,
+                 e.what());
+  }
+}
+
 bool process_alive(long pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
 // Workers started together (keel-server --workers N) share one cache folder: blobs are
@@ -49,9 +59,12 @@ std::filesystem::path make_process_area(const std::filesystem::path& cache_dir) 
 }  // namespace
 
 std::string default_worker_name() {
+  static const int64_t start_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                      std::chrono::system_clock::now().time_since_epoch())
+                                      .count();
   char host[256] = {};
   if (::gethostname(host, sizeof(host) - 1) != 0) std::snprintf(host, sizeof(host), "unknown");
-  return std::string(host) + ":" + std::to_string(::getpid());
+  return std::string(host) + ":" + std::to_string(::getpid()) + ":" + std::to_string(start_ms);
 }
 
 LeaseLoop::LeaseLoop(client::ClientConfig config, LeaseLoopOptions options,
@@ -83,10 +96,25 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
   proto::LeaseRequest request;
   request.worker = options_.worker_name;
   request.lease_seconds = options_.lease_seconds;
-  spdlog::info("worker {} polling {}", request.worker, config_.url);
+  // The server holds the call up to wait_seconds: keep it well inside the request deadline.
+  request.wait_seconds =
+      std::max(0, std::min(options_.wait_seconds, static_cast<int>(config_.timeout_s) - 5));
+  spdlog::info("worker {} leasing from {} (long poll {} s)", request.worker, config_.url,
+               request.wait_seconds);
 
+  using Clock = std::chrono::steady_clock;
+  auto idle_since = Clock::now();
+  auto idle_long_enough = [&] {
+    return options_.exit_when_idle_s > 0 &&
+           std::chrono::duration<double>(Clock::now() - idle_since).count() >=
+               options_.exit_when_idle_s;
+  };
   int failures = 0;
   while (!stop_requested()) {
+    if (idle_long_enough()) {
+      spdlog::info("no job for {:.0f} s: exiting (--exit-when-idle)", options_.exit_when_idle_s);
+      break;
+    }
     std::optional<proto::Lease> lease;
     try {
       lease = api.lease(request);
@@ -112,11 +140,17 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
       continue;
     }
     if (!lease) {
-      pause(options_.poll_seconds, stop_requested);
+      if (request.wait_seconds == 0) pause(options_.poll_seconds, stop_requested);
       continue;
+    }
+    if (stop_requested()) {
+      // Leased while the stop was asked (the long poll answered late): give it back unrun.
+      release_unstarted(api, *lease);
+      break;
     }
     LeasedJob(api, heartbeat_api, blobs, *lease, job_options, factory_, stop_requested).run();
     ++jobs_handled_;
+    idle_since = Clock::now();
     if (options_.once) break;
   }
   if (stop_requested()) spdlog::info("stopping");

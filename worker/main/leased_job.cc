@@ -47,6 +47,8 @@ std::string to_string(JobEnd end) {
       return "canceled";
     case JobEnd::kAbandoned:
       return "abandoned";
+    case JobEnd::kReleased:
+      return "released";
   }
   return "unknown";
 }
@@ -103,7 +105,9 @@ JobEnd LeasedJob::run() {
     end = finish(result);
   } catch (const Abandon& a) {
     heartbeat.stop();
-    end = heartbeat.canceled() ? JobEnd::kCanceled : abandon(a.why);
+    end = heartbeat.canceled()                           ? JobEnd::kCanceled
+          : stop_requested_() && !heartbeat.lease_lost() ? give_back(a.why)
+                                                         : abandon(a.why);
   } catch (const client::ApiCallError& e) {
     heartbeat.stop();
     if (is_server_trouble(e) || heartbeat.lease_lost())
@@ -112,7 +116,9 @@ JobEnd LeasedJob::run() {
       end = fail(e.what());
   } catch (const std::exception& e) {
     heartbeat.stop();
-    end = heartbeat.lease_lost() || stop_requested_() ? abandon(e.what()) : fail(e.what());
+    end = heartbeat.lease_lost() ? abandon(e.what())
+          : stop_requested_()    ? give_back(e.what())
+                                 : fail(e.what());
   }
   heartbeat_ = nullptr;
 
@@ -279,7 +285,7 @@ JobEnd LeasedJob::finish(const pipeline::JobResult& result) {
     case pipeline::JobOutcome::kCanceled:
       if (heartbeat_->lease_lost()) return abandon("lease lost");
       if (heartbeat_->canceled()) return JobEnd::kCanceled;  // the server knows; say nothing more
-      return abandon("worker stopping");
+      return give_back("worker stopping");
     case pipeline::JobOutcome::kFailed:
       if (!lease_.job.stages.empty()) upload_failure_report(result.failed_stage, result.error);
       return fail(result.error);
@@ -309,6 +315,17 @@ JobEnd LeasedJob::fail(const std::string& error) {
     return JobEnd::kAbandoned;
   }
   return JobEnd::kFailed;
+}
+
+JobEnd LeasedJob::give_back(const std::string& why) {
+  if (heartbeat_) heartbeat_->flush(api_);  // the log lines so far, before the lease goes
+  try {
+    api_.release_job(lease_.job.id, lease_.lease_id);
+  } catch (const std::exception& e) {
+    return abandon(std::string(why) + "; giving the lease back failed: " + e.what());
+  }
+  spdlog::info("job {}: lease given back ({}); the job is queued again", lease_.job.id, why);
+  return JobEnd::kReleased;
 }
 
 JobEnd LeasedJob::abandon(const std::string& why) {

@@ -8,8 +8,10 @@
 //   4. post complete or fail (a stage's failure first uploads report.json and report.html of
 //      the stages that finished, with the error, under the job's last stage).
 // Nothing escapes run(): a job's error fails that job only. Server trouble (unreachable,
-// 5xx, lease lost) and a stop request abandon the job instead: its lease expires and
-// another worker resumes it after its last completed stage.
+// 5xx, lease lost) abandons the job instead: its lease expires and another worker resumes
+// it after its last completed stage. A stop request (SIGTERM) stops the job at its next
+// safe point (between stages, or where a stage checks for cancelation) and gives the lease
+// back, so the job is queued again at once.
 #pragma once
 
 #include <filesystem>
@@ -34,7 +36,7 @@ struct LeasedJobOptions {
   bool keep_work = false;  // keep the job's folder afterwards (debugging)
 };
 
-enum class JobEnd { kSucceeded, kFailed, kCanceled, kAbandoned };
+enum class JobEnd { kSucceeded, kFailed, kCanceled, kAbandoned, kReleased };
 std::string to_string(JobEnd end);
 
 class LeasedJob {
@@ -57,6 +59,8 @@ class LeasedJob {
   JobEnd finish(const pipeline::JobResult& result);
   JobEnd fail(const std::string& error);
   JobEnd abandon(const std::string& why);
+  // The worker is stopping: the lease goes back to the server (abandoned if that fails).
+  JobEnd give_back(const std::string& why);
   void log(const std::string& line);
 
   client::ApiClient& api_;

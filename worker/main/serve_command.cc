@@ -101,16 +101,25 @@ Subcommand add_serve_command(CLI::App& app) {
   cmd->add_option("--lease-seconds", args->loop.lease_seconds, "Lease time asked for")
       ->capture_default_str()
       ->check(CLI::Range(1, 3600));
-  cmd->add_option("--poll-seconds", args->loop.poll_seconds, "Pause when no job is queued")
+  cmd->add_option("--wait-seconds", args->loop.wait_seconds,
+                  "Long poll: how long the server may hold a lease call open (0 = poll)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 30));
+  cmd->add_option("--poll-seconds", args->loop.poll_seconds,
+                  "Pause when no job is queued (with --wait-seconds 0)")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 3600.0));
+  cmd->add_option("--exit-when-idle", args->loop.exit_when_idle_s,
+                  "Exit (0) after this many seconds without a job (Slurm arrays, autoscaling)")
+      ->check(CLI::Range(0.0, 1e9));
   cmd->add_option("--heartbeat-seconds", args->loop.heartbeat_seconds, "Heartbeat period")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 60.0));
   cmd->add_option("--request-timeout", args->request_timeout_s, "Deadline of one HTTP request (s)")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 3600.0));
-  cmd->add_option("--name", args->loop.worker_name, "Worker name (default host:pid)");
+  cmd->add_option("--name", args->loop.worker_name,
+                  "Worker name (default host:pid:start-time, unique per process start)");
   cmd->add_flag("--once", args->loop.once, "Handle one job (waiting for it), then exit");
   cmd->add_flag("--keep-work", args->loop.keep_work, "Keep each job's work folder");
   cmd->add_option("--exit-with-parent", args->parent_pid,

@@ -1,7 +1,7 @@
 // `keel-worker serve` against a real keel-server on loopback (no local workers): a job
 // succeeds and its report.json is an artifact; a stage error fails the job with the stage's
-// message and the worker leases the next job; a cancel stops the stage; SIGTERM abandons the
-// job and another worker resumes it once the lease expires.
+// message and the worker leases the next job; a cancel stops the stage; SIGTERM gives the
+// lease back so another worker resumes the job at once; --exit-when-idle ends an idle worker.
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
@@ -199,19 +199,21 @@ TEST_F(LeaseLoopTest, CancelStopsTheRunningStage) {
   EXPECT_TRUE(api_->list_artifacts(job.id).empty());
 }
 
-TEST_F(LeaseLoopTest, SigtermAbandonsTheJobAndAnotherWorkerResumesIt) {
+TEST_F(LeaseLoopTest, SigtermGivesTheLeaseBackAndAnotherWorkerResumesItAtOnce) {
   // Long enough that the job is still running when the test sees it (idle machines are fast).
   testing::write_long_mission(dir_ / "long", 200000);
   const proto::Job job = submit(dir_ / "long");
-  auto first = start_worker("w1", {"--lease-seconds", "2"});
+  // A lease far longer than the test: the job can only be queued again by the release.
+  auto first = start_worker("w1", {"--lease-seconds", "600"});
   const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
     return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
   });
   ASSERT_EQ(running.state, proto::JobState::kRunning);
   first->signal(SIGTERM);
   EXPECT_EQ(first->wait(30s), 0) << worker_log("w1");
-  EXPECT_NE(worker_log("w1").find("abandoned"), std::string::npos) << worker_log("w1");
-  EXPECT_FALSE(proto::is_terminal(api_->get_job(job.id).state));  // not failed: abandoned
+  EXPECT_NE(worker_log("w1").find("lease given back"), std::string::npos) << worker_log("w1");
+  const proto::Job released = api_->get_job(job.id);
+  EXPECT_EQ(released.state, proto::JobState::kQueued) << "queued at once, not after 600 s";
 
   auto second = start_worker("w2", {"--once"});
   // The whole long mission again: minutes on a loaded 2-core machine, seconds on an idle one.
@@ -219,6 +221,17 @@ TEST_F(LeaseLoopTest, SigtermAbandonsTheJobAndAnotherWorkerResumesIt) {
   const proto::Job done = api_->get_job(job.id);
   EXPECT_EQ(done.state, proto::JobState::kSucceeded) << done.error;
   EXPECT_EQ(done.attempts, 2);
+}
+
+TEST_F(LeaseLoopTest, ExitWhenIdleEndsTheWorkerAfterItsLastJob) {
+  testing::write_tiny_mission(dir_ / "tiny");
+  const proto::Job job = submit(dir_ / "tiny");
+  const auto start = std::chrono::steady_clock::now();
+  auto worker = start_worker("w1", {"--exit-when-idle", "2", "--wait-seconds", "1"});
+  EXPECT_EQ(worker->wait(120s), 0) << worker_log("w1");
+  EXPECT_GE(std::chrono::steady_clock::now() - start, 2s) << "idle for 2 s before leaving";
+  EXPECT_EQ(api_->get_job(job.id).state, proto::JobState::kSucceeded) << worker_log("w1");
+  EXPECT_NE(worker_log("w1").find("--exit-when-idle"), std::string::npos) << worker_log("w1");
 }
 
 }  // namespace
