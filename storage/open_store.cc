@@ -68,6 +68,8 @@ std::unique_ptr<Store> open_store(const StoreLocation& location, Clock clock) {
     options.database_url = url;
     options.blob_dir = location.blob_dir.empty() ? location.data_dir : location.blob_dir;
     options.listen = location.listen;
+    // This server's own files (its first token, server.url) stay in the data folder.
+    if (!location.data_dir.empty()) require_writable_folder(location.data_dir, "data folder");
     for (const char* part : {"blobs", "tmp", "uploads"})
       require_writable_folder(options.blob_dir / part, "blob folder");
     return std::make_unique<PgStore>(options, std::move(clock));

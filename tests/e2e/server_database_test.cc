@@ -106,7 +106,6 @@ TEST_F(ServerOnPostgresTest, TwoReplicasShareOneDatabase) {
   const fs::path blobs = dir_.path() / "shared-blobs";
   auto start = [&](const std::string& name) {
     const fs::path data = dir_.path() / name;
-    fs::create_directories(data);
     auto process = std::make_unique<Process>(
         std::vector<std::string>{Programs().server, "--data-dir", data, "--listen", "127.0.0.1:0",
                                  "--workers", "0", "--database", url_, "--blob-dir", blobs},
