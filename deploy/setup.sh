@@ -14,6 +14,8 @@ packages=(
   libspdlog-dev libyaml-cpp-dev libssl-dev libarchive-dev
   # PostgreSQL store for several replicas (issue 14); tests start a private server
   libpqxx-dev postgresql
+  # deploy/ checks (tests/deploy): systemd-analyze, nginx -t
+  systemd nginx-light
   # ROS1 bags without ROS (PLATFORM-NOTES.md)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev
@@ -54,4 +56,12 @@ if [ ! -f "$web/node_modules/.package-lock.json" ] ||
    [ "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
   echo "keel setup: npm ci in web/"
   (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+# The Kubernetes and KEDA schemas that tests/deploy checks deploy/k8s against, as pinned.
+checks="$(cd "$(dirname "$0")/../tests/deploy" && pwd)"
+if [ ! -f "$checks/node_modules/.package-lock.json" ] ||
+   [ "$checks/package-lock.json" -nt "$checks/node_modules/.package-lock.json" ]; then
+  echo "keel setup: npm ci in tests/deploy/"
+  (cd "$checks" && npm ci --no-audit --no-fund --loglevel=error)
 fi
