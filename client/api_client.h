@@ -104,7 +104,7 @@ class ApiClient {
   proto::Job cancel_job(const std::string& job_id);
   proto::Job retry_job(const std::string& job_id);
   // POST /v1/reprocess: the batch (made in one transaction) and, for batches of up to
-  // 10,000 jobs, its jobs.
+  // 1,000 jobs, its jobs.
   struct Reprocessed {
     proto::Batch batch;
     std::vector<proto::Job> jobs;

@@ -116,11 +116,13 @@ Response reprocess(const Call& call) {
   const proto::Batch batch = call.store.create_batch(request);
   storage::JobFilter filter;
   filter.batch_id = batch.id;
-  filter.limit = 10000;
+  // Listing a large batch would cost more than making it (10,000 jobs: ~0.7 s to make, ~7 s
+  // to list and encode at load 14): over 1,000 jobs the answer is the batch alone, at once.
+  filter.limit = 1000;
   std::vector<proto::Job> jobs;
   if (batch.jobs <= filter.limit) jobs = call.store.list_jobs(filter);
-  // Oldest first, as the missions were given; a batch over 10,000 jobs lists none here
-  // (GET /v1/jobs?batch_id= pages through them).
+  // Oldest first, as the missions were given; a batch over 1,000 jobs lists none here
+  // (GET /v1/jobs?batch_id= pages through them; keel jobs --batch follows it).
   std::reverse(jobs.begin(), jobs.end());
   return json_response(201, {{"batch", batch.to_json()}, {"jobs", jobs_json(jobs)}});
 }

@@ -181,6 +181,20 @@ TEST_F(LiveRoutesTest, ReprocessMakesABatchThatCanBeFollowed) {
   EXPECT_EQ(call_as(stranger, "GET", "/v1/batches/" + batch_id).status, 404);
 }
 
+// Over 1,000 jobs the answer is the batch alone (made in one transaction, answered at once);
+// the jobs are there to page through.
+TEST_F(LiveRoutesTest, LargeBatchIsAnsweredWithoutItsJobs) {
+  for (int i = 0; i < 1001; ++i) create_mission("survey-" + std::to_string(i));
+  Response made = post("/v1/reprocess", {{"name_prefix", "survey-"}, {"stages", {"ingest"}}});
+  ASSERT_EQ(made.status, 201) << made.body;
+  const nlohmann::json body = json_of(made);
+  EXPECT_EQ(body["batch"]["jobs"], 1001);
+  EXPECT_TRUE(body["jobs"].empty());
+  const std::string batch_id = body["batch"]["id"];
+  EXPECT_EQ(json_of(call("GET", "/v1/batches/" + batch_id))["jobs_by_state"]["queued"], 1001);
+  EXPECT_EQ(json_of(call("GET", "/v1/jobs?limit=5000&batch_id=" + batch_id))["jobs"].size(), 1001u);
+}
+
 TEST_F(LiveRoutesTest, AnotherProjectsObjectsAnswer404AndListsLeaveThemOut) {
   const nlohmann::json theirs = mission_in("harbour", "pier");
   const nlohmann::json job = create_job(theirs["id"]);
