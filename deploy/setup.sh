@@ -16,6 +16,8 @@ packages=(
   libpqxx-dev postgresql
   # deploy/ checks (tests/deploy): systemd-analyze, nginx -t
   systemd nginx-light
+  # single-node Slurm for deploy/slurm_workers; iproute2 for the multi-host test's namespaces
+  slurm-wlm munge iproute2
   # ROS1 bags without ROS (PLATFORM-NOTES.md)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev
