@@ -3,7 +3,9 @@
 //     the cylinder's measured height vs 0.11 m, and shapes matching no object (false shapes);
 //   - the DVL range residual sigma after GICP alone vs after `proposed` (target >= 3x smaller);
 //   - solve time of `proposed` vs `naive` (target <= +25 %) and vs `geva` (target: less);
-// then a pass/fail line per target over the seeds.
+// then a table of the seeds with their sum and a pass/fail line per target over the seeds
+// (issue 18: the timing targets on the sums, the DVL target on a fouled hull on the robust
+// sigma).
 // Run: build/tests/bench/bench_hull_sim [seeds=3 | first-last] [duration_s=0 (full survey)]
 //                                       [tracks=frontend|ground_truth] [ba option=value]...
 //                                       [sim.<keel-sim --set key>=value]...
@@ -97,7 +99,10 @@ int main(int argc, char** argv) {
     }
     if (arg.rfind("sim.", 0) == 0) {
       sim_settings.push_back(arg.substr(4));
-      mission_suffix += "_" + arg.substr(4);
+      std::string name = arg.substr(4);  // a folder name: sim.hull.cad=/a/b.stl -> hull.cad=b.stl
+      if (const size_t slash = name.rfind('/'); slash != std::string::npos)
+        name = name.substr(0, name.find('=') + 1) + name.substr(slash + 1);
+      mission_suffix += "_" + name;
       continue;
     }
     const json value = json::parse(arg.substr(eq + 1), nullptr, /*allow_exceptions=*/false);
@@ -113,7 +118,8 @@ int main(int argc, char** argv) {
   std::printf("hauv-hull, %d seeds, duration %s, ba options %s, keel-sim settings '%s'\n", seeds,
               duration_s > 0 ? std::to_string(duration_s).c_str() : "full",
               ba_options.dump().c_str(), mission_suffix.c_str());
-  Tally found_all, cylinder, clean, dvl, time_naive, time_geva;
+  Tally found_all, cylinder, clean, dvl, dvl_robust, time_naive, time_geva;
+  std::vector<std::string> table;                          // one row per seed, printed at the end
   double total_naive = 0, total_geva = 0, total_prop = 0;  // solve times summed over seeds, s
   for (int seed = first_seed; seed <= last_seed; ++seed) {
     const fs::path mission =
@@ -158,6 +164,7 @@ int main(int argc, char** argv) {
     const double t_prop = modes["proposed"]["solve_time_s"].get<double>();
     const double s_gicp = modes["proposed"]["dvl_residuals_gicp"]["sigma_m"].get<double>();
     const double s_prop = modes["proposed"]["dvl_residuals_final"]["sigma_m"].get<double>();
+    double robust_ratio = 0.0;  // GICP's robust sigma over proposed's (0: a report without it)
     std::printf("seed %d: %zu keyframes, %d landmarks, %d DVL returns used\n", seed,
                 ba["input"]["keyframes"].get<size_t>(), ba["landmarks_triangulated"].get<int>(),
                 ba["dvl_ranges_used"].get<int>());
@@ -181,6 +188,7 @@ int main(int argc, char** argv) {
       // fouled hull; 1.4826 MAD measures the spread of the rest. Printed, not a target.
       const double rs_gicp = r_gicp["robust_sigma_m"].get<double>();
       const double rs_prop = r_prop["robust_sigma_m"].get<double>();
+      robust_ratio = rs_gicp / rs_prop;
       std::printf(
           "  DVL residual robust sigma (1.4826 MAD): GICP %.4f m, proposed %.4f m (%.1fx)\n",
           rs_gicp, rs_prop, rs_gicp / rs_prop);
@@ -248,6 +256,8 @@ int main(int argc, char** argv) {
     const json truth_objects =
         io::load_yaml_file(mission / "ground_truth" / "truth.yaml")["foreign_objects"];
     bool every = true, cylinder_ok = false;
+    int found_count = 0, surveyed_count = 0;
+    double cylinder_error = NAN;
     const json& objects = in["truth"]["objects"];
     for (size_t k = 0; k < objects.size(); ++k) {
       const json& obj = objects[k];
@@ -255,13 +265,17 @@ int main(int argc, char** argv) {
       const bool found = obj["found"].get<bool>();
       const bool seen = surveyed(truth_objects[k], solution, camera);
       if (h_true >= kMinObjectHeightM && seen && !found) every = false;
+      if (h_true >= kMinObjectHeightM && seen) ++surveyed_count, found_count += found;
       std::printf("  %-8s true %.3f m: %s", obj["kind"].get<std::string>().c_str(), h_true,
                   found ? "found" : (seen ? "MISSED" : "not surveyed"));
       if (found) {
         const double error = obj["height_error_m"].get<double>();
         std::printf(", measured %.3f m (error %+.3f m)", obj["measured_height_m"].get<double>(),
                     error);
-        if (obj["kind"] == "cylinder") cylinder_ok = std::abs(error) <= kCylinderToleranceM;
+        if (obj["kind"] == "cylinder") {
+          cylinder_ok = std::abs(error) <= kCylinderToleranceM;
+          cylinder_error = error;
+        }
       } else if (obj.contains("nearest_shape_distance_m")) {
         std::printf(" (nearest shape %.2f m away)", obj["nearest_shape_distance_m"].get<double>());
       }
@@ -277,30 +291,56 @@ int main(int argc, char** argv) {
     cylinder.add(cylinder_ok);
     clean.add(false_shapes == 0);
     dvl.add(s_gicp / s_prop >= kDvlSigmaRatio);
+    dvl_robust.add(robust_ratio >= kDvlSigmaRatio);
+    char row[256];
+    std::snprintf(
+        row, sizeof(row),
+        "| %d | %d / %d | %+.3f | %d | %d | %.1fx | %.1fx | %.2f / %.2f / %.2f | %+.0f %% |", seed,
+        found_count, surveyed_count, cylinder_error, false_shapes,
+        in.value("shapes_rejected_few_views", 0), s_gicp / s_prop, robust_ratio, t_naive, t_geva,
+        t_prop, 100.0 * (t_prop / t_naive - 1.0));
+    table.push_back(row);
     time_naive.add(t_prop <= (1.0 + kMaxTimeOverNaive) * t_naive);
     time_geva.add(t_prop < t_geva);
     total_naive += t_naive, total_geva += t_geva, total_prop += t_prop;
     std::fflush(stdout);
   }
+  std::printf(
+      "\n| seed | objects >= 5 cm found / surveyed | cylinder error, m | shapes on clean hull | "
+      "shapes dropped (< min_shape_views views) | DVL sigma GICP/proposed | DVL robust sigma "
+      "GICP/proposed | solve naive / geva / proposed, s | proposed vs naive |\n"
+      "|---|---|---|---|---|---|---|---|---|\n");
+  for (const std::string& row : table) std::printf("%s\n", row.c_str());
+  std::printf("| sum | | | | | | | %.2f / %.2f / %.2f | %+.0f %% |\n\n", total_naive, total_geva,
+              total_prop, 100.0 * (total_prop / total_naive - 1.0));
   std::printf("targets over %d seeds (passes / seeds):\n", seeds);
   std::printf("  %s every surveyed foreign object >= 5 cm found: %d / %d\n", found_all.verdict(),
               found_all.pass, found_all.runs);
   std::printf("  %s cylinder height within 1.5 cm: %d / %d\n", cylinder.verdict(), cylinder.pass,
               cylinder.runs);
   std::printf("  %s no shape on clean hull: %d / %d\n", clean.verdict(), clean.pass, clean.runs);
-  std::printf("  %s DVL residual sigma >= 3x smaller than GICP alone: %d / %d\n", dvl.verdict(),
-              dvl.pass, dvl.runs);
-  std::printf("  %s proposed <= +25 %% time vs naive: %d / %d\n", time_naive.verdict(),
-              time_naive.pass, time_naive.runs);
-  std::printf("  %s proposed faster than geva: %d / %d\n", time_geva.verdict(), time_geva.pass,
-              time_geva.runs);
-  // Which of two modes stops first on one seed turns on whether a tail step lowers the cost by
-  // just over or just under Ceres's function tolerance; summed over seeds that evens out.
   std::printf(
-      "  (summed over the seeds: naive %.2f s, geva %.2f s, proposed %.2f s: proposed %+.0f %% vs "
-      "naive, %+.0f %% vs geva)\n",
-      total_naive, total_geva, total_prop, 100.0 * (total_prop / total_naive - 1.0),
-      100.0 * (total_prop / total_geva - 1.0));
+      "  %s DVL residual sigma >= 3x smaller than GICP alone: %d / %d (the target on a "
+      "clean hull)\n",
+      dvl.verdict(), dvl.pass, dvl.runs);
+  // On a fouled hull the beams that hit a patch 5-18 cm proud are real structure, not error:
+  // issue 18 judges the target there on the robust sigma (1.4826 MAD).
+  std::printf(
+      "  %s DVL residual robust sigma >= 3x smaller than GICP alone: %d / %d (the target "
+      "on a fouled hull)\n",
+      dvl_robust.verdict(), dvl_robust.pass, dvl_robust.runs);
+  // Issue 18: the timing targets are judged on the solve times summed over the seeds (on the
+  // fouled hull); per seed, which mode stops first turns on Ceres's stopping tail.
+  std::printf(
+      "  %s proposed <= +25 %% time vs naive, summed over the seeds: %+.0f %% (per seed: "
+      "%d / %d)\n",
+      total_prop <= (1.0 + kMaxTimeOverNaive) * total_naive ? "PASS" : "FAIL",
+      100.0 * (total_prop / total_naive - 1.0), time_naive.pass, time_naive.runs);
+  std::printf(
+      "  %s proposed faster than geva, summed over the seeds: %+.0f %% (per seed: %d / "
+      "%d)\n",
+      total_prop < total_geva ? "PASS" : "FAIL", 100.0 * (total_prop / total_geva - 1.0),
+      time_geva.pass, time_geva.runs);
   if (!keep) fs::remove_all(root);
   return 0;
 }

@@ -42,6 +42,7 @@ void validate(const InspectOptions& o) {
   require(std::isfinite(o.dbscan_eps_m) && o.dbscan_eps_m > 0.0, "dbscan_eps_m", o.dbscan_eps_m,
           "a finite radius > 0 m");
   require(o.dbscan_min_pts >= 1, "dbscan_min_pts", o.dbscan_min_pts, "an integer >= 1");
+  require(o.min_shape_views >= 1, "min_shape_views", o.min_shape_views, "an integer >= 1");
   require(std::isfinite(o.alpha_m) && o.alpha_m > 0.0, "alpha_m", o.alpha_m,
           "a finite radius > 0 m");
   require(std::isfinite(o.view_range_m) && o.view_range_m > 0.0, "view_range_m", o.view_range_m,
@@ -61,29 +62,55 @@ InspectResult run_inspect(const InspectInput& input, const InspectOptions& optio
   InspectOptions detection = options;  // line 6 of Algorithm 1 with the tau in force
   detection.tau_m = result.threshold.tau_m;
 
+  // Algorithm 1 at every view first (line 4 of Algorithm 2), so that the detections can be
+  // merged into objects and those seen in fewer than min_shape_views views dropped before
+  // any is fused.
+  auto start = Clock::now();
+  std::vector<DetectedShape> all;
+  for (int view = 0; view < stats.num_views; ++view) {
+    std::vector<DetectedShape> shapes =
+        detect_shapes(view, input.T_world_camera[view], input.landmarks, visible[view], detection);
+    for (DetectedShape& shape : shapes) all.push_back(std::move(shape));
+  }
+  stats.num_detections = static_cast<int>(all.size());
+  std::vector<ShapeSummary> objects = summarize_shapes(all, input.landmarks, options.dbscan_eps_m);
+  std::vector<bool> kept(all.size(), false);
+  for (const ShapeSummary& object : objects) {
+    if (static_cast<int>(object.views.size()) < options.min_shape_views) {
+      ++stats.num_shapes_rejected;
+      continue;
+    }
+    for (const int k : object.detections) kept[k] = true;
+    result.shapes.push_back(object);
+    result.shapes.back().id = static_cast<int>(result.shapes.size()) - 1;
+  }
+  std::vector<int> new_index(all.size(), -1);  // into result.detections
+  for (size_t k = 0; k < all.size(); ++k) {
+    if (!kept[k]) continue;
+    new_index[k] = static_cast<int>(result.detections.size());
+    result.detections.push_back(std::move(all[k]));
+  }
+  for (ShapeSummary& object : result.shapes)
+    for (int& k : object.detections) k = new_index[k];
+  std::vector<std::vector<DetectedShape>> per_view(stats.num_views);
+  for (const DetectedShape& shape : result.detections) per_view[shape.view].push_back(shape);
+  stats.detect_s = seconds_since(start);
+
   MeshFusion fusion(input.cad_in_world, options);       // line 1 of Algorithm 2
   for (int view = 0; view < stats.num_views; ++view) {  // line 2
-    const Pose3& T_world_camera = input.T_world_camera[view];
-    auto start = Clock::now();
-    std::vector<DetectedShape> shapes =  // line 4: Algorithm 1
-        detect_shapes(view, T_world_camera, input.landmarks, visible[view], detection);
-    stats.detect_s += seconds_since(start);
     start = Clock::now();
-    stats.num_updates += fusion.fuse_view(T_world_camera, shapes);  // lines 5-14
+    stats.num_updates += fusion.fuse_view(input.T_world_camera[view], per_view[view]);  // 5-14
     stats.fuse_s += seconds_since(start);
-    if (!shapes.empty()) ++stats.num_views_with_shapes;
-    stats.num_detections += static_cast<int>(shapes.size());
-    for (DetectedShape& shape : shapes) result.detections.push_back(std::move(shape));
+    if (!per_view[view].empty()) ++stats.num_views_with_shapes;
   }
   result.remeshed = fusion.mesh();  // line 16
   result.vertex_update_count = fusion.update_counts();
   for (const int n : result.vertex_update_count) stats.num_vertices_moved += n > 0 ? 1 : 0;
 
-  const auto start = Clock::now();
+  start = Clock::now();
   result.vertex_deviation_m =
       vertex_deviations(input.cad_in_world, result.remeshed, result.vertex_update_count);
   stats.deviation_s = seconds_since(start);
-  result.shapes = summarize_shapes(result.detections, input.landmarks, options.dbscan_eps_m);
   return result;
 }
 

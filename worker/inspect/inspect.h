@@ -17,12 +17,13 @@ namespace keel::inspect {
 struct InspectStats {
   int num_views = 0;
   int num_views_with_shapes = 0;
-  int num_detections = 0;      // per-view shapes from Algorithm 1
-  int num_updates = 0;         // evaluations of line 11 of Algorithm 2 (Eq. 15)
-  int num_vertices_moved = 0;  // vertices with n > 0
-  double detect_s = 0.0;       // wall time of Algorithm 1 over all views
-  double fuse_s = 0.0;         // wall time of Algorithm 2 (without detection)
-  double deviation_s = 0.0;    // wall time of the per-vertex deviations
+  int num_detections = 0;       // per-view shapes from Algorithm 1
+  int num_shapes_rejected = 0;  // merged shapes seen in fewer than min_shape_views views
+  int num_updates = 0;          // evaluations of line 11 of Algorithm 2 (Eq. 15)
+  int num_vertices_moved = 0;   // vertices with n > 0
+  double detect_s = 0.0;        // wall time of Algorithm 1 over all views
+  double fuse_s = 0.0;          // wall time of Algorithm 2 (without detection)
+  double deviation_s = 0.0;     // wall time of the per-vertex deviations
 };
 
 struct InspectResult {
@@ -33,10 +34,12 @@ struct InspectResult {
   // vertices no ray moved. We report this rather than the length of the move because a vertex
   // moves along a slanted camera ray, and that length overstates the height of the structure.
   std::vector<double> vertex_deviation_m;
-  std::vector<int> vertex_update_count;   // n of Eq. (15)
-  std::vector<DetectedShape> detections;  // every per-view shape of Algorithm 1
-  std::vector<ShapeSummary> shapes;       // merged objects, for shapes.json
-  DeviationThreshold threshold;           // the tau line 6 of Algorithm 1 used
+  std::vector<int> vertex_update_count;  // n of Eq. (15)
+  // The per-view shapes of Algorithm 1 that belong to a kept shape (the ones fused).
+  std::vector<DetectedShape> detections;
+  std::vector<ShapeSummary> shapes;  // merged objects seen in >= min_shape_views views
+
+  DeviationThreshold threshold;  // the tau line 6 of Algorithm 1 used
   InspectStats stats;
 };
 

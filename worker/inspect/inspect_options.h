@@ -25,6 +25,13 @@ struct InspectOptions {
   // Section 4.2.1: "DBSCAN requires a minimum number of datapoints per cluster (... 3)".
   // Counts the point itself, as Ester et al. (1996) do.
   int dbscan_min_pts = 3;
+  // Not in the paper: a shape (the per-view detections merged into one object, shape_report.h)
+  // is kept only when Algorithm 1 found it in at least this many views; the rest are neither
+  // fused nor reported. The standard a monocular feature must meet to be triangulated at all
+  // (ba triangulation.min_monocular_views = 3): a single view's cluster can be three features
+  // whose noise happens to agree in that view, while a structure on the hull stays in the
+  // camera for ~10 images of a lane (2 Hz, 0.25 m/s, a footprint over 1 m wide).
+  int min_shape_views = 3;
   // Section 3.2: "a fixed value of 12 cm". The radius of the alpha disc; CGAL's Alpha_shape_2
   // takes its square (0.0144 m^2), see alpha_shape_25d.h.
   double alpha_m = 0.12;

@@ -101,20 +101,20 @@ std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& det
   const std::vector<int> root = group_detections(detections, landmarks, link_distance_m);
   std::unordered_map<int, int> object_of_root;
   std::vector<std::vector<int>> object_landmarks, object_views;
-  std::vector<int> object_detections;
+  std::vector<std::vector<int>> object_detection_indices;
   for (size_t k = 0; k < detections.size(); ++k) {
     const auto [it, inserted] =
         object_of_root.emplace(root[k], static_cast<int>(object_landmarks.size()));
     if (inserted) {
       object_landmarks.emplace_back();
       object_views.emplace_back();
-      object_detections.push_back(0);
+      object_detection_indices.emplace_back();
     }
     const int object = it->second;
     auto& ids = object_landmarks[object];
     ids.insert(ids.end(), detections[k].landmarks.begin(), detections[k].landmarks.end());
     object_views[object].push_back(detections[k].view);
-    ++object_detections[object];
+    object_detection_indices[object].push_back(static_cast<int>(k));
   }
   std::vector<ShapeSummary> shapes;
   for (size_t o = 0; o < object_landmarks.size(); ++o) {
@@ -122,9 +122,10 @@ std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& det
       std::sort(list->begin(), list->end());
       list->erase(std::unique(list->begin(), list->end()), list->end());
     }
-    shapes.push_back(
-        summarize(object_landmarks[o], object_views[o], object_detections[o], landmarks));
+    shapes.push_back(summarize(object_landmarks[o], object_views[o],
+                               static_cast<int>(object_detection_indices[o].size()), landmarks));
     shapes.back().id = static_cast<int>(o);
+    shapes.back().detections = std::move(object_detection_indices[o]);
   }
   return shapes;
 }

@@ -23,8 +23,9 @@ struct ShapeSummary {
   double mean_deviation_m = 0.0;  // mean of h (Eq. 5), signed
   double max_deviation_m = 0.0;   // the h of largest magnitude, signed
   int num_landmarks = 0;
-  int num_detections = 0;  // per-view shapes merged into this object
-  std::vector<int> views;  // views whose Algorithm 1 detected it, ascending
+  int num_detections = 0;       // per-view shapes merged into this object
+  std::vector<int> views;       // views whose Algorithm 1 detected it, ascending
+  std::vector<int> detections;  // indices of its detections in the list summarised, ascending
 
   Eigen::Vector3d extent_m() const { return max_world - min_world; }
   nlohmann::json to_json() const;

@@ -193,6 +193,7 @@ class InspectStage : public Stage {
     r["views"] = result.stats.num_views;
     r["views_with_shapes"] = result.stats.num_views_with_shapes;
     r["detections"] = result.stats.num_detections;
+    r["shapes_rejected_few_views"] = result.stats.num_shapes_rejected;
     r["updates"] = result.stats.num_updates;
     r["vertices_moved"] = result.stats.num_vertices_moved;
     r["detect_s"] = result.stats.detect_s;
@@ -233,6 +234,7 @@ InspectStageOptions InspectStageOptions::from_json(const json& options) {
   in.tau_noise_sigmas = r.optional<double>("tau_noise_sigmas", in.tau_noise_sigmas);
   in.dbscan_eps_m = r.optional<double>("dbscan_eps_m", in.dbscan_eps_m);
   in.dbscan_min_pts = r.optional<int>("dbscan_min_pts", in.dbscan_min_pts);
+  in.min_shape_views = r.optional<int>("min_shape_views", in.min_shape_views);
   in.alpha_m = r.optional<double>("alpha_m", in.alpha_m);
   in.view_range_m = r.optional<double>("view_range_m", in.view_range_m);
   in.max_behind_vertex_m = r.optional<double>("max_behind_vertex_m", in.max_behind_vertex_m);

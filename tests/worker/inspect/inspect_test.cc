@@ -90,6 +90,39 @@ TEST(Inspect, CylinderBumpIsFusedIntoTheMesh) {
   EXPECT_EQ(result.stats.num_views_with_shapes, 9);
 }
 
+// min_shape_views: the bump's features matched in one or two views only (as three noisy
+// features can agree in one view) make no shape and move no vertex; in three views they do.
+TEST(Inspect, ShapeSeenInFewerThanMinShapeViewsIsDroppedBeforeFusion) {
+  SceneOptions scene = patch_with_cameras();
+  scene.bumps = {Bump{{0.0, 0.0}, 0.3, 0.11, 80}};
+  InspectInput input = testing::make_scene(scene);
+  auto seen_in = [&](const std::vector<int>& views) {
+    for (Landmark& l : input.landmarks)
+      if (l.h_m > 0.05) l.views = views;
+    return run_inspect(input);
+  };
+  for (const std::vector<int>& views : {std::vector<int>{4}, std::vector<int>{2, 6}}) {
+    const InspectResult result = seen_in(views);
+    EXPECT_TRUE(result.shapes.empty()) << views.size() << " views";
+    EXPECT_TRUE(result.detections.empty());
+    EXPECT_EQ(result.stats.num_detections, static_cast<int>(views.size()));
+    EXPECT_EQ(result.stats.num_shapes_rejected, 1);
+    EXPECT_EQ(result.stats.num_views_with_shapes, 0);
+    EXPECT_EQ(result.remeshed.vertices, input.cad_in_world.vertices);
+  }
+  const InspectResult three = seen_in({1, 4, 7});
+  ASSERT_EQ(three.shapes.size(), 1u);
+  EXPECT_EQ(three.shapes[0].views, (std::vector<int>{1, 4, 7}));
+  EXPECT_EQ(three.shapes[0].detections, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(three.stats.num_shapes_rejected, 0);
+  EXPECT_NE(three.remeshed.vertices, input.cad_in_world.vertices);
+  InspectOptions every_detection;  // the paper: no such rule
+  every_detection.min_shape_views = 1;
+  for (Landmark& l : input.landmarks)
+    if (l.h_m > 0.05) l.views = {4};
+  EXPECT_EQ(run_inspect(input, every_detection).shapes.size(), 1u);
+}
+
 TEST(Inspect, CleanPatchReportsNothingAndKeepsTheMesh) {
   SceneOptions scene = patch_with_cameras();
   scene.num_hull_landmarks = 1500;
@@ -257,6 +290,9 @@ TEST(Inspect, BadInputNamesTheField) {
   options = {};
   options.dbscan_min_pts = 0;
   expect_invalid(good, options, "dbscan_min_pts");
+  options = {};
+  options.min_shape_views = 0;
+  expect_invalid(good, options, "min_shape_views");
   options = {};
   options.view_range_m = nan;
   expect_invalid(good, options, "view_range_m");
