@@ -9,6 +9,9 @@ find_package(SQLite3 REQUIRED)
 # libpqxx (Debian libpqxx-dev, 6.4) has no CMake package on Debian 12: pkg-config.
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(PQXX REQUIRED IMPORTED_TARGET libpqxx)
+# zstd and lz4 (MCAP chunk compression) have no CMake config on Debian 12: pkg-config.
+pkg_check_modules(ZSTD REQUIRED IMPORTED_TARGET libzstd)
+pkg_check_modules(LZ4 REQUIRED IMPORTED_TARGET liblz4)
 find_package(LibArchive REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(spdlog REQUIRED)

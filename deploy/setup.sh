@@ -21,6 +21,8 @@ packages=(
   # ROS1 bags without ROS (PLATFORM-NOTES.md)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev
+  # ROS 2 bags (MCAP chunk compression) and their fuzzers (clang 14's libFuzzer)
+  libzstd-dev liblz4-dev clang libclang-rt-14-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs

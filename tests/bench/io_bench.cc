@@ -1,16 +1,24 @@
 // Streaming throughput of the mission readers: points/s from PCD/PLY scan folders and from a
-// bag's PointCloud2 topic (target >= 1 M points/s each), rows/s of an IMU CSV. The data are
-// generated here, in a temporary folder. Run: build/tests/bench/bench_io
+// bag's PointCloud2 topic, ROS1 and ROS 2 (MCAP zstd, MCAP lz4, SQLite3) (target >= 1 M
+// points/s each), rows/s of an IMU CSV. The data are generated here, in a temporary folder;
+// the same sweeps go into every bag, and the ROS 2 / ROS1 ratios are printed at the end.
+// Run: build/tests/bench/bench_io
 #include <benchmark/benchmark.h>
 
 #include <rosbag/bag.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <map>
 #include <random>
 
+#include "tests/sim/bag2_writer.h"
+
 #include "worker/io/bag_reader.h"
+#include "worker/io/rosbag2_reader.h"
 #include "worker/io/scan_file.h"
 #include "worker/io/scan_source.h"
 #include "worker/io/stream_csv.h"
@@ -108,6 +116,25 @@ fs::path point_cloud_bag() {
   return path;
 }
 
+// A rosbag2 folder of the same sweeps (keel-sim's writer: x y z intensity ring time).
+fs::path point_cloud_bag2(const std::string& storage, const std::string& compression) {
+  const fs::path path = bench_dir() / ("bag2_" + storage + "_" + compression);
+  if (fs::exists(path / "metadata.yaml")) return path;
+  sim::Bag2Options options;
+  options.storage = storage;
+  options.compression = compression;
+  sim::Bag2Writer bag(path.string(), options);
+  for (int k = 0; k < kScans; ++k) bag.cloud("/lidar/points", "lidar", make_sweep(k));
+  bag.close();
+  return path;
+}
+
+// points/s of each bag benchmark's last run, for the ratios printed at the end.
+std::map<std::string, double>& rates() {
+  static std::map<std::string, double> r;
+  return r;
+}
+
 void count_points(benchmark::State& state, ScanSource& source, size_t& points) {
   PointCloud cloud;
   while (source.next(cloud)) points += cloud.size();
@@ -137,16 +164,32 @@ void BM_StreamPcdAscii(benchmark::State& state) {
   stream_folder(state, scan_folder("pcd_ascii", ".pcd", ScanEncoding::kAscii));
 }
 
-void BM_StreamBagPointCloud2(benchmark::State& state) {
-  const fs::path bag = point_cloud_bag();
+void stream_bag(benchmark::State& state, const fs::path& bag, const std::string& name) {
   size_t points = 0;
+  const auto start = std::chrono::steady_clock::now();
   for (auto _ : state) {
-    BagReader reader(bag);
-    auto source = reader.open_scans("/lidar/points", read_options());
+    const auto reader = open_bag(bag);
+    auto source = reader->open_scans("/lidar/points", read_options());
     count_points(state, *source, points);
   }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  rates()[name] = static_cast<double>(points) / seconds;
   state.counters["points/s"] =
       benchmark::Counter(static_cast<double>(points), benchmark::Counter::kIsRate);
+}
+
+void BM_StreamBagPointCloud2(benchmark::State& state) {
+  stream_bag(state, point_cloud_bag(), "ROS1 bag");
+}
+void BM_StreamMcapZstdPointCloud2(benchmark::State& state) {
+  stream_bag(state, point_cloud_bag2("mcap", "zstd"), "ROS 2 MCAP zstd");
+}
+void BM_StreamMcapLz4PointCloud2(benchmark::State& state) {
+  stream_bag(state, point_cloud_bag2("mcap", "lz4"), "ROS 2 MCAP lz4");
+}
+void BM_StreamDb3PointCloud2(benchmark::State& state) {
+  stream_bag(state, point_cloud_bag2("sqlite3", "none"), "ROS 2 SQLite3");
 }
 
 void BM_ReadImuCsv(benchmark::State& state) {
@@ -170,6 +213,9 @@ BENCHMARK(BM_StreamPcdCompressed)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StreamPlyBinary)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StreamPcdAscii)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_StreamBagPointCloud2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamMcapZstdPointCloud2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamMcapLz4PointCloud2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StreamDb3PointCloud2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ReadImuCsv)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
@@ -178,6 +224,14 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  const auto& r = rates();
+  if (r.count("ROS1 bag")) {
+    std::printf("\nPointCloud2 streaming, same %d sweeps of %d points (target >= 1e6 points/s):\n",
+                kScans, kPointsPerScan);
+    for (const auto& [name, rate] : r)
+      std::printf("  %-18s %6.2f M points/s  (%.2f x ROS1)\n", name.c_str(), rate / 1e6,
+                  rate / r.at("ROS1 bag"));
+  }
   std::error_code ec;
   fs::remove_all(bench_dir(), ec);
   return 0;

@@ -1,7 +1,8 @@
 // keel-sim: writes a synthetic mission bundle with ground truth (DESIGN.md, issue 3).
 //   keel-sim --scenario usv-bridge|usv-corridor|hauv-hull --seed N --out DIR [--duration S]
 //            [--sensors imu,dvl,lidar_h,lidar_v,sonar,camera,depth] [--dvl-scale 1.02]
-//            [--dvl-dropout-rate R] [--bag] [--survey N] [--set key=value ...]
+//            [--dvl-dropout-rate R] [--bag] [--bag2 mcap,sqlite3] [--survey N]
+//            [--set key=value ...]
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -29,6 +30,16 @@ int main(int argc, char** argv) {
   app.add_option("--dvl-dropout-rate", options.dvl_dropout_rate,
                  "fraction of DVL samples lost (bursts)");
   app.add_flag("--bag", options.write_bag, "also write mission.bag and mission_bag.yaml");
+  app.add_option("--bag2", options.bag2_storages,
+                 "also write ROS 2 bags of the same data: mcap (mission_mcap/, mission_mcap.yaml) "
+                 "and/or sqlite3 (mission_db3/, mission_db3.yaml)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"mcap", "sqlite3"}));
+  app.add_option("--bag2-compression", options.bag2.compression,
+                 "MCAP chunk compression: zstd (default), lz4 or none")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+  app.add_option("--bag2-split-bytes", options.bag2.max_file_bytes,
+                 "split ROS 2 bags into files of about this many bytes (0: one file)");
   app.add_option("--threads", options.threads, "worker threads")->check(CLI::Range(1, 64));
   app.add_option("--set", options.settings, "key=value overrides: " + keel::sim::settings_help());
   CLI11_PARSE(app, argc, argv);

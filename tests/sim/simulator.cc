@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "tests/sim/bag2_writer.h"
 #include "tests/sim/bag_writer.h"
 #include "tests/sim/bundle_files.h"
 #include "tests/sim/pose_table.h"
@@ -355,8 +356,25 @@ SimSummary run_simulation(const SimOptions& options) {
     summary.path_length_m = s;
   }
   const PoseTable truth(*scenario.motion, duration);
-  std::unique_ptr<BagWriter> bag;
-  if (options.write_bag) bag = std::make_unique<BagWriter>((out / "mission.bag").string());
+  // Bags carry the same data as the files: a ROS1 bag and ROS 2 bags, each with a manifest
+  // (manifest file, bag path) that maps the sensors to its topics.
+  std::unique_ptr<BagSinks> bag;
+  std::vector<std::pair<std::string, std::string>> bag_manifests;
+  {
+    auto sinks = std::make_unique<BagSinks>();
+    if (options.write_bag) {
+      sinks->add(std::make_unique<BagWriter>((out / "mission.bag").string()));
+      bag_manifests.emplace_back("mission_bag.yaml", "mission.bag");
+    }
+    for (const auto& storage : options.bag2_storages) {
+      Bag2Options bag2 = options.bag2;
+      bag2.storage = storage;
+      const std::string folder = storage == "sqlite3" ? "mission_db3" : "mission_" + storage;
+      sinks->add(std::make_unique<Bag2Writer>((out / folder).string(), bag2));
+      bag_manifests.emplace_back(folder + ".yaml", folder);
+    }
+    if (!sinks->empty()) bag = std::move(sinks);
+  }
 
   YAML::Emitter sensors_yaml, sensors_bag_yaml;  // the sensors: lists of both manifests
   sensors_yaml.SetDoublePrecision(10);
@@ -736,10 +754,10 @@ SimSummary run_simulation(const SimOptions& options) {
     write_text((out / "ground_truth" / "truth.yaml").string(), y.c_str());
   }
 
-  // ---- mission.yaml (and mission_bag.yaml) ----
+  // ---- mission.yaml (and one manifest per bag: mission_bag.yaml, mission_mcap.yaml, ...) ----
   const std::string name = scenario.name + "-seed" + std::to_string(options.seed) +
                            (options.survey > 1 ? "-survey" + std::to_string(options.survey) : "");
-  for (int which = 0; which < (bag ? 2 : 1); ++which) {
+  for (size_t which = 0; which <= bag_manifests.size(); ++which) {
     YAML::Emitter y;
     y.SetDoublePrecision(10);
     y << YAML::BeginMap;
@@ -748,7 +766,7 @@ SimSummary run_simulation(const SimOptions& options) {
     y << YAML::Key << "platform" << YAML::Value << scenario.platform;
     y << YAML::Key << "body_frame" << YAML::Value << "base_link";
     y << YAML::Key << "world_frame" << YAML::Value << "world";
-    if (which == 1) y << YAML::Key << "bag" << YAML::Value << "mission.bag";
+    if (which > 0) y << YAML::Key << "bag" << YAML::Value << bag_manifests[which - 1].second;
     y << YAML::Key << "sensors" << YAML::Value
       << YAML::Load((which == 0 ? sensors_yaml : sensors_bag_yaml).c_str());
     y << YAML::Key << "trajectories" << YAML::Value << YAML::BeginMap;
@@ -766,7 +784,8 @@ SimSummary run_simulation(const SimOptions& options) {
     y << YAML::Key << "ground_truth" << YAML::Value << "ground_truth/truth.yaml";
     if (hauv) y << YAML::Key << "cad_mesh" << YAML::Value << "cad/hull.ply";
     y << YAML::EndMap;
-    write_text((out / (which == 0 ? "mission.yaml" : "mission_bag.yaml")).string(), y.c_str());
+    write_text((out / (which == 0 ? "mission.yaml" : bag_manifests[which - 1].first)).string(),
+               y.c_str());
   }
   return summary;
 }

@@ -1,11 +1,13 @@
 // keel-sim's library entry point: builds a scenario, simulates every requested sensor and
-// writes a mission bundle (docs/mission-format.md) with ground truth, optionally a ROS1 bag.
+// writes a mission bundle (docs/mission-format.md) with ground truth, optionally ROS1 and ROS 2
+// bags of the same data.
 #pragma once
 
 #include <map>
 #include <string>
 #include <vector>
 
+#include "tests/sim/bag2_writer.h"
 #include "tests/sim/camera_sim.h"
 #include "tests/sim/inertial_sensors.h"
 #include "tests/sim/range_sensors.h"
@@ -45,6 +47,10 @@ struct SimOptions {
   double dvl_scale = 1.0;
   double dvl_dropout_rate = 0.0;
   bool write_bag = false;
+  // ROS 2 bags of the same data: "mcap" -> mission_mcap/ + mission_mcap.yaml, "sqlite3" ->
+  // mission_db3/ + mission_db3.yaml (bag2.storage is set per entry).
+  std::vector<std::string> bag2_storages;
+  Bag2Options bag2;
   int threads = 2;
   TimeNs t0_ns = 1700000000LL * 1000000000LL;  // mission start stamp
   std::vector<std::string> settings;           // "key=value" overrides (see settings_help())

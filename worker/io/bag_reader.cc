@@ -12,12 +12,11 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include <cmath>
-#include <cstring>
 #include <map>
-#include <set>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
+#include "worker/io/ros_messages.h"
 
 namespace keel::io {
 
@@ -28,7 +27,7 @@ struct BagReader::Impl {
   rosbag::Bag bag;
   std::vector<BagTopicInfo> topics;
 
-  std::string name() const { return path.string(); }
+  std::string name() const { return display_path(path); }
 
   const BagTopicInfo& topic(const std::string& topic_name) const {
     for (const auto& t : topics)
@@ -99,49 +98,34 @@ bool read_guarded(const BagReader::Impl& impl, const std::string& topic, size_t 
 
 void check_increasing(const BagReader::Impl& impl, const std::string& topic, size_t index,
                       TimeNs t_ns, TimeNs previous_ns) {
-  if (index > 0 && t_ns <= previous_ns)
-    throw IoError(where(impl, topic, index) + ": " +
-                  (t_ns == previous_ns ? "duplicate" : "decreasing") + " stamp " +
-                  format_seconds(t_ns) + " (previous " + format_seconds(previous_ns) +
-                  "); expected strictly increasing header stamps");
+  io::check_increasing(where(impl, topic, index), index, t_ns, previous_ns);
 }
 
 template <typename Vector>
 Eigen::Vector3d finite3(const Vector& v, const std::string& what) {
-  const Eigen::Vector3d out(v.x, v.y, v.z);
-  if (!out.allFinite()) throw IoError(what + ": non-finite value");
-  return out;
+  return finite_vector(v.x, v.y, v.z, what);
 }
 
 Pose3 pose_of(const geometry_msgs::Pose& p, const std::string& what) {
   const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-  if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3)
-    throw IoError(
-        what + ": orientation is not a unit quaternion (|q| = " + std::to_string(q.norm()) + ")");
-  return make_pose(q, finite3(p.position, what));
+  return checked_pose(q, finite3(p.position, what), what);
 }
 
-FieldType field_type(uint8_t datatype, const std::string& name, const std::string& what) {
-  using F = sensor_msgs::PointField;
-  switch (datatype) {
-    case F::INT8:
-      return FieldType::kInt8;
-    case F::UINT8:
-      return FieldType::kUint8;
-    case F::INT16:
-      return FieldType::kInt16;
-    case F::UINT16:
-      return FieldType::kUint16;
-    case F::INT32:
-      return FieldType::kInt32;
-    case F::UINT32:
-      return FieldType::kUint32;
-    case F::FLOAT32:
-      return FieldType::kFloat32;
-    case F::FLOAT64:
-      return FieldType::kFloat64;
-  }
-  throw IoError(what + ": field '" + name + "' has unknown datatype " + std::to_string(datatype));
+PointCloud2View view_of(const sensor_msgs::PointCloud2& msg) {
+  PointCloud2View view;
+  view.height = msg.height;
+  view.width = msg.width;
+  for (const auto& f : msg.fields) view.fields.push_back({f.name, f.offset, f.datatype, f.count});
+  view.is_bigendian = msg.is_bigendian;
+  view.point_step = msg.point_step;
+  view.row_step = msg.row_step;
+  view.data = msg.data.data();
+  view.data_size = msg.data.size();
+  return view;
+}
+
+ImageView view_of(const sensor_msgs::Image& msg) {
+  return {msg.height, msg.width, msg.encoding, msg.step, msg.data.data(), msg.data.size()};
 }
 
 class BagScanSource : public ScanSource {
@@ -171,7 +155,7 @@ class BagScanSource : public ScanSource {
       if (!msg) throw IoError(what + ": not a sensor_msgs/PointCloud2");
       const TimeNs t_ns = stamp_of(msg->header.stamp, *it_);
       check_increasing(*impl_, topic_, index_, t_ns, previous_ns_);
-      cloud = unpack(*msg, t_ns, what);
+      cloud = unpack_point_cloud2(view_of(*msg), t_ns, options_, what);
       previous_ns_ = t_ns;
       ++index_;
       ++it_;
@@ -180,36 +164,6 @@ class BagScanSource : public ScanSource {
   }
 
  private:
-  PointCloud unpack(const sensor_msgs::PointCloud2& msg, TimeNs t_ns,
-                    const std::string& what) const {
-    if (msg.is_bigendian) throw IoError(what + ": big-endian point data is not supported");
-    const size_t points = static_cast<size_t>(msg.width) * msg.height;
-    const size_t row_bytes = static_cast<size_t>(msg.width) * msg.point_step;
-    if (msg.row_step < row_bytes ||
-        msg.data.size() < static_cast<size_t>(msg.row_step) * msg.height)
-      throw IoError(what + ": data holds " + std::to_string(msg.data.size()) + " bytes; " +
-                    std::to_string(msg.height) + " rows of " + std::to_string(msg.row_step) +
-                    " needed");
-    PackedCloudView view;
-    view.num_points = points;
-    view.point_step = msg.point_step;
-    for (const auto& f : msg.fields) {
-      const FieldType type = field_type(f.datatype, f.name, what);
-      if (f.offset + field_size(type) > msg.point_step)
-        throw IoError(what + ": field '" + f.name + "' lies outside the point record");
-      view.fields.push_back({f.name, type, f.offset, std::max<size_t>(1, f.count)});
-    }
-    if (msg.row_step == row_bytes) {
-      view.data = msg.data.data();
-      return unpack_cloud(view, t_ns, options_, what);
-    }
-    std::vector<uint8_t> packed(points * msg.point_step);  // drop row padding
-    for (size_t r = 0; r < msg.height; ++r)
-      std::memcpy(packed.data() + r * row_bytes, msg.data.data() + r * msg.row_step, row_bytes);
-    view.data = packed.data();
-    return unpack_cloud(view, t_ns, options_, what);
-  }
-
   std::shared_ptr<const BagReader::Impl> impl_;
   std::string topic_;
   ScanReadOptions options_;
@@ -219,50 +173,6 @@ class BagScanSource : public ScanSource {
   size_t index_ = 0;
   TimeNs previous_ns_ = 0;
 };
-
-ImageFrame raw_image(const sensor_msgs::Image& msg, bool decode, const std::string& what) {
-  ImageFrame frame;
-  frame.width = static_cast<int>(msg.width);
-  frame.height = static_cast<int>(msg.height);
-  int in_channels = 0;
-  const std::string& e = msg.encoding;
-  if (e == "mono8" || e == "8UC1")
-    frame.channels = in_channels = 1, frame.bit_depth = 8;
-  else if (e == "mono16" || e == "16UC1")
-    frame.channels = in_channels = 1, frame.bit_depth = 16;
-  else if (e == "rgb8" || e == "bgr8" || e == "8UC3")
-    frame.channels = 3, in_channels = 3, frame.bit_depth = 8;
-  else if (e == "rgba8" || e == "bgra8" || e == "8UC4")
-    frame.channels = 3, in_channels = 4, frame.bit_depth = 8;
-  else
-    throw IoError(what + ": image encoding '" + e +
-                  "' not supported (mono8, mono16, rgb8, bgr8, rgba8, bgra8)");
-  const size_t pixel_bytes = in_channels * frame.bit_depth / 8;
-  if (msg.step < msg.width * pixel_bytes ||
-      msg.data.size() < static_cast<size_t>(msg.step) * msg.height)
-    throw IoError(what + ": image data holds " + std::to_string(msg.data.size()) + " bytes; " +
-                  std::to_string(msg.height) + " rows of " + std::to_string(msg.step) + " needed");
-  if (!decode) return frame;
-  const bool swap = e == "bgr8" || e == "bgra8";
-  frame.pixels.resize(static_cast<size_t>(frame.width) * frame.height * frame.channels *
-                      frame.bit_depth / 8);
-  size_t out = 0;
-  for (size_t r = 0; r < msg.height; ++r) {
-    const uint8_t* row = msg.data.data() + r * msg.step;
-    if (in_channels == frame.channels && !swap) {
-      std::memcpy(frame.pixels.data() + out, row, msg.width * pixel_bytes);
-      out += msg.width * pixel_bytes;
-      continue;
-    }
-    for (size_t c = 0; c < msg.width; ++c) {
-      const uint8_t* p = row + c * in_channels;
-      frame.pixels[out++] = swap ? p[2] : p[0];
-      frame.pixels[out++] = p[1];
-      frame.pixels[out++] = swap ? p[0] : p[2];
-    }
-  }
-  return frame;
-}
 
 class BagImageSource : public ImageSource {
  public:
@@ -293,7 +203,7 @@ class BagImageSource : public ImageSource {
       } else {
         auto msg = it_->instantiate<sensor_msgs::Image>();
         t_ns = stamp_of(msg->header.stamp, *it_);
-        frame = raw_image(*msg, decode, what);
+        frame = unpack_image(view_of(*msg), decode, what);
       }
       check_increasing(*impl_, topic_, index_, t_ns, previous_ns_);
       frame.t_ns = previous_ns_ = t_ns;
@@ -319,7 +229,7 @@ class BagImageSource : public ImageSource {
 BagReader::BagReader(const fs::path& path) : impl_(std::make_shared<Impl>()) {
   impl_->path = path;
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw IoError(path.string() + ": bag not found");
+  if (!fs::is_regular_file(path, ec)) throw IoError(impl_->name() + ": bag not found");
   try {
     impl_->bag.open(path.string(), rosbag::bagmode::Read);
     rosbag::View all(impl_->bag);
@@ -334,7 +244,7 @@ BagReader::BagReader(const fs::path& path) : impl_(std::make_shared<Impl>()) {
       impl_->topics.push_back(info);
     }
   } catch (const rosbag::BagException& e) {
-    throw IoError(path.string() + ": cannot open bag (truncated or corrupt?): " + e.what());
+    throw IoError(impl_->name() + ": cannot open bag (truncated or corrupt?): " + e.what());
   }
 }
 
@@ -342,13 +252,6 @@ BagReader::~BagReader() = default;
 
 const fs::path& BagReader::path() const { return impl_->path; }
 const std::vector<BagTopicInfo>& BagReader::topics() const { return impl_->topics; }
-const BagTopicInfo& BagReader::topic(const std::string& name) const { return impl_->topic(name); }
-
-bool BagReader::has_topic(const std::string& name) const {
-  for (const auto& t : impl_->topics)
-    if (t.topic == name) return true;
-  return false;
-}
 
 ImuSeries BagReader::read_imu(const std::string& topic) const {
   impl_->expect_type(topic, {"sensor_msgs/Imu"});
@@ -447,39 +350,6 @@ std::unique_ptr<ScanSource> BagReader::open_scans(const std::string& topic,
 
 std::unique_ptr<ImageSource> BagReader::open_images(const std::string& topic) const {
   return std::make_unique<BagImageSource>(impl_, topic);
-}
-
-bool lookup_static_transform(const std::vector<StaticTransform>& transforms,
-                             const std::string& target_frame, const std::string& source_frame,
-                             Pose3& T_target_source) {
-  // Path to the root from each frame (a TF tree: every child has one parent).
-  auto chain_to_root = [&](const std::string& frame) {
-    std::vector<std::pair<std::string, Pose3>> chain;  // (frame, T_root?_frame accumulated)
-    Pose3 T_current_frame = Pose3::Identity();
-    std::string current = frame;
-    chain.emplace_back(current, T_current_frame);
-    std::set<std::string> seen{current};
-    while (true) {
-      const StaticTransform* edge = nullptr;
-      for (const auto& t : transforms)
-        if (t.child_frame == current) edge = &t;
-      if (!edge || seen.count(edge->parent_frame)) break;
-      T_current_frame = edge->T_parent_child * T_current_frame;  // T_parent_frame
-      current = edge->parent_frame;
-      seen.insert(current);
-      chain.emplace_back(current, T_current_frame);
-    }
-    return chain;  // chain[k] = (ancestor_k, T_ancestor_k_frame)
-  };
-  const auto source_chain = chain_to_root(source_frame);
-  const auto target_chain = chain_to_root(target_frame);
-  for (const auto& [ancestor, T_ancestor_source] : source_chain)
-    for (const auto& [other, T_other_target] : target_chain)
-      if (ancestor == other) {
-        T_target_source = T_other_target.inverse() * T_ancestor_source;
-        return true;
-      }
-  return false;
 }
 
 }  // namespace keel::io

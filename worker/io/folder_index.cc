@@ -1,6 +1,7 @@
 #include "worker/io/folder_index.h"
 
 #include "worker/io/csv_reader.h"
+#include "worker/io/display_path.h"
 #include "worker/io/text_writer.h"
 
 namespace keel::io {
@@ -23,7 +24,7 @@ std::vector<IndexEntry> read_folder_index(const fs::path& folder) {
     e.path = (folder / rel).lexically_normal();
     std::error_code ec;
     if (!fs::is_regular_file(e.path, ec))
-      csv.fail("file '" + name + "' not found (" + e.path.string() + ")");
+      csv.fail("file '" + name + "' not found (" + display_path(e.path) + ")");
     entries.push_back(std::move(e));
   }
   return entries;

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <memory>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/text_lines.h"
 
@@ -43,8 +44,8 @@ ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
 }  // namespace
 
 ImageFrame read_png_info(const std::filesystem::path& path) {
-  const std::string file = path.string();
-  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
+  const std::string file = display_path(path);
+  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw IoError(file + ": cannot open");
   uint8_t head[33];
   const size_t n = std::fread(head, 1, sizeof(head), f.get());
@@ -89,7 +90,7 @@ ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& 
 
 ImageFrame read_png(const std::filesystem::path& path) {
   const std::string bytes = read_file_bytes(path);
-  return decode_image(std::vector<uint8_t>(bytes.begin(), bytes.end()), path.string());
+  return decode_image(std::vector<uint8_t>(bytes.begin(), bytes.end()), display_path(path));
 }
 
 void write_png(const std::filesystem::path& path, const ImageFrame& image) {
@@ -117,7 +118,7 @@ bool ImageFolderReader::next(ImageFrame& frame, bool decode) {
 }
 
 std::string ImageFolderReader::current_source() const {
-  return next_ == 0 ? std::string() : entries_[next_ - 1].path.string();
+  return next_ == 0 ? std::string() : display_path(entries_[next_ - 1].path);
 }
 
 }  // namespace keel::io

@@ -2,6 +2,7 @@
 # own so the mesh readers/writers and the other io readers build and change independently.
 keel_library(keel_mesh_io
   SOURCES
+    ${CMAKE_CURRENT_LIST_DIR}/display_path.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_parse_util.cc
     ${CMAKE_CURRENT_LIST_DIR}/mesh_reader.cc
     ${CMAKE_CURRENT_LIST_DIR}/ply_header.cc

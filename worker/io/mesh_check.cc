@@ -80,6 +80,7 @@ void count_faces_and_edges(const TriangleMesh& mesh, const MeshCheckOptions& opt
       ++report->duplicate_faces;
       continue;
     }
+    report->surface_area_m2 += area;  // a duplicate face covers no new surface
     for (int c = 0; c < 3; ++c) {
       const int from = f[c];
       const int to = f[(c + 1) % 3];
@@ -159,6 +160,8 @@ nlohmann::json MeshCheckReport::to_json() const {
           {"bbox_min", {bbox_min.x(), bbox_min.y(), bbox_min.z()}},
           {"bbox_max", {bbox_max.x(), bbox_max.y(), bbox_max.z()}},
           {"largest_extent_m", largest_extent_m},
+          {"surface_area_m2", surface_area_m2},
+          {"degenerate_faces", degenerate_faces()},
           {"invalid_index_faces", invalid_index_faces},
           {"repeated_index_faces", repeated_index_faces},
           {"zero_area_faces", zero_area_faces},

@@ -17,9 +17,10 @@ struct MeshCheckOptions {
   // A triangle whose area is below this fraction of (largest extent)^2 counts as zero area.
   double degenerate_relative_area = 1e-12;
   // Extents outside [min, max] suggest wrong units: a ship hull or bridge pier is metres to
-  // a few hundred metres, so > 1 km is probably millimetres and < 1 cm kilometres.
+  // a few hundred metres (the largest ships are ~460 m), so > 1 km is probably millimetres
+  // and < 0.5 m kilometres (a 200 m hull in km is 0.2).
   double max_plausible_extent_m = 1000.0;
-  double min_plausible_extent_m = 0.01;
+  double min_plausible_extent_m = 0.5;
 };
 
 struct MeshWarning {
@@ -35,6 +36,7 @@ struct MeshCheckReport {
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
   double largest_extent_m = 0.0;
+  double surface_area_m2 = 0.0;     // sum of the triangle areas (faces with valid indices)
   size_t invalid_index_faces = 0;   // an index outside the vertex list (otherwise skipped)
   size_t repeated_index_faces = 0;  // a vertex index used twice in one face
   size_t zero_area_faces = 0;       // distinct indices, but (near) zero area

@@ -5,12 +5,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "worker/io/display_path.h"
 #include "worker/io/mesh_reader.h"
 
 namespace keel::io::mesh_detail {
 
 void fail(const std::filesystem::path& path, size_t line, const std::string& what) {
-  std::string message = path.string();
+  std::string message = display_path(path);
   if (line > 0) message += ":" + std::to_string(line);
   throw MeshReadError(message + ": " + what);
 }

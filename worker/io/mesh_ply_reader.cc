@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/mesh_parse_util.h"
 #include "worker/io/mesh_reader.h"
@@ -20,7 +21,7 @@ using mesh_detail::quoted;
 // The shared header parser throws IoError; this reader's callers expect MeshReadError.
 PlyHeader parse_header(const std::filesystem::path& path, std::string_view text) {
   try {
-    return parse_ply_header(text, path.string());
+    return parse_ply_header(text, display_path(path));
   } catch (const IoError& e) {
     throw MeshReadError(e.what());
   }

@@ -1,6 +1,7 @@
 #include "worker/io/mission.h"
 
 #include "proto/contract_error.h"
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/yaml_json.h"
 
@@ -10,7 +11,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-enum class Kind { kFile, kFolder, kIndexedFolder };
+enum class Kind { kFile, kFolder, kIndexedFolder, kFileOrFolder };
 
 class Resolver {
  public:
@@ -22,15 +23,20 @@ class Resolver {
     if (rel.is_absolute() || escapes(rel))
       fail(field, "'" + relative + "' must be a relative path inside the bundle");
     const fs::path path = (dir_ / rel).lexically_normal();
+    // The full path helps only when it says more than the manifest's own words (a local run;
+    // a worker's copy of the bundle shows the name relative to it, as in mission.yaml).
+    const std::string shown = display_path(path);
+    const std::string at =
+        shown == rel.lexically_normal().generic_string() ? "" : " (" + shown + ")";
     std::error_code ec;
     const auto status = fs::status(path, ec);
-    if (!fs::exists(status)) fail(field, "'" + relative + "' not found (" + path.string() + ")");
+    if (!fs::exists(status)) fail(field, "'" + relative + "' not found" + at);
     if (kind == Kind::kFile && !fs::is_regular_file(status))
-      fail(field, "'" + relative + "' is not a file (" + path.string() + ")");
-    if (kind != Kind::kFile && !fs::is_directory(status))
-      fail(field, "'" + relative + "' is not a folder (" + path.string() + ")");
+      fail(field, "'" + relative + "' is not a file" + at);
+    if (kind != Kind::kFile && kind != Kind::kFileOrFolder && !fs::is_directory(status))
+      fail(field, "'" + relative + "' is not a folder" + at);
     if (kind == Kind::kIndexedFolder && !fs::is_regular_file(path / "index.csv"))
-      fail(field, "'" + relative + "' has no index.csv (" + (path / "index.csv").string() + ")");
+      fail(field, "'" + relative + "' has no index.csv (" + display_path(path / "index.csv") + ")");
     return path;
   }
 
@@ -60,7 +66,7 @@ class Resolver {
 const fs::path& Mission::sensor_path(std::string_view name) const {
   const auto it = sensor_paths.find(std::string(name));
   if (it == sensor_paths.end())
-    throw IoError(manifest_path.string() + ": sensor '" + std::string(name) +
+    throw IoError(display_path(manifest_path) + ": sensor '" + std::string(name) +
                   "' has no file or folder (it reads from bag topic '" + sensor(name).topic + "')");
   return it->second;
 }
@@ -71,9 +77,9 @@ Mission load_mission(const fs::path& dir_in) {
   mission.dir = fs::absolute(dir_in, ec).lexically_normal();
   mission.manifest_path = mission.dir / "mission.yaml";
   if (!fs::is_regular_file(mission.manifest_path))
-    throw IoError(mission.manifest_path.string() +
+    throw IoError(display_path(mission.manifest_path) +
                   ": not found (a mission bundle has mission.yaml at its root)");
-  const std::string manifest_name = mission.manifest_path.string();
+  const std::string manifest_name = display_path(mission.manifest_path);
   const nlohmann::json document = load_yaml_file(mission.manifest_path);
   try {
     mission.manifest = proto::MissionManifest::from_json(document, "");
@@ -83,7 +89,8 @@ Mission load_mission(const fs::path& dir_in) {
 
   const Resolver resolver(mission.dir, manifest_name);
   const auto& m = mission.manifest;
-  if (!m.bag.empty()) mission.bag_path = resolver.resolve(m.bag, "bag", Kind::kFile);
+  // A ROS1 .bag or a ROS 2 .mcap/.db3 file, or a rosbag2 folder (bag_source.h).
+  if (!m.bag.empty()) mission.bag_path = resolver.resolve(m.bag, "bag", Kind::kFileOrFolder);
   for (size_t i = 0; i < m.sensors.size(); ++i) {
     const auto& s = m.sensors[i];
     const std::string item = "sensors[" + std::to_string(i) + "]";

@@ -15,7 +15,7 @@ struct Mission {
   std::filesystem::path dir;            // absolute bundle folder
   std::filesystem::path manifest_path;  // dir / mission.yaml
   proto::MissionManifest manifest;
-  std::filesystem::path bag_path;  // empty without a bag
+  std::filesystem::path bag_path;  // empty without a bag; a file or a rosbag2 folder
   // By sensor name: the CSV file, or the scans/images folder; absent for bag topics.
   std::map<std::string, std::filesystem::path> sensor_paths;
   // By trajectory name (map, odometry, ground_truth): TUM files; absent for bag topics.

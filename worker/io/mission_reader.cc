@@ -1,5 +1,6 @@
 #include "worker/io/mission_reader.h"
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/stream_csv.h"
 #include "worker/io/tum.h"
@@ -10,14 +11,14 @@ using proto::SensorType;
 
 MissionReader::MissionReader(Mission mission) : mission_(std::move(mission)) {
   if (mission_.bag_path.empty()) return;
-  bag_ = std::make_unique<BagReader>(mission_.bag_path);
+  bag_ = open_bag(mission_.bag_path);
   // Every topic mission.yaml names must be in the bag: fail now, naming the field.
   auto check = [&](const std::string& topic, const std::string& field) {
     if (topic.empty()) return;
     try {
       bag_->topic(topic);
     } catch (const IoError& e) {
-      throw IoError(mission_.manifest_path.string() + ": " + field + ": " + e.what());
+      throw IoError(display_path(mission_.manifest_path) + ": " + field + ": " + e.what());
     }
   };
   const auto& m = mission_.manifest;
@@ -32,7 +33,7 @@ const proto::SensorSpec& MissionReader::expect(const std::string& sensor, Sensor
   const proto::SensorSpec* spec = mission_.manifest.find_sensor(sensor);
   if (!spec) (void)mission_.sensor(sensor);  // throws naming the mission's sensors
   if (spec->type != type)
-    throw IoError(mission_.manifest_path.string() + ": sensor '" + sensor + "' is of type " +
+    throw IoError(display_path(mission_.manifest_path) + ": sensor '" + sensor + "' is of type " +
                   proto::to_string(spec->type) + ", not " + proto::to_string(type));
   return *spec;
 }
@@ -55,7 +56,7 @@ DvlRangesSeries MissionReader::read_dvl_ranges(const std::string& sensor) const 
 DepthSeries MissionReader::read_depth(const std::string& sensor) const {
   const auto& s = expect(sensor, SensorType::kDepth);
   if (s.file.empty())
-    throw IoError(mission_.manifest_path.string() + ": sensor '" + sensor +
+    throw IoError(display_path(mission_.manifest_path) + ": sensor '" + sensor +
                   "' holds depth-camera scans, not a pressure-depth CSV (use open_scans)");
   return read_depth_csv(mission_.sensor_path(sensor));
 }
@@ -77,7 +78,7 @@ ScanReadOptions MissionReader::scan_options(const std::string& sensor) const {
 std::unique_ptr<ScanSource> MissionReader::open_scans(const std::string& sensor) const {
   const auto& s = mission_.sensor(sensor);
   if (!s.is_scans())
-    throw IoError(mission_.manifest_path.string() + ": sensor '" + sensor + "' (" +
+    throw IoError(display_path(mission_.manifest_path) + ": sensor '" + sensor + "' (" +
                   proto::to_string(s.type) + ") has no scans");
   if (!s.topic.empty()) return bag_->open_scans(s.topic, scan_options(sensor));
   return std::make_unique<ScanFolderReader>(mission_.sensor_path(sensor), scan_options(sensor));
@@ -96,7 +97,7 @@ bool MissionReader::has_trajectory(const std::string& name) const {
 Trajectory MissionReader::read_trajectory(const std::string& name) const {
   const auto it = mission_.manifest.trajectories.find(name);
   if (it == mission_.manifest.trajectories.end())
-    throw IoError(mission_.manifest_path.string() + ": no trajectory '" + name +
+    throw IoError(display_path(mission_.manifest_path) + ": no trajectory '" + name +
                   "' under trajectories");
   if (!it->second.topic.empty()) return bag_->read_trajectory(it->second.topic);
   return read_tum(mission_.trajectory_paths.at(name));

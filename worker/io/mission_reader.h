@@ -1,5 +1,6 @@
 // Reads a mission's data whatever the source: CSV/TUM/PCD/PLY/PNG files or bag topics, as
-// mission.yaml says. Downstream code asks for a sensor by name and gets typed values.
+// mission.yaml says (bags: ROS1, or ROS 2 as a rosbag2 folder or one .mcap/.db3 file). Downstream
+// code asks for a sensor by name and gets typed values.
 #pragma once
 
 #include <memory>
@@ -8,7 +9,7 @@
 #include <vector>
 
 #include "worker/core/pose.h"
-#include "worker/io/bag_reader.h"
+#include "worker/io/bag_source.h"
 #include "worker/io/image_source.h"
 #include "worker/io/loop_closures.h"
 #include "worker/io/mission.h"
@@ -25,7 +26,7 @@ class MissionReader {
 
   const Mission& mission() const { return mission_; }
   const proto::MissionManifest& manifest() const { return mission_.manifest; }
-  const BagReader* bag() const { return bag_.get(); }
+  const BagSource* bag() const { return bag_.get(); }
 
   // Each fails naming the sensor when it is not of that type, and the file/topic on bad data.
   ImuSeries read_imu(const std::string& sensor) const;
@@ -52,7 +53,7 @@ class MissionReader {
   const proto::SensorSpec& expect(const std::string& sensor, proto::SensorType type) const;
 
   Mission mission_;
-  std::unique_ptr<BagReader> bag_;
+  std::unique_ptr<BagSource> bag_;
   mutable std::optional<std::vector<StaticTransform>> tf_static_;
 };
 

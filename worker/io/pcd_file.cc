@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/mesh_parse_util.h"
 #include "worker/io/scan_file.h"
@@ -93,15 +94,16 @@ struct PcdHeader {
 
 PcdHeader read_header(const fs::path& path) {
   const std::string file = path.string();
+  const std::string name = display_path(path);
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw IoError(file + ": not found");
+  if (!fs::is_regular_file(path, ec)) throw IoError(name + ": not found");
   // PCL accepts a header cut before its DATA line as an empty cloud: require the line.
   {
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
     std::string head(1 << 16, '\0');
     head.resize(f ? std::fread(head.data(), 1, head.size(), f.get()) : 0);
     if (head.rfind("DATA ", 0) != 0 && head.find("\nDATA ") == std::string::npos)
-      throw IoError(file + ": malformed PCD header: no DATA line (truncated header?)");
+      throw IoError(name + ": malformed PCD header: no DATA line (truncated header?)");
   }
   PcdHeader h;
   Eigen::Vector4f origin;
@@ -109,10 +111,10 @@ PcdHeader read_header(const fs::path& path) {
   int version = 0;
   pcl::PCDReader reader;
   if (reader.readHeader(file, h.cloud, origin, orientation, version, h.data_type, h.data_idx) < 0)
-    throw IoError(file +
+    throw IoError(name +
                   ": malformed PCD header (expected VERSION, FIELDS, SIZE, TYPE, COUNT, "
                   "WIDTH, HEIGHT, POINTS, DATA)");
-  if (h.data_type < 0 || h.data_type > 2) throw IoError(file + ": unknown PCD DATA encoding");
+  if (h.data_type < 0 || h.data_type > 2) throw IoError(name + ": unknown PCD DATA encoding");
   return h;
 }
 
@@ -120,11 +122,12 @@ PcdHeader read_header(const fs::path& path) {
 // bytes missing (PCL's own message is generic).
 void check_body_size(const fs::path& path, const PcdHeader& h) {
   const std::string file = path.string();
+  const std::string name = display_path(path);
   const uint64_t file_size = fs::file_size(path);
   const uint64_t points = static_cast<uint64_t>(h.cloud.width) * h.cloud.height;
   const uint64_t body = points * h.cloud.point_step;
   if (h.data_type == 1 && h.data_idx + body > file_size)
-    throw IoError(file + ": truncated PCD: " + std::to_string(points) + " points of " +
+    throw IoError(name + ": truncated PCD: " + std::to_string(points) + " points of " +
                   std::to_string(h.cloud.point_step) + " bytes need " + std::to_string(body) +
                   " bytes of data, the file has " +
                   std::to_string(file_size - std::min<uint64_t>(file_size, h.data_idx)));
@@ -133,12 +136,12 @@ void check_body_size(const fs::path& path, const PcdHeader& h) {
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
     if (!f || std::fseek(f.get(), h.data_idx, SEEK_SET) != 0 ||
         std::fread(sizes, 4, 2, f.get()) != 2)
-      throw IoError(file + ": truncated PCD: missing the binary_compressed size header");
+      throw IoError(name + ": truncated PCD: missing the binary_compressed size header");
     if (h.data_idx + 8ull + sizes[0] > file_size)
-      throw IoError(file + ": truncated PCD: compressed body of " + std::to_string(sizes[0]) +
+      throw IoError(name + ": truncated PCD: compressed body of " + std::to_string(sizes[0]) +
                     " bytes, the file has " + std::to_string(file_size - h.data_idx - 8));
     if (sizes[1] != body)
-      throw IoError(file + ": malformed PCD: compressed body unpacks to " +
+      throw IoError(name + ": malformed PCD: compressed body unpacks to " +
                     std::to_string(sizes[1]) + " bytes, the header needs " + std::to_string(body));
   }
 }
@@ -148,6 +151,7 @@ void check_body_size(const fs::path& path, const PcdHeader& h) {
 // Rows hold the sum of COUNT over FIELDS values, padding fields ('_') included, as in PCL.
 void check_ascii_body(const fs::path& path, const PcdHeader& h) {
   const std::string file = path.string();
+  const std::string name = display_path(path);
   TextLines lines(path);
   size_t values_per_row = 0;
   for (const auto& f : h.cloud.fields) values_per_row += f.count;
@@ -167,7 +171,7 @@ void check_ascii_body(const fs::path& path, const PcdHeader& h) {
       if (first_extra_line == 0) first_extra_line = lines.line_number();
       continue;
     }
-    const std::string where = file + ":" + std::to_string(lines.line_number()) + ": data row " +
+    const std::string where = name + ":" + std::to_string(lines.line_number()) + ": data row " +
                               std::to_string(rows) + ": ";
     if (tokens.size() != values_per_row)
       throw IoError(where + "expected " + std::to_string(values_per_row) +
@@ -180,10 +184,10 @@ void check_ascii_body(const fs::path& path, const PcdHeader& h) {
     }
   }
   if (rows < points)
-    throw IoError(file + ": truncated PCD: POINTS declares " + std::to_string(points) +
+    throw IoError(name + ": truncated PCD: POINTS declares " + std::to_string(points) +
                   " points, the ascii body has " + std::to_string(rows) + " rows");
   if (rows > points)
-    throw IoError(file + ":" + std::to_string(first_extra_line) + ": " +
+    throw IoError(name + ":" + std::to_string(first_extra_line) + ": " +
                   std::to_string(rows - points) + " data rows beyond the " +
                   std::to_string(points) + " points the header declares (POINTS " +
                   std::to_string(points) + ")");
@@ -195,28 +199,29 @@ ScanFileInfo read_pcd_info(const fs::path& path) {
   const PcdHeader h = read_header(path);
   ScanFileInfo info;
   info.num_points = static_cast<size_t>(h.cloud.width) * h.cloud.height;
-  info.fields = fields_of(h.cloud, path.string());
+  info.fields = fields_of(h.cloud, display_path(path));
   info.format = std::string("pcd ") + kEncodings[h.data_type];
   return info;
 }
 
 PointCloud read_pcd(const fs::path& path, TimeNs t_ns, const ScanReadOptions& options) {
   const std::string file = path.string();
+  const std::string name = display_path(path);
   const PcdHeader h = read_header(path);
   check_body_size(path, h);
   if (h.data_type == 0) check_ascii_body(path, h);
   pcl::PCLPointCloud2 cloud;
   pcl::PCDReader reader;
   if (reader.read(file, cloud) < 0)
-    throw IoError(file + ": malformed or truncated PCD " + kEncodings[h.data_type] + " body (" +
+    throw IoError(name + ": malformed or truncated PCD " + kEncodings[h.data_type] + " body (" +
                   std::to_string(static_cast<uint64_t>(h.cloud.width) * h.cloud.height) +
                   " points expected)");
   const size_t points = static_cast<size_t>(cloud.width) * cloud.height;
   if (cloud.data.size() < points * cloud.point_step)
-    throw IoError(file + ": truncated PCD: fewer data bytes than " + std::to_string(points) +
+    throw IoError(name + ": truncated PCD: fewer data bytes than " + std::to_string(points) +
                   " points");
-  PackedCloudView view{cloud.data.data(), points, cloud.point_step, fields_of(cloud, file)};
-  return unpack_cloud(view, t_ns, options, file);
+  PackedCloudView view{cloud.data.data(), points, cloud.point_step, fields_of(cloud, name)};
+  return unpack_cloud(view, t_ns, options, name);
 }
 
 void write_pcd(const fs::path& path, const PointCloud& cloud, const ScanWriteOptions& options) {

@@ -6,6 +6,7 @@
 #include <string_view>
 #include <vector>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/mesh_parse_util.h"
 #include "worker/io/ply_header.h"
@@ -284,16 +285,17 @@ void check_binary_rest(const std::string& bytes, const PlyCloudLayout& layout,
 ScanFileInfo read_ply_info(const fs::path& path) {
   // Headers are small: read the first 64 KiB only.
   const std::string file = path.string();
+  const std::string name = display_path(path);
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
-  if (!f) throw IoError(file + ": cannot open");
+  if (!f) throw IoError(name + ": cannot open");
   std::string head(1 << 16, '\0');
   head.resize(std::fread(head.data(), 1, head.size(), f.get()));
-  const PlyCloudLayout h = parse_layout(head, file);
+  const PlyCloudLayout h = parse_layout(head, name);
   return {h.num_vertices, h.fields, std::string("ply ") + to_string(h.header.format)};
 }
 
 PointCloud read_ply(const fs::path& path, TimeNs t_ns, const ScanReadOptions& options) {
-  const std::string file = path.string();
+  const std::string file = display_path(path);
   const std::string bytes = read_file_bytes(path);
   const PlyCloudLayout h = parse_layout(bytes, file);
   const size_t body_bytes = bytes.size() - h.header.body_offset;

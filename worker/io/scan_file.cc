@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 
 namespace keel::io {
@@ -18,7 +19,7 @@ Format format_of(const fs::path& path) {
                  [](unsigned char c) { return std::tolower(c); });
   if (ext == ".pcd") return Format::kPcd;
   if (ext == ".ply") return Format::kPly;
-  throw IoError(path.string() + ": unknown scan format '" + ext + "' (expected .pcd or .ply)");
+  throw IoError(display_path(path) + ": unknown scan format '" + ext + "' (expected .pcd or .ply)");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "worker/io/scan_source.h"
 
+#include "worker/io/display_path.h"
 #include "worker/io/scan_file.h"
 
 namespace keel::io {
@@ -15,7 +16,7 @@ bool ScanFolderReader::next(PointCloud& cloud) {
 }
 
 std::string ScanFolderReader::current_source() const {
-  return next_ == 0 ? std::string() : entries_[next_ - 1].path.string();
+  return next_ == 0 ? std::string() : display_path(entries_[next_ - 1].path);
 }
 
 }  // namespace keel::io

@@ -6,23 +6,24 @@
 #include <limits>
 #include <memory>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 
 namespace keel::io {
 
 std::string read_file_bytes(const std::filesystem::path& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!file) throw IoError(path.string() + ": cannot open: " + std::strerror(errno));
+  if (!file) throw IoError(display_path(path) + ": cannot open: " + std::strerror(errno));
   std::string bytes;
   char buffer[1 << 16];
   size_t n;
   while ((n = std::fread(buffer, 1, sizeof(buffer), file.get())) > 0) bytes.append(buffer, n);
-  if (std::ferror(file.get())) throw IoError(path.string() + ": read error");
+  if (std::ferror(file.get())) throw IoError(display_path(path) + ": read error");
   return bytes;
 }
 
 TextLines::TextLines(const std::filesystem::path& path)
-    : name_(path.string()), text_(read_file_bytes(path)) {}
+    : name_(display_path(path)), text_(read_file_bytes(path)) {}
 
 bool TextLines::next(std::string_view& line) {
   if (position_ >= text_.size()) return false;

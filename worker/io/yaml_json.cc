@@ -6,6 +6,7 @@
 #include <limits>
 #include <regex>
 
+#include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/text_lines.h"
 
@@ -81,7 +82,7 @@ nlohmann::json yaml_to_json(const std::string& yaml_text, const std::string& sou
 }
 
 nlohmann::json load_yaml_file(const std::filesystem::path& path) {
-  return yaml_to_json(read_file_bytes(path), path.string());
+  return yaml_to_json(read_file_bytes(path), display_path(path));
 }
 
 }  // namespace keel::io

@@ -1,7 +1,8 @@
 // Stage `ingest` (docs/mission-format.md): loads mission.yaml, reads every stream, every scan
 // and every image header once (one scan in memory at a time) and reports per sensor what the
 // bundle holds: counts, time spans, measured vs nominal rate, gaps, point statistics and the
-// span of the per-point time field; per trajectory: poses, span and path length.
+// span of the per-point time field; per trajectory: poses, span and path length; with a CAD
+// mesh, its size, area, closedness, degenerate triangles and a units check (io::check_mesh).
 #include "worker/pipeline/ingest_stage.h"
 
 #include <algorithm>
@@ -9,6 +10,9 @@
 #include <limits>
 
 #include "proto/contract_error.h"
+#include "worker/io/display_path.h"
+#include "worker/io/mesh_check.h"
+#include "worker/io/mesh_reader.h"
 #include "worker/io/mission_reader.h"
 #include "worker/pipeline/stage_options.h"
 
@@ -104,7 +108,10 @@ class IngestStage : public Stage {
     const auto& manifest = reader.manifest();
     json warnings = json::array();
     json sensors = json::object();
-    const size_t units = manifest.sensors.size() + manifest.trajectories.size() + 1;
+    const std::filesystem::path cad_path =
+        !context.cad_path.empty() ? context.cad_path : reader.mission().cad_mesh_path;
+    const size_t units =
+        manifest.sensors.size() + manifest.trajectories.size() + (cad_path.empty() ? 1 : 2);
     size_t done = 0;
     auto progress = [&](double within) {
       context.progress((done + within) / static_cast<double>(units));
@@ -130,6 +137,15 @@ class IngestStage : public Stage {
     }
     context.check_canceled();
     const auto loops = reader.read_loop_closures();
+    json cad = nullptr;
+    if (!cad_path.empty()) {
+      ++done;
+      progress(0.0);
+      context.check_canceled();
+      cad = cad_report(cad_path, warnings);
+      context.log("cad: " + std::to_string(cad["num_faces"].get<size_t>()) + " triangles, " +
+                  (cad["closed"].get<bool>() ? "closed" : "open"));
+    }
     context.progress(1.0);
 
     StageResult result;
@@ -146,6 +162,7 @@ class IngestStage : public Stage {
         {"sensors", sensors},
         {"trajectories", trajectories},
         {"loop_closures", loops.size()},
+        {"cad", cad},
         {"warnings", warnings}};
     return result;
   }
@@ -281,6 +298,21 @@ class IngestStage : public Stage {
     }
     json r = stamp_report(stamps, s.rate_hz, options, s.name, warnings);
     r["formats"] = sizes;  // [width, height, channels, bit_depth] seen
+    return r;
+  }
+
+  // A mesh that cannot serve as a CAD prior fails here, naming the problem (read_mesh refuses
+  // non-finite vertices and meshes without faces, naming the file and line); what it can
+  // serve with goes into the report and the warnings.
+  static json cad_report(const std::filesystem::path& path, json& warnings) {
+    const TriangleMesh mesh = io::read_mesh(path);
+    const io::MeshCheckReport check = io::check_mesh(mesh);
+    if (check.degenerate_faces() == check.num_faces)
+      throw std::runtime_error(io::display_path(path) + ": all " + std::to_string(check.num_faces) +
+                               " triangles are degenerate (no surface to align to)");
+    json r = check.to_json();
+    r["file"] = path.filename().string();
+    for (const auto& w : check.warnings) warnings.push_back("cad: " + w.message);
     return r;
   }
 

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <utility>
 
+#include "worker/io/display_path.h"
+
 namespace keel::pipeline {
 
 namespace {
@@ -151,6 +153,8 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     const auto start = Clock::now();
     StageResult stage_result;
     try {
+      // Errors name the user's files as in their bundle, not this worker's copy of it.
+      const io::DisplayRoots roots({spec.mission_dir, spec.cad_path});
       stage_result = stages[i]->run(context);
       check_artifacts(stage_result, spec.work_dir);
     } catch (const Canceled&) {

@@ -22,6 +22,7 @@
 #include <limits>
 
 #include "proto/contract_error.h"
+#include "worker/io/display_path.h"
 #include "worker/io/mission_reader.h"
 #include "worker/io/tum.h"
 #include "worker/io/yaml_json.h"
@@ -518,7 +519,7 @@ DvlTruth read_dvl_truth(const io::Mission& mission, const std::string& dvl_senso
     truth.R_body_dvl = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
   }
   if (!truth.scale && !truth.R_body_dvl)
-    warnings.push_back(mission.ground_truth_path.string() +
+    warnings.push_back(io::display_path(mission.ground_truth_path) +
                        ": no dvl_scale and no DVL extrinsic to compare with");
   return truth;
 }

@@ -97,5 +97,98 @@ TEST(IngestStage, ImageSizeDifferentFromTheCameraModelIsAnError) {
                             {"img_1.png", "9x6", "8x6"});
 }
 
+// A cube of side `side_m` with one corner at the origin as OBJ text: 8 vertices, 12 outward
+// triangles (two per face); `skip_face` in [0, 6) leaves out that face's two triangles.
+std::string cube_obj(double side_m, int skip_face = -1) {
+  std::string text;
+  for (int i = 0; i < 8; ++i)
+    text += "v " + std::to_string(side_m * (i & 1)) + " " + std::to_string(side_m * (i >> 1 & 1)) +
+            " " + std::to_string(side_m * (i >> 2 & 1)) + "\n";
+  // Quads (1-based, counter-clockwise from outside): -z, +z, -y, +y, -x, +x.
+  const int quads[6][4] = {{1, 3, 4, 2}, {5, 6, 8, 7}, {1, 2, 6, 5},
+                           {3, 7, 8, 4}, {1, 5, 7, 3}, {2, 4, 8, 6}};
+  for (int f = 0; f < 6; ++f) {
+    if (f == skip_face) continue;
+    const int* q = quads[f];
+    text += "f " + std::to_string(q[0]) + " " + std::to_string(q[1]) + " " + std::to_string(q[2]) +
+            "\n";
+    text += "f " + std::to_string(q[0]) + " " + std::to_string(q[2]) + " " + std::to_string(q[3]) +
+            "\n";
+  }
+  return text;
+}
+
+nlohmann::json ingest_with_cad(const io::testing::TempDir& dir, const std::string& obj_text) {
+  io::testing::write_bundle(dir.path());
+  io::testing::write_text(dir / "cad" / "hull.obj", obj_text);
+  StageContext context;
+  context.mission_dir = dir.path();
+  context.cad_path = dir / "cad" / "hull.obj";
+  return make_ingest_stage()->run(context).report;
+}
+
+bool has_warning(const nlohmann::json& report, const std::string& needle) {
+  for (const auto& w : report["warnings"])
+    if (w.get<std::string>().find(needle) != std::string::npos) return true;
+  return false;
+}
+
+TEST(IngestStage, UnitCubeCadIsTwelveTrianglesOfAreaSixAndClosed) {
+  TempDir dir;
+  const auto r = ingest_with_cad(dir, cube_obj(1.0));
+  const auto& cad = r["cad"];
+  EXPECT_EQ(cad["file"], "hull.obj");
+  EXPECT_EQ(cad["num_faces"], 12);
+  EXPECT_EQ(cad["num_vertices"], 8);
+  EXPECT_EQ(cad["num_edges"], 18);  // Euler: 8 - 18 + 12 = 2
+  EXPECT_NEAR(cad["surface_area_m2"].get<double>(), 6.0, 1e-12);
+  EXPECT_EQ(cad["bbox_min"], nlohmann::json({0.0, 0.0, 0.0}));
+  EXPECT_EQ(cad["bbox_max"], nlohmann::json({1.0, 1.0, 1.0}));
+  EXPECT_TRUE(cad["closed"].get<bool>());
+  EXPECT_EQ(cad["boundary_edges"], 0);
+  EXPECT_EQ(cad["non_manifold_edges"], 0);
+  EXPECT_EQ(cad["degenerate_faces"], 0);
+  EXPECT_EQ(cad["inconsistent_edges"], 0);
+  EXPECT_TRUE(cad["warnings"].empty()) << cad.dump();
+  EXPECT_FALSE(has_warning(r, "cad:")) << r["warnings"].dump();
+}
+
+TEST(IngestStage, CubeWithOneFaceRemovedHasFourBoundaryEdges) {
+  TempDir dir;
+  const auto r = ingest_with_cad(dir, cube_obj(1.0, /*skip_face=*/3));
+  const auto& cad = r["cad"];
+  EXPECT_EQ(cad["num_faces"], 10);
+  EXPECT_NEAR(cad["surface_area_m2"].get<double>(), 5.0, 1e-12);
+  EXPECT_EQ(cad["boundary_edges"], 4);
+  EXPECT_FALSE(cad["closed"].get<bool>());
+  EXPECT_TRUE(has_warning(r, "cad: 4 boundary edges")) << r["warnings"].dump();
+}
+
+TEST(IngestStage, CadInMillimetresOrKilometresIsFlagged) {
+  TempDir dir;
+  // A 30 m hull written in millimetres.
+  auto r = ingest_with_cad(dir, cube_obj(30000.0));
+  EXPECT_NEAR(r["cad"]["surface_area_m2"].get<double>(), 6 * 30000.0 * 30000.0, 1e-3);
+  EXPECT_TRUE(has_warning(r, "millimetres")) << r["warnings"].dump();
+  // A 200 m hull written in kilometres.
+  r = ingest_with_cad(dir, cube_obj(0.2));
+  EXPECT_TRUE(has_warning(r, "kilometres")) << r["warnings"].dump();
+  // A 30 m hull in metres is not flagged.
+  r = ingest_with_cad(dir, cube_obj(30.0));
+  EXPECT_FALSE(has_warning(r, "cad:")) << r["warnings"].dump();
+}
+
+TEST(IngestStage, CadThatCannotServeIsRefusedNamingTheProblem) {
+  TempDir dir;
+  std::string nan_vertex = cube_obj(1.0);
+  nan_vertex.replace(nan_vertex.find("v 1.000000"), 10, "v nan");
+  io::testing::expect_error([&] { ingest_with_cad(dir, nan_vertex); },
+                            {"hull.obj:2", "non-finite"});
+  io::testing::expect_error([&] { ingest_with_cad(dir, "v 0 0 0\nv 1 0 0\nv 0 1 0\n"); },
+                            {"hull.obj", "no faces"});
+  io::testing::expect_error([&] { ingest_with_cad(dir, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"); },
+                            {"hull.obj", "all 1 triangles are degenerate"});
+}
+
 }  // namespace
 }  // namespace keel::pipeline

@@ -6,3 +6,4 @@ keel_test(io/draco_codec SOURCES ${CMAKE_CURRENT_LIST_DIR}/draco_codec_test.cc D
 keel_test(io/replaced_file SOURCES ${CMAKE_CURRENT_LIST_DIR}/replaced_file_test.cc DEPS keel_mesh_io)
 keel_test(io/ply_header SOURCES ${CMAKE_CURRENT_LIST_DIR}/ply_header_test.cc DEPS keel_mesh_io)
 keel_test(io/draco_summary SOURCES ${CMAKE_CURRENT_LIST_DIR}/draco_summary_test.cc DEPS keel_mesh_io draco::draco)
+keel_test(io/display_path SOURCES ${CMAKE_CURRENT_LIST_DIR}/display_path_test.cc DEPS keel_mesh_io)

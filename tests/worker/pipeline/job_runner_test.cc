@@ -9,6 +9,9 @@
 #include <limits>
 #include <thread>
 
+#include "tests/worker/pipeline/test_missions.h"
+#include "worker/pipeline/stage.h"
+
 namespace keel::pipeline {
 namespace {
 
@@ -290,6 +293,28 @@ TEST_F(JobRunnerTest, HookExceptionPropagatesInsteadOfFailingTheStage) {
     throw std::runtime_error("upload failed");
   };
   EXPECT_THROW(runner().run(spec_, hooks), std::runtime_error);
+}
+
+// A worker runs the job on its copy of the bundle, deep in its cache: errors name the files
+// as the user's bundle does (issue 18), the CAD mesh by its own name.
+TEST_F(JobRunnerTest, ErrorsNameFilesRelativeToTheMissionBundle) {
+  spec_.mission_dir = dir_ / "cache" / "jobs" / "j_1" / "mission";
+  keel::testing::write_tiny_mission(spec_.mission_dir);
+  {
+    std::ofstream imu(spec_.mission_dir / "imu.csv", std::ios::app);
+    imu << "1700000000.2,0,0,0.1,0,0,9.81\n";  // line 8: a decreasing stamp
+  }
+  spec_.stages = {"ingest"};
+  JobResult result = JobRunner(make_stage).run(spec_, {});
+  EXPECT_EQ(result.outcome, JobOutcome::kFailed);
+  EXPECT_EQ(result.error.rfind("ingest: imu.csv:8: ", 0), 0u) << result.error;
+
+  keel::testing::write_tiny_mission(spec_.mission_dir);
+  fs::create_directories(dir_ / "cache" / "jobs" / "j_1" / "cad");
+  spec_.cad_path = dir_ / "cache" / "jobs" / "j_1" / "cad" / "hull.obj";
+  std::ofstream(spec_.cad_path) << "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n";
+  result = JobRunner(make_stage).run(spec_, {});
+  EXPECT_EQ(result.error.rfind("ingest: hull.obj:3: ", 0), 0u) << result.error;
 }
 
 }  // namespace

@@ -159,8 +159,9 @@ TEST_F(LeaseLoopTest, StageErrorFailsTheJobAndTheWorkerTakesTheNext) {
   auto worker = start_worker("w1");
   const proto::Job failed = wait_job(broken.id, finished);
   EXPECT_EQ(failed.state, proto::JobState::kFailed);
-  EXPECT_EQ(failed.error.rfind("ingest: ", 0), 0u) << failed.error;
-  EXPECT_NE(failed.error.find("imu.csv"), std::string::npos) << failed.error;
+  // The user's names (mission.yaml, imu.csv), not the worker's cache paths (issue 18).
+  EXPECT_EQ(failed.error, "ingest: mission.yaml: sensors[0].file: 'imu.csv' not found")
+      << failed.error;
   // The failed job's report names the stage and the error.
   const auto artifacts = api_->list_artifacts(broken.id);
   ASSERT_EQ(artifacts.size(), 2u);
