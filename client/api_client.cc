@@ -89,7 +89,7 @@ ApiCallError error_from_answer(const HttpResult& result, const std::string& what
 
 ApiClient::ApiClient(ClientConfig config) : config_(std::move(config)) {
   connection_ = std::make_unique<Connection>(parse_base_url(config_.url), config_.timeout_s, stats_,
-                                             config_.token);
+                                             config_.token, config_.ca_file);
 }
 
 ApiClient::~ApiClient() = default;

@@ -22,8 +22,9 @@
 namespace keel::client {
 
 struct ClientConfig {
-  std::string url = "http://127.0.0.1:8080";  // http://host:port
+  std::string url = "http://127.0.0.1:8080";  // http[s]://host:port
   std::string token;
+  std::string ca_file;             // https: PEM CAs to trust instead of the system's
   double timeout_s = 60.0;         // deadline of one request
   int64_t chunk_bytes = 16 << 20;  // upload chunk size
   int retries = 5;                 // reconnect attempts on a dropped link (uploads, downloads)
@@ -84,10 +85,13 @@ class ApiClient {
   // dropped link or a killed client resumes at the server's committed offset.
   // `known_sha256` skips hashing the file first when the caller already knows its hash
   // (the server still checks it on completion: a wrong one gives 422 sha256_mismatch).
+  // `project` names the project the upload counts against ("" = the token's; a worker names
+  // its job's, so artifacts count against the job's project quota).
   // progress(offset, size) is called once at the start and after every committed chunk;
   // an exception thrown from it ends the upload, leaving it resumable.
   std::string upload_file(const std::filesystem::path& file, const std::filesystem::path& state_dir,
-                          const ProgressFn& progress = {}, const std::string& known_sha256 = "");
+                          const ProgressFn& progress = {}, const std::string& known_sha256 = "",
+                          const std::string& project = "");
   // Downloads a GET target (artifact or blob) to `destination` with Range resume: bytes go
   // to `destination.part` first and it is renamed when complete and its SHA-256 matches
   // `expected_sha256` (when given). A mismatch throws ApiCallError(0, "sha256_mismatch")
@@ -133,7 +137,7 @@ class ApiClient {
                               const std::string& body,
                               const std::map<std::string, std::string>& headers);
   std::optional<int64_t> upload_offset(const std::string& upload_id);
-  std::string create_upload(const std::string& name, int64_t size);
+  std::string create_upload(const std::string& name, int64_t size, const std::string& project);
   HttpResult put_chunk(const std::string& upload_id, const char* data, int64_t first, int64_t size,
                        int64_t total);
   bool blob_exists(const std::string& sha256);

@@ -10,8 +10,9 @@
 namespace keel::client {
 
 struct ApiClient::Connection : HttpConnection {
-  Connection(BaseUrl url, double timeout_s, TransferStats& stats, std::string token)
-      : HttpConnection(std::move(url), timeout_s, stats), token(std::move(token)) {}
+  Connection(BaseUrl url, double timeout_s, TransferStats& stats, std::string token,
+             const std::string& ca_file)
+      : HttpConnection(std::move(url), timeout_s, stats, ca_file), token(std::move(token)) {}
 
   // Host, User-Agent, Authorization: Bearer, then the caller's headers.
   void prepare(http::fields& fields, const std::map<std::string, std::string>& headers) const;

@@ -95,8 +95,9 @@ std::optional<int64_t> ApiClient::upload_offset(const std::string& upload_id) {
   return header_int(result, "upload-offset", connection_->describe("HEAD", target));
 }
 
-std::string ApiClient::create_upload(const std::string& name, int64_t size) {
-  proto::UploadRequest request{name, size};
+std::string ApiClient::create_upload(const std::string& name, int64_t size,
+                                     const std::string& project) {
+  proto::UploadRequest request{name, size, project};
   const nlohmann::json body = post_json("/v1/uploads", request.to_json());
   try {
     return proto::Upload::from_json(body).id;
@@ -137,7 +138,8 @@ HttpResult ApiClient::put_chunk(const std::string& upload_id, const char* data, 
 }
 
 std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_dir,
-                                   const ProgressFn& progress, const std::string& known_sha256) {
+                                   const ProgressFn& progress, const std::string& known_sha256,
+                                   const std::string& project) {
   std::error_code ec;
   const auto size_or_error = fs::file_size(file, ec);
   if (ec) throw file_error(file, "cannot read: " + ec.message());
@@ -161,7 +163,7 @@ std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_d
   std::optional<int64_t> offset;
   if (!upload_id.empty()) offset = upload_offset(upload_id);
   if (!offset || *offset > size) {
-    upload_id = create_upload(file.filename().string(), size);
+    upload_id = create_upload(file.filename().string(), size, project);
     write_state(state_file, upload_id);
     offset = 0;
   }
@@ -193,7 +195,7 @@ std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_d
       const ApiCallError error = error_from_answer(result, "PUT /v1/uploads/" + upload_id);
       if (result.status == 404) {  // expired or deleted on the server: start over
         fail_once(error.what());
-        upload_id = create_upload(file.filename().string(), size);
+        upload_id = create_upload(file.filename().string(), size, project);
         write_state(state_file, upload_id);
         offset = 0;
         continue;

@@ -24,6 +24,7 @@ struct FileSettings {
   std::optional<std::string> url;
   std::optional<std::string> token;
   std::optional<std::string> token_file;
+  std::optional<std::string> ca_file;
 };
 
 std::optional<std::string> string_key(const YAML::Node& root, const char* key,
@@ -44,16 +45,17 @@ FileSettings read_config_file(const fs::path& file) {
   FileSettings out;
   if (root.IsNull()) return out;
   if (!root.IsMap())
-    throw LocalFileError(file.string() + ": expected a map of url/token/token_file");
+    throw LocalFileError(file.string() + ": expected a map of url/token/token_file/ca_file");
   for (const auto& item : root) {
     const std::string key = item.first.as<std::string>();
-    if (key != "url" && key != "token" && key != "token_file")
+    if (key != "url" && key != "token" && key != "token_file" && key != "ca_file")
       throw LocalFileError(file.string() + ": unknown key '" + key +
-                           "' (known: url, token, token_file)");
+                           "' (known: url, token, token_file, ca_file)");
   }
   out.url = string_key(root, "url", file);
   out.token = string_key(root, "token", file);
   out.token_file = string_key(root, "token_file", file);
+  out.ca_file = string_key(root, "ca_file", file);
   return out;
 }
 
@@ -126,6 +128,14 @@ CliConfig resolve_cli_config(const CliFlags& flags, const EnvLookup& env) {
     out.token = read_token_file(token_file);
     out.token_source = config_file.string() + " token_file (" + token_file.string() + ")";
   }
+
+  const auto env_ca_file = env("KEEL_CA_FILE");
+  if (!flags.ca_file.empty())
+    out.ca_file = flags.ca_file;
+  else if (env_ca_file && !env_ca_file->empty())
+    out.ca_file = *env_ca_file;
+  else if (file.ca_file)
+    out.ca_file = relative_to(*file.ca_file, config_file).string();
   return out;
 }
 

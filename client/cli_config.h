@@ -1,8 +1,8 @@
 // Where `keel` finds its server URL and token: flags > environment > config file.
-//   flags:       --url, --token, --config (the config file's path)
-//   environment: KEEL_URL, KEEL_TOKEN, KEEL_TOKEN_FILE (a file holding the token)
+//   flags:       --url, --token, --ca-file, --config (the config file's path)
+//   environment: KEEL_URL, KEEL_TOKEN, KEEL_TOKEN_FILE (a file holding the token), KEEL_CA_FILE
 //   file:        $XDG_CONFIG_HOME/keel/config.yaml or ~/.config/keel/config.yaml with
-//                `url:`, `token:` and/or `token_file:`
+//                `url:`, `token:`, `token_file:` and/or `ca_file:`
 #pragma once
 
 #include <filesystem>
@@ -16,6 +16,7 @@ struct CliFlags {
   std::string url;          // "" = not given
   std::string token;        // "" = not given
   std::string config_file;  // "" = the default path
+  std::string ca_file;      // "" = not given
 };
 
 struct CliConfig {
@@ -23,6 +24,7 @@ struct CliConfig {
   std::string token;
   std::string url_source = "default";  // "--url", "KEEL_URL", "<file>", "default"
   std::string token_source = "none";   // "--token", "KEEL_TOKEN", "KEEL_TOKEN_FILE (<path>)", ...
+  std::string ca_file;  // https: PEM CAs to trust instead of the system's ("" = system)
 };
 
 // Reads an environment variable; nullopt when unset. Tests substitute their own.

@@ -22,6 +22,7 @@ ApiClient& CliContext::api() {
     ClientConfig client_config;
     client_config.url = config().url;
     client_config.token = config().token;
+    client_config.ca_file = config().ca_file;
     client_config.timeout_s = timeout_s;
     client_ = std::make_unique<ApiClient>(client_config);
   }

@@ -2,16 +2,23 @@
 // operation is an async Beast operation run to completion on a private io_context, which
 // is what makes `tcp_stream::expires_after` deadlines apply (Beast ignores them for
 // blocking calls). Internal to client/: ApiClient is the public face.
+//
+// https URLs speak TLS 1.2+ over the same TCP stream (Beast's OpenSSL stream) and always
+// verify the server: its chain against the system's CAs or `ca_file`, and its name against
+// the URL's host. There is no way to skip that.
 #pragma once
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 
 #include <chrono>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "client/api_client.h"
@@ -28,7 +35,8 @@ inline constexpr std::uint64_t kNoBodyLimit = std::numeric_limits<std::uint64_t>
 
 class HttpConnection {
  public:
-  HttpConnection(BaseUrl url, double timeout_s, TransferStats& stats);
+  // `ca_file`: PEM CA certificates to trust for https instead of the system's ("" = system).
+  HttpConnection(BaseUrl url, double timeout_s, TransferStats& stats, const std::string& ca_file = "");
 
   const BaseUrl& url() const { return url_; }
   // "METHOD http://host:port/target", for error messages.
@@ -55,8 +63,17 @@ class HttpConnection {
   void close();
 
  private:
+  using TlsStream = boost::beast::ssl_stream<boost::beast::tcp_stream&>;
+
   template <class Start>
   boost::beast::error_code run(Start&& start);
+  // Calls f(stream) with the TLS stream when there is one, else the TCP stream.
+  template <class F>
+  auto with_stream(F&& f) {
+    if (tls_) return f(*tls_);
+    return f(stream_);
+  }
+  void handshake(const std::string& what);
   bool peer_closed() const;
   std::chrono::steady_clock::duration timeout() const;
 
@@ -65,6 +82,8 @@ class HttpConnection {
   TransferStats& stats_;
   boost::asio::io_context ioc_;
   boost::beast::tcp_stream stream_;
+  std::unique_ptr<boost::asio::ssl::context> tls_context_;  // set for https
+  std::optional<TlsStream> tls_;                            // per connection, over stream_
   boost::beast::flat_buffer buffer_;
   boost::asio::ip::tcp::resolver::results_type endpoints_;
   bool open_ = false;
@@ -88,27 +107,35 @@ boost::beast::error_code HttpConnection::run(Start&& start) {
 template <class Body>
 boost::beast::error_code HttpConnection::write(http::request<Body>& request) {
   stream_.expires_after(timeout());
-  return run([&](auto handler) { http::async_write(stream_, request, std::move(handler)); });
+  return run([&](auto handler) {
+    with_stream([&](auto& stream) { http::async_write(stream, request, std::move(handler)); });
+  });
 }
 
 template <class Parser>
 boost::beast::error_code HttpConnection::read_header(Parser& parser) {
   stream_.expires_after(timeout());
-  return run(
-      [&](auto handler) { http::async_read_header(stream_, buffer_, parser, std::move(handler)); });
+  return run([&](auto handler) {
+    with_stream(
+        [&](auto& stream) { http::async_read_header(stream, buffer_, parser, std::move(handler)); });
+  });
 }
 
 template <class Parser>
 boost::beast::error_code HttpConnection::read_some(Parser& parser) {
   stream_.expires_after(timeout());
-  return run(
-      [&](auto handler) { http::async_read_some(stream_, buffer_, parser, std::move(handler)); });
+  return run([&](auto handler) {
+    with_stream(
+        [&](auto& stream) { http::async_read_some(stream, buffer_, parser, std::move(handler)); });
+  });
 }
 
 template <class Parser>
 boost::beast::error_code HttpConnection::read(Parser& parser) {
   stream_.expires_after(timeout());
-  return run([&](auto handler) { http::async_read(stream_, buffer_, parser, std::move(handler)); });
+  return run([&](auto handler) {
+    with_stream([&](auto& stream) { http::async_read(stream, buffer_, parser, std::move(handler)); });
+  });
 }
 
 template <class Body>

@@ -5,16 +5,25 @@
 
 namespace keel::client {
 
-std::string BaseUrl::origin() const { return "http://" + host + ":" + port + path_prefix; }
+std::string BaseUrl::origin() const {
+  return scheme() + "://" + host + ":" + port + path_prefix;
+}
 
 BaseUrl parse_base_url(const std::string& url) {
-  const std::string scheme = "http://";
   auto fail = [&](const std::string& why) {
     throw std::invalid_argument("server URL '" + url + "': " + why);
   };
-  if (url.compare(0, scheme.size(), scheme) != 0) fail("expected http://host:port");
-  std::string rest = url.substr(scheme.size());
   BaseUrl out;
+  std::string rest;
+  if (url.compare(0, 7, "http://") == 0) {
+    rest = url.substr(7);
+  } else if (url.compare(0, 8, "https://") == 0) {
+    rest = url.substr(8);
+    out.tls = true;
+    out.port = "443";
+  } else {
+    fail("expected http://host:port or https://host:port");
+  }
   const size_t slash = rest.find('/');
   if (slash != std::string::npos) {
     out.path_prefix = rest.substr(slash);

@@ -18,7 +18,10 @@ int run(int argc, char** argv) {
   app.footer(exit_code_help());
   app.require_subcommand(1);
   CliContext context;
-  app.add_option("--url", context.flags.url, "Server URL, http://host:port (env KEEL_URL)");
+  app.add_option("--url", context.flags.url,
+                 "Server URL, http://host:port or https://host:port (env KEEL_URL)");
+  app.add_option("--ca-file", context.flags.ca_file,
+                 "https: PEM CA certificates to trust instead of the system's (env KEEL_CA_FILE)");
   app.add_option("--token", context.flags.token, "API token (env KEEL_TOKEN or KEEL_TOKEN_FILE)");
   app.add_option("--config", context.flags.config_file,
                  "Config file (default ~/.config/keel/config.yaml)");

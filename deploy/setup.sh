@@ -31,6 +31,8 @@ packages=(
   cloudcompare
   # the web dashboard's browser tests
   chromium
+  # fuzzing (tests/fuzz: libFuzzer with ASan/UBSan) and the TLS tests' openssl command
+  clang libclang-rt-14-dev openssl
 )
 # Node.js and npm for web/'s packages: Debian's, unless the machine already has a Node.js with
 # npm (e.g. NodeSource's nodejs, which bundles npm and conflicts with Debian's npm package).

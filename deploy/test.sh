@@ -21,3 +21,19 @@ if [ "${KEEL_SKIP_FUZZ:-0}" != 1 ]; then
   ninja -C "$build-fuzz" -j "$(nproc)" keel_fuzzers
   ctest --test-dir "$build-fuzz" -L fuzz --output-on-failure
 fi
+# Issue 15, within CI's time: the network-facing tests again under ASan + UBSan (a second
+# tree holding only what they need), then every fuzz harness for a bounded time
+# (KEEL_CI_FUZZ_SECONDS each; 0 skips). KEEL_CI_HARDENING=0 skips both.
+if [ "${KEEL_CI_HARDENING:-1}" = 1 ]; then
+  asan="$build-asan"
+  cmake -G Ninja -S "$here" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEEL_SANITIZE=ON >/dev/null
+  targets=$(ninja -C "$asan" -t targets all | grep -oE '^test_(server|storage|proto|client)_[a-z0-9_]+' | sort -u)
+  ninja -C "$asan" -j "$(nproc)" keel keel-server $targets
+  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    ctest --test-dir "$asan" --output-on-failure -j "$(nproc)" -R '^(server|storage|proto|client)/' -LE heavy
+  fuzz_seconds="${KEEL_CI_FUZZ_SECONDS:-20}"
+  if [ "$fuzz_seconds" -gt 0 ]; then
+    KEEL_FUZZ_BUILD_DIR="$build-fuzz" KEEL_SIM="$build/bin/keel-sim" \
+      bash "$here/tests/fuzz/run_fuzzers.sh" "$fuzz_seconds"
+  fi
+fi

@@ -95,18 +95,22 @@ TokenRequest TokenRequest::from_json(const nlohmann::json& body, const std::stri
 }
 
 nlohmann::json Project::to_json() const {
-  return {{"name", name}, {"created_at_ms", created_at_ms}, {"quota_bytes", quota_bytes}};
+  return {{"name", name},
+          {"created_at_ms", created_at_ms},
+          {"quota_bytes", quota_bytes},
+          {"used_bytes", used_bytes}};
 }
 
 Project Project::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
-  r.reject_unknown({"name", "created_at_ms", "quota_bytes"});
+  r.reject_unknown({"name", "created_at_ms", "quota_bytes", "used_bytes"});
   Project out;
   out.name = r.required<std::string>("name");
   validate_project_name(out.name, r.child("name"));
   out.created_at_ms = r.optional<int64_t>("created_at_ms", 0);
   out.quota_bytes = r.optional<int64_t>("quota_bytes", 0);
   if (out.quota_bytes < 0) throw ContractError(r.child("quota_bytes") + ": expected bytes >= 0");
+  out.used_bytes = r.optional<int64_t>("used_bytes", 0);
   return out;
 }
 

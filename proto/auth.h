@@ -64,6 +64,7 @@ struct Project {
   std::string name;
   int64_t created_at_ms = 0;
   int64_t quota_bytes = 0;  // 0 = no quota
+  int64_t used_bytes = 0;   // what it holds now (Store::project_usage); filled by the server
 
   nlohmann::json to_json() const;
   static Project from_json(const nlohmann::json& body, const std::string& path = "");

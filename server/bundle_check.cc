@@ -71,7 +71,12 @@ struct Member {
 
 }  // namespace
 
-BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
+BundleSummary check_mission_bundle(const std::filesystem::path& tar_file,
+                                   const BundleLimits& limits) {
+  std::error_code size_error;
+  const auto tar_bytes = static_cast<int64_t>(std::filesystem::file_size(tar_file, size_error));
+  if (size_error) throw BundleError("bad_bundle", "bundle cannot be read: " + size_error.message());
+  const double max_file_bytes = limits.max_sparse_ratio * static_cast<double>(tar_bytes);
   ArchivePtr reader(archive_read_new(), &archive_read_free);
   if (!reader) throw std::runtime_error("libarchive: out of memory");
   archive_read_support_format_tar(reader.get());  // ustar, GNU and pax; no compression
@@ -93,13 +98,19 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
                                           std::to_string(summary.members) +
                                           " members: " + (error ? error : "unknown error"));
     }
-    ++summary.members;
+    if (++summary.members > limits.max_members)
+      throw BundleError("bad_bundle", "bundle has more than " + std::to_string(limits.max_members) +
+                                          " members (the limit)");
     const char* raw_name = archive_entry_pathname(entry);
     std::string name = raw_name ? raw_name : "";
     if (name.empty())
       throw BundleError("bad_bundle",
                         "member #" + std::to_string(summary.members) + " has no name");
     std::vector<std::string> parts = safe_components(name, "member");
+    if (static_cast<int>(parts.size()) > limits.max_depth)
+      throw BundleError("bad_bundle", "member '" + name.substr(0, 200) + "...' is nested " +
+                                          std::to_string(parts.size()) + " folders deep (limit " +
+                                          std::to_string(limits.max_depth) + ")");
     const mode_t type = archive_entry_filetype(entry);
     const char* hardlink = archive_entry_hardlink(entry);
 
@@ -111,6 +122,13 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file) {
       symlinks.insert(join(parts, parts.size()));
     } else if (type == AE_IFREG) {
       summary.file_bytes += archive_entry_size(entry);
+      if (static_cast<double>(summary.file_bytes) > max_file_bytes)
+        throw BundleError("bad_bundle",
+                          "member '" + name + "' makes the files add up to " +
+                              std::to_string(summary.file_bytes) + " bytes, more than the " +
+                              std::to_string(tar_bytes) +
+                              "-byte bundle holds (a sparse member that would unpack to "
+                              "more than was sent)");
     } else if (type != AE_IFDIR) {
       throw BundleError("bad_bundle",
                         "member '" + name + "': only files, folders and links are allowed");

@@ -28,12 +28,24 @@ class BundleError : public std::runtime_error {
   std::string code_;
 };
 
+// Bundles built to exhaust the server or a worker (tar bombs) are refused before anything is
+// unpacked. A plain tar stores every file byte, so files cannot add up to more than the
+// tar's own size, except through sparse members (GNU/pax sparse maps) whose declared size
+// costs nothing to send; those are refused when they would unpack to more than
+// `max_sparse_ratio` times the tar's size.
+struct BundleLimits {
+  int max_members = 1'000'000;  // one file per lidar sweep or image: hours of data
+  int max_depth = 64;           // folders nested in one member's name
+  double max_sparse_ratio = 1.0;
+};
+
 struct BundleSummary {
   int members = 0;         // entries in the tar
   int64_t file_bytes = 0;  // sum of regular file sizes
 };
 
 // Throws BundleError naming the offending member (or the tar itself).
-BundleSummary check_mission_bundle(const std::filesystem::path& tar_file);
+BundleSummary check_mission_bundle(const std::filesystem::path& tar_file,
+                                   const BundleLimits& limits = {});
 
 }  // namespace keel::server

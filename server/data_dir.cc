@@ -3,10 +3,12 @@
 #include <fcntl.h>
 #include <openssl/rand.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
 
 namespace keel::server {
@@ -62,6 +64,49 @@ bool ensure_initial_token(storage::Store& store, const std::filesystem::path& da
   write_file_atomically(data_dir / "token", token, 0600);
   store.add_token(token, storage::admin_token("initial"));
   return true;
+}
+
+std::filesystem::path ensure_worker_token(storage::Store& store,
+                                          const std::filesystem::path& data_dir) {
+  const std::filesystem::path file = data_dir / "worker-token";
+  std::string existing;
+  {
+    std::ifstream in(file);
+    std::getline(in, existing);
+  }
+  if (!existing.empty()) {
+    const auto info = store.check_token(existing);
+    if (info && info->role == proto::Role::kWorker && info->all_projects()) return file;
+  }
+  const std::string token = random_token();
+  storage::TokenSpec spec;
+  spec.label = "local workers";
+  spec.role = proto::Role::kWorker;
+  spec.project = proto::kAllProjects;
+  // The store first: a worker started between the two steps reads the old (refused) token
+  // and retries; the reverse order could leave a file whose token the store never had.
+  store.add_token(token, spec);
+  write_file_atomically(file, token, 0600);
+  return file;
+}
+
+int64_t free_bytes_at(const std::filesystem::path& folder) {
+  struct statvfs info {};
+  if (::statvfs(folder.c_str(), &info) != 0) return -1;
+  return static_cast<int64_t>(info.f_bavail) * static_cast<int64_t>(info.f_frsize);
+}
+
+int remove_stale_temp_files(const std::filesystem::path& data_dir) {
+  int removed = 0;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(data_dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && name.find(".tmp.") != std::string::npos) {
+      std::filesystem::remove(entry.path(), ec);
+      if (!ec) ++removed;
+    }
+  }
+  return removed;
 }
 
 ListenAddress parse_listen_address(const std::string& text) {

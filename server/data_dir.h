@@ -24,6 +24,21 @@ std::string random_token();
 // <data_dir>/token with mode 0600. Returns true when it made one.
 bool ensure_initial_token(storage::Store& store, const std::filesystem::path& data_dir);
 
+// The token the server's local workers (--workers N) use: a worker token of every project
+// kept in <data_dir>/worker-token (mode 0600). Reused while the store still accepts it as a
+// worker token; otherwise (first start, revoked, expired) a new one is made. Returns the file.
+std::filesystem::path ensure_worker_token(storage::Store& store,
+                                          const std::filesystem::path& data_dir);
+
+// Bytes free for an unprivileged writer on the filesystem holding `folder` (statvfs); -1 when
+// it cannot be read.
+int64_t free_bytes_at(const std::filesystem::path& folder);
+
+// Removes temporary files a crash left in the data folder's root (write_file_atomically's
+// "<name>.tmp.<pid>"); the store clears its own (blobs' tmp/, uploads without a row).
+// Returns how many it removed.
+int remove_stale_temp_files(const std::filesystem::path& data_dir);
+
 struct ListenAddress {
   std::string host;
   uint16_t port = 0;

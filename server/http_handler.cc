@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <cstdlib>
+#include <system_error>
 
 #include "proto/contract_error.h"
 #include "server/api_response.h"
@@ -17,49 +20,76 @@ namespace keel::server {
 
 namespace {
 
+// Who may call a route: a set of roles (docs/api.md, "Who may do what"). Open routes
+// (/healthz, /metrics) need no token; every /v1 route names its roles, and a token of
+// another role is answered 403 before anything is looked up (so a 403 says nothing about
+// whether an object exists).
+enum RoleBit : unsigned {
+  kOpen = 0,
+  kAdmin = 1u << static_cast<unsigned>(proto::Role::kAdmin),
+  kSubmitter = 1u << static_cast<unsigned>(proto::Role::kSubmitter),
+  kViewer = 1u << static_cast<unsigned>(proto::Role::kViewer),
+  kWorker = 1u << static_cast<unsigned>(proto::Role::kWorker),
+};
+constexpr unsigned kReaders = kAdmin | kSubmitter | kViewer;    // read jobs, logs, artifacts
+constexpr unsigned kWriters = kAdmin | kSubmitter;              // create, cancel, retry
+constexpr unsigned kUploaders = kAdmin | kSubmitter | kWorker;  // uploads (worker artifacts)
+constexpr unsigned kWorkers = kAdmin | kWorker;                 // the worker protocol
+
 struct Route {
   const char* method;
   const char* pattern;  // segments separated by '/', "*" matches one path parameter
   routes::RouteFn fn;
+  unsigned roles;
 };
 
 // Order matters only for readability: patterns do not overlap. "**" (last) matches the rest of
 // the path, one segment or more, joined by '/'.
 const Route kRoutes[] = {
-    {"GET", "healthz", routes::healthz},
-    {"GET", "metrics", routes::metrics},
-    {"POST", "v1/uploads", routes::create_upload},
-    {"HEAD", "v1/uploads/*", routes::head_upload},
-    {"GET", "v1/uploads/*", routes::get_upload},
-    {"PUT", "v1/uploads/*", routes::put_upload_chunk},
-    {"DELETE", "v1/uploads/*", routes::delete_upload},
-    {"POST", "v1/uploads/*/complete", routes::complete_upload},
-    {"GET", "v1/blobs/*", routes::get_blob},
-    {"POST", "v1/missions", routes::create_mission},
-    {"GET", "v1/missions", routes::list_missions},
-    {"GET", "v1/missions/*", routes::get_mission},
-    {"POST", "v1/jobs", routes::create_job},
-    {"POST", "v1/comparisons", routes::create_comparison},
-    {"GET", "v1/jobs", routes::list_jobs},
-    {"GET", "v1/jobs/*", routes::get_job},
-    {"GET", "v1/jobs/*/log", routes::read_job_log},
-    {"POST", "v1/jobs/*/cancel", routes::cancel_job},
-    {"POST", "v1/jobs/*/retry", routes::retry_job},
-    {"GET", "v1/jobs/*/artifacts", routes::list_job_artifacts},
-    {"POST", "v1/reprocess", routes::reprocess},
-    {"GET", "v1/artifacts/*", routes::get_artifact},
-    {"GET", "v1/artifacts/*/files/**", routes::get_artifact_file},
-    {"GET", "v1/batches/*", routes::get_batch},
-    {"GET", "v1/events", routes::job_events},
-    {"GET", "v1/queue", routes::queue_summary},
-    {"POST", "v1/worker/lease", routes::worker_lease},
-    {"POST", "v1/worker/jobs/*/release", routes::worker_release_job},
-    {"POST", "v1/worker/jobs/*/heartbeat", routes::worker_heartbeat},
-    {"POST", "v1/worker/jobs/*/artifacts", routes::worker_add_artifact},
-    {"POST", "v1/worker/jobs/*/stages/*/complete", routes::worker_complete_stage},
-    {"POST", "v1/worker/jobs/*/complete", routes::worker_complete_job},
-    {"POST", "v1/worker/jobs/*/fail", routes::worker_fail_job},
+    {"GET", "healthz", routes::healthz, kOpen},
+    {"GET", "metrics", routes::metrics, kOpen},
+    {"POST", "v1/uploads", routes::create_upload, kUploaders},
+    {"HEAD", "v1/uploads/*", routes::head_upload, kUploaders},
+    {"GET", "v1/uploads/*", routes::get_upload, kUploaders},
+    {"PUT", "v1/uploads/*", routes::put_upload_chunk, kUploaders},
+    {"DELETE", "v1/uploads/*", routes::delete_upload, kUploaders},
+    {"POST", "v1/uploads/*/complete", routes::complete_upload, kUploaders},
+    {"GET", "v1/blobs/*", routes::get_blob, kUploaders},
+    {"POST", "v1/missions", routes::create_mission, kWriters},
+    {"GET", "v1/missions", routes::list_missions, kReaders},
+    {"GET", "v1/missions/*", routes::get_mission, kReaders},
+    {"POST", "v1/jobs", routes::create_job, kWriters},
+    {"POST", "v1/comparisons", routes::create_comparison, kWriters},
+    {"GET", "v1/jobs", routes::list_jobs, kReaders},
+    {"GET", "v1/jobs/*", routes::get_job, kReaders},
+    {"GET", "v1/jobs/*/log", routes::read_job_log, kReaders},
+    {"POST", "v1/jobs/*/cancel", routes::cancel_job, kWriters},
+    {"POST", "v1/jobs/*/retry", routes::retry_job, kWriters},
+    {"GET", "v1/jobs/*/artifacts", routes::list_job_artifacts, kReaders},
+    {"POST", "v1/reprocess", routes::reprocess, kWriters},
+    {"GET", "v1/artifacts/*", routes::get_artifact, kReaders | kWorker},
+    {"GET", "v1/artifacts/*/files/**", routes::get_artifact_file, kReaders | kWorker},
+    {"GET", "v1/batches/*", routes::get_batch, kReaders},
+    {"GET", "v1/events", routes::job_events, kReaders},
+    {"GET", "v1/queue", routes::queue_summary, kReaders},
+    {"POST", "v1/worker/lease", routes::worker_lease, kWorkers},
+    {"POST", "v1/worker/jobs/*/release", routes::worker_release_job, kWorkers},
+    {"POST", "v1/worker/jobs/*/heartbeat", routes::worker_heartbeat, kWorkers},
+    {"POST", "v1/worker/jobs/*/artifacts", routes::worker_add_artifact, kWorkers},
+    {"POST", "v1/worker/jobs/*/stages/*/complete", routes::worker_complete_stage, kWorkers},
+    {"POST", "v1/worker/jobs/*/complete", routes::worker_complete_job, kWorkers},
+    {"POST", "v1/worker/jobs/*/fail", routes::worker_fail_job, kWorkers},
+    {"POST", "v1/tokens", routes::create_token, kAdmin},
+    {"GET", "v1/tokens", routes::list_tokens, kAdmin},
+    {"POST", "v1/tokens/*/revoke", routes::revoke_token, kAdmin},
+    {"GET", "v1/projects", routes::list_projects, kReaders},
+    {"GET", "v1/projects/*", routes::get_project, kReaders},
+    {"PUT", "v1/projects/*", routes::put_project, kAdmin},
 };
+
+bool role_allowed(unsigned roles, proto::Role role) {
+  return (roles & (1u << static_cast<unsigned>(role))) != 0;
+}
 
 // Matches `segments` against a pattern, collecting "*" segments into `params`.
 bool match(const char* pattern, const std::vector<std::string>& segments,
@@ -87,6 +117,13 @@ bool match(const char* pattern, const std::vector<std::string>& segments,
   return index == segments.size();
 }
 
+Response insufficient_storage(const std::string& detail) {
+  spdlog::warn("refused for lack of space: {}", detail);
+  return error_response(
+      507, "insufficient_storage",
+      "the server is out of disk space; nothing of this request was kept (" + detail + ")");
+}
+
 bool starts_with_v1(const std::vector<std::string>& segments) {
   return !segments.empty() && segments[0] == "v1";
 }
@@ -94,7 +131,7 @@ bool starts_with_v1(const std::vector<std::string>& segments) {
 }  // namespace
 
 HttpHandler::HttpHandler(storage::Store& store, HandlerOptions options)
-    : store_(store), options_(std::move(options)) {}
+    : store_(store), options_(std::move(options)), limiter_(options_.rate_limit) {}
 
 HttpHandler::~HttpHandler() = default;
 
@@ -118,6 +155,15 @@ Response HttpHandler::handle(const Request& request) {
     spdlog::warn("{} {}: {}", request.method, request.target, e.what());
     response = error_response(503, "unavailable", e.what());
     response.headers.set("Retry-After", "2");
+  } catch (const storage::StorageFull& e) {
+    response = insufficient_storage(e.what());
+  } catch (const std::system_error& e) {
+    if (e.code() == std::errc::no_space_on_device || e.code().value() == EDQUOT) {
+      response = insufficient_storage(e.what());
+    } else {
+      spdlog::error("{} {}: unexpected error: {}", request.method, request.target, e.what());
+      response = error_response(500, "internal", std::string("internal error: ") + e.what());
+    }
   } catch (const std::exception& e) {
     spdlog::error("{} {}: unexpected error: {}", request.method, request.target, e.what());
     response = error_response(500, "internal", std::string("internal error: ") + e.what());
@@ -144,12 +190,34 @@ Response HttpHandler::dispatch(const Request& request) {
                          challenge);
     }
     principal = std::move(*token);
+    const double now_s =
+        options_.monotonic_s
+            ? options_.monotonic_s()
+            : std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+                  .count();
+    if (const std::optional<double> wait = limiter_.take(principal.id, now_s)) {
+      const auto seconds = static_cast<int64_t>(std::ceil(*wait));
+      Headers headers;
+      headers.set("Retry-After", std::to_string(std::max<int64_t>(1, seconds)));
+      throw ApiException(429, "rate_limited",
+                         "token " + principal.id + " made more than " +
+                             std::to_string(static_cast<int64_t>(options_.rate_limit.rate_per_s)) +
+                             " requests per second (bursts of " +
+                             std::to_string(static_cast<int64_t>(options_.rate_limit.burst)) +
+                             "); retry after " + std::to_string(std::max<int64_t>(1, seconds)) +
+                             " s",
+                         headers);
+    }
   }
   std::vector<std::string> params;
   std::string allowed;
   for (const Route& route : kRoutes) {
     if (!match(route.pattern, target->segments, params)) continue;
     if (request.method == route.method) {
+      if (route.roles != kOpen && !role_allowed(route.roles, principal.role))
+        throw ApiException(403, "forbidden",
+                           "a " + proto::to_string(principal.role) + " token may not " +
+                               request.method + " " + target->path);
       routes::Call call{store_, request, *target, params, options_, counters_, principal};
       return route.fn(call);
     }
@@ -222,6 +290,32 @@ std::string request_project(const Call& call, const std::string& requested) {
 }
 
 std::string listing_project(const Call& call) { return call.principal.project; }
+
+void require_space(const Call& call, int64_t bytes, const std::string& what) {
+  if (!call.options.free_bytes) return;
+  const int64_t free = call.options.free_bytes();
+  if (free < 0 || free - bytes >= call.options.min_free_bytes) return;  // unknown: no check
+  throw ApiException(507, "insufficient_storage",
+                     what + " of " + std::to_string(bytes) +
+                         " bytes refused: the server's disk has " + std::to_string(free) +
+                         " bytes free and keeps " + std::to_string(call.options.min_free_bytes) +
+                         " in reserve; try again when space was freed");
+}
+
+void require_quota(const Call& call, const std::string& project, int64_t bytes,
+                   const std::string& what) {
+  const std::string name = project.empty() ? proto::kDefaultProject : project;
+  int64_t quota = 0;
+  for (const proto::Project& p : call.store.list_projects())
+    if (p.name == name) quota = p.quota_bytes;
+  if (quota <= 0) return;
+  const int64_t used = call.store.project_usage(name);
+  if (used + bytes <= quota) return;
+  throw ApiException(413, "quota_exceeded",
+                     what + " of " + std::to_string(bytes) + " bytes refused: project " + name +
+                         " holds " + std::to_string(used) + " of its quota of " +
+                         std::to_string(quota) + " bytes");
+}
 
 std::string query_string(const Call& call, const std::string& name) {
   auto it = call.target.query.find(name);

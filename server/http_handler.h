@@ -4,7 +4,8 @@
 //
 // handle() never throws: route errors become {"error": {"code", "message"}} answers
 // (ContractError -> 400 invalid_field, NotFound -> 404, Conflict -> 409, Invalid -> 400,
-// anything unexpected -> 500 internal) and the handler stays usable.
+// StorageFull or ENOSPC -> 507 insufficient_storage, anything unexpected -> 500 internal)
+// and the handler stays usable.
 #pragma once
 
 #include <cstdint>
@@ -15,6 +16,7 @@
 
 #include "proto/auth.h"
 #include "server/http_types.h"
+#include "server/rate_limiter.h"
 #include "server/request_counters.h"
 #include "server/static_files.h"
 #include "storage/store.h"
@@ -28,6 +30,13 @@ struct HandlerOptions {
   std::function<int()> workers_alive;      // for /metrics; empty = 0
   std::shared_ptr<const StaticFiles> web;  // the dashboard at "/"; null = none (404)
   std::function<int64_t()> wall_clock_ms;  // for event timestamps; empty = the system clock
+  // Storage limits: uploads and chunks that would leave less than `min_free_bytes` free on
+  // the data folder's disk are refused with 507 (free_bytes empty = no check).
+  int64_t min_free_bytes = 0;
+  std::function<int64_t()> free_bytes;
+  // Requests per API token (429 rate_limited with Retry-After beyond it); rate 0 = none.
+  RateLimit rate_limit;
+  std::function<double()> monotonic_s;  // for the rate limit; empty = steady_clock
 };
 
 class HttpHandler {
@@ -56,6 +65,7 @@ class HttpHandler {
   storage::Store& store_;
   HandlerOptions options_;
   RequestCounters counters_;
+  RateLimiter limiter_;
 };
 
 }  // namespace keel::server

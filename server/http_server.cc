@@ -1,5 +1,6 @@
 #include "server/http_server.h"
 
+#include <openssl/ssl.h>
 #include <spdlog/spdlog.h>
 #include <sys/socket.h>
 #include <boost/asio/bind_executor.hpp>
@@ -11,16 +12,19 @@
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 
 #include <array>
 #include <atomic>
 #include <cerrno>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "server/api_response.h"
@@ -34,7 +38,14 @@ namespace http = boost::beast::http;
 using tcp = net::ip::tcp;
 using error_code = boost::system::error_code;
 
-class Session;
+// What the server keeps of a session, whatever its stream (plain TCP or TLS).
+class SessionBase {
+ public:
+  virtual ~SessionBase() = default;
+  // Called on the session's strand when the server stops.
+  virtual void on_server_stop() = 0;
+  virtual net::any_io_executor executor() = 0;
+};
 
 // State shared by the acceptor and every session.
 struct ServerCore {
@@ -44,7 +55,9 @@ struct ServerCore {
 
   std::mutex sessions_mutex;
   std::condition_variable sessions_done;
-  std::map<const Session*, std::weak_ptr<Session>> sessions;
+  std::map<const SessionBase*, std::weak_ptr<SessionBase>> sessions;
+  // Set when the acceptor stopped at max_connections; the session that ends first resumes it.
+  std::function<void()> resume_accept;
 
   ServerCore(HttpHandler& h, ServerOptions o) : handler(h), options(std::move(o)) {}
 };
@@ -53,16 +66,31 @@ namespace {
 
 constexpr uint64_t kUnlimitedUntilHeader = ~uint64_t{0};
 
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
+
+template <class Stream>
+constexpr bool kIsTls = std::is_same_v<Stream, TlsStream>;
+
 }  // namespace
 
-class Session : public std::enable_shared_from_this<Session> {
+// One connection: HTTP/1.1 keep-alive over `Stream`, beast::tcp_stream or TlsStream. The
+// TCP layer (deadlines, the socket) is beast::get_lowest_layer(stream_) for both.
+template <class Stream>
+class Session : public SessionBase, public std::enable_shared_from_this<Session<Stream>> {
  public:
-  Session(tcp::socket&& socket, ServerCore& core) : stream_(std::move(socket)), core_(core) {}
+  template <class... StreamArgs>
+  Session(ServerCore& core, StreamArgs&&... args)
+      : stream_(std::forward<StreamArgs>(args)...), core_(core) {}
 
-  ~Session() {
-    std::lock_guard<std::mutex> lock(core_.sessions_mutex);
-    core_.sessions.erase(this);
-    if (core_.sessions.empty()) core_.sessions_done.notify_all();
+  ~Session() override {
+    std::function<void()> resume;
+    {
+      std::lock_guard<std::mutex> lock(core_.sessions_mutex);
+      core_.sessions.erase(this);
+      if (core_.sessions.empty()) core_.sessions_done.notify_all();
+      resume.swap(core_.resume_accept);
+    }
+    if (resume) resume();
   }
 
   void start() {
@@ -71,16 +99,16 @@ class Session : public std::enable_shared_from_this<Session> {
     buffer_.reserve(64 * 1024);
     {
       std::lock_guard<std::mutex> lock(core_.sessions_mutex);
-      core_.sessions[this] = weak_from_this();
+      core_.sessions[this] = this->weak_from_this();
     }
-    net::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->read_header(); });
+    net::dispatch(stream_.get_executor(), [self = this->shared_from_this()] { self->handshake(); });
   }
 
   // Called on the session's strand when the server stops: an idle connection (waiting for
   // a request) closes now; a request in flight finishes and then closes; a long poll
   // answers now and an event stream ends.
-  void on_server_stop() {
-    if (idle_) stream_.cancel();
+  void on_server_stop() override {
+    if (idle_) tcp().cancel();
     if (pending_) on_pending_wake(true);
     if (event_stream_) {
       stream_final_ = true;
@@ -88,9 +116,28 @@ class Session : public std::enable_shared_from_this<Session> {
     }
   }
 
-  net::any_io_executor executor() { return stream_.get_executor(); }
+  net::any_io_executor executor() override { return stream_.get_executor(); }
 
  private:
+  beast::tcp_stream& tcp() { return beast::get_lowest_layer(stream_); }
+
+  // TLS: the handshake first, under the read deadline (a client that connects and says
+  // nothing is dropped like an idle one). Plain TCP: straight to the first request.
+  void handshake() {
+    if constexpr (kIsTls<Stream>) {
+      idle_ = true;
+      tcp().expires_after(core_.options.read_timeout);
+      stream_.async_handshake(net::ssl::stream_base::server,
+                              [self = this->shared_from_this()](error_code ec) {
+                                self->idle_ = false;
+                                if (ec) return self->close();
+                                self->read_header();
+                              });
+    } else {
+      read_header();
+    }
+  }
+
   // --- reading ---
   void read_header() {
     if (core_.stopping) return close();
@@ -98,10 +145,10 @@ class Session : public std::enable_shared_from_this<Session> {
     parser_->header_limit(core_.options.header_limit_bytes);
     parser_->body_limit(kUnlimitedUntilHeader);
     idle_ = true;
-    stream_.expires_after(core_.options.read_timeout);
+    tcp().expires_after(core_.options.read_timeout);
     http::async_read_header(
         stream_, buffer_, *parser_,
-        [self = shared_from_this()](error_code ec, size_t) { self->on_header(ec); });
+        [self = this->shared_from_this()](error_code ec, size_t) { self->on_header(ec); });
   }
 
   void on_header(error_code ec) {
@@ -132,21 +179,22 @@ class Session : public std::enable_shared_from_this<Session> {
 
   void send_continue() {
     auto reply = std::make_shared<http::response<http::empty_body>>(http::status::continue_, 11);
-    stream_.expires_after(core_.options.write_timeout);
-    http::async_write(stream_, *reply, [self = shared_from_this(), reply](error_code ec, size_t) {
-      if (ec) return self->close();
-      self->read_body();
-    });
+    tcp().expires_after(core_.options.write_timeout);
+    http::async_write(stream_, *reply,
+                      [self = this->shared_from_this(), reply](error_code ec, size_t) {
+                        if (ec) return self->close();
+                        self->read_body();
+                      });
   }
 
   // The body is read piece by piece with a fresh deadline each time: a slow uplink that keeps
   // sending survives, a stalled one is dropped. A cut connection never reaches the handler,
   // so a partial chunk commits nothing.
   void read_body() {
-    stream_.expires_after(core_.options.read_timeout);
+    tcp().expires_after(core_.options.read_timeout);
     http::async_read_some(
         stream_, buffer_, *parser_,
-        [self = shared_from_this()](error_code ec, size_t) { self->on_body(ec); });
+        [self = this->shared_from_this()](error_code ec, size_t) { self->on_body(ec); });
   }
 
   void on_body(error_code ec) {
@@ -180,7 +228,7 @@ class Session : public std::enable_shared_from_this<Session> {
   // --- long polls (PendingResponse) ---
   // Nothing is read or written while waiting; the answer is written like any other.
   std::function<void()> waker(void (Session::*method)()) {
-    std::weak_ptr<Session> weak = weak_from_this();
+    std::weak_ptr<Session> weak = this->weak_from_this();
     return [weak, method] {
       if (auto self = weak.lock())
         net::post(self->executor(), [self, method] { ((*self).*method)(); });
@@ -203,7 +251,7 @@ class Session : public std::enable_shared_from_this<Session> {
   void arm_pending_timer() {
     const auto now = std::chrono::steady_clock::now();
     timer_->expires_at(std::min(pending_->deadline(), now + pending_->tick()));
-    timer_->async_wait([self = shared_from_this()](error_code ec) {
+    timer_->async_wait([self = this->shared_from_this()](error_code ec) {
       if (ec == net::error::operation_aborted || !self->pending_) return;
       self->on_pending_wake(std::chrono::steady_clock::now() >= self->pending_->deadline());
     });
@@ -213,7 +261,7 @@ class Session : public std::enable_shared_from_this<Session> {
   // a byte, so a pipelined next request stays for the parser.
   bool peer_gone() {
     char byte;
-    const ssize_t n = ::recv(stream_.socket().native_handle(), &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+    const ssize_t n = ::recv(tcp().socket().native_handle(), &byte, 1, MSG_PEEK | MSG_DONTWAIT);
     return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
   }
 
@@ -242,10 +290,10 @@ class Session : public std::enable_shared_from_this<Session> {
     set_common(*header, response, false);
     header->chunked(true);
     auto serializer = std::make_shared<http::response_serializer<http::empty_body>>(*header);
-    stream_.expires_after(core_.options.write_timeout);
+    tcp().expires_after(core_.options.write_timeout);
     http::async_write_header(
         stream_, *serializer,
-        [self = shared_from_this(), header, serializer](error_code ec, size_t) {
+        [self = this->shared_from_this(), header, serializer](error_code ec, size_t) {
           if (ec) return self->end_stream(false);
           self->timer_.emplace(self->stream_.get_executor());
           self->event_stream_->start(self->waker(&Session::pump_stream));
@@ -264,7 +312,7 @@ class Session : public std::enable_shared_from_this<Session> {
     if (data.empty() && !ended) {
       if (peer_gone()) return end_stream(false);
       timer_->expires_after(event_stream_->tick());
-      timer_->async_wait([self = shared_from_this()](error_code ec) {
+      timer_->async_wait([self = this->shared_from_this()](error_code ec) {
         if (ec == net::error::operation_aborted) return;
         self->pump_stream();
       });
@@ -273,13 +321,13 @@ class Session : public std::enable_shared_from_this<Session> {
     stream_writing_ = true;
     stream_dirty_ = false;
     auto bytes = std::make_shared<std::string>(std::move(data));
-    auto after = [self = shared_from_this(), bytes, ended](error_code ec, size_t) {
+    auto after = [self = this->shared_from_this(), bytes, ended](error_code ec, size_t) {
       self->stream_writing_ = false;
       if (ec) return self->end_stream(false);
       if (ended) return self->end_stream(true);
       self->pump_stream();
     };
-    stream_.expires_after(core_.options.write_timeout);
+    tcp().expires_after(core_.options.write_timeout);
     if (bytes->empty())
       after(error_code(), 0);
     else
@@ -291,9 +339,9 @@ class Session : public std::enable_shared_from_this<Session> {
     if (timer_) timer_->cancel();
     event_stream_.reset();
     if (!clean) return close();
-    stream_.expires_after(core_.options.write_timeout);
+    tcp().expires_after(core_.options.write_timeout);
     net::async_write(stream_, http::make_chunk_last(),
-                     [self = shared_from_this()](error_code, size_t) { self->close(); });
+                     [self = this->shared_from_this()](error_code, size_t) { self->close(); });
   }
 
   void send_error(int status, const std::string& code, const std::string& message) {
@@ -354,9 +402,9 @@ class Session : public std::enable_shared_from_this<Session> {
   void write_some(std::shared_ptr<http::response<Body>> held,
                   std::shared_ptr<http::response_serializer<Body>> serializer, bool close_after,
                   bool head) {
-    stream_.expires_after(core_.options.write_timeout);
-    auto next = [self = shared_from_this(), held, serializer, close_after, head](error_code ec,
-                                                                                 size_t) {
+    tcp().expires_after(core_.options.write_timeout);
+    auto next = [self = this->shared_from_this(), held, serializer, close_after, head](
+                    error_code ec, size_t) {
       if (ec) return self->close();
       const bool done = head ? serializer->is_header_done() : serializer->is_done();
       if (!done) return self->write_some(held, serializer, close_after, head);
@@ -374,7 +422,7 @@ class Session : public std::enable_shared_from_this<Session> {
   // read and drop what still comes (bounded in time and bytes), then close.
   void drain_and_close() {
     error_code ignored;
-    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    tcp().socket().shutdown(tcp::socket::shutdown_send, ignored);
     drain_deadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(2);
     drain_some();
   }
@@ -383,22 +431,24 @@ class Session : public std::enable_shared_from_this<Session> {
     constexpr size_t kMaxDrainBytes = 256ull << 20;
     if (drained_ > kMaxDrainBytes || std::chrono::steady_clock::now() >= drain_deadline_)
       return close();
-    stream_.expires_at(drain_deadline_);
+    tcp().expires_at(drain_deadline_);
     stream_.async_read_some(net::buffer(drain_buffer_),
-                            [self = shared_from_this()](error_code ec, size_t n) {
+                            [self = this->shared_from_this()](error_code ec, size_t n) {
                               if (ec) return self->close();
                               self->drained_ += n;
                               self->drain_some();
                             });
   }
 
+  // TLS connections are closed without waiting for the client's close_notify: every answer
+  // is framed (Content-Length or chunked), so a client cannot take a cut for the end.
   void close() {
     error_code ignored;
-    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
-    stream_.close();
+    tcp().socket().shutdown(tcp::socket::shutdown_send, ignored);
+    tcp().close();
   }
 
-  beast::tcp_stream stream_;
+  Stream stream_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   ServerCore& core_;
@@ -418,9 +468,32 @@ class Session : public std::enable_shared_from_this<Session> {
   bool stream_final_ = false;
 };
 
+// A TLS context for a server: the certificate chain and key in PEM, TLS 1.2 or newer.
+std::unique_ptr<net::ssl::context> make_tls_context(const ServerOptions& options) {
+  auto context = std::make_unique<net::ssl::context>(net::ssl::context::tls_server);
+  context->set_options(net::ssl::context::default_workarounds | net::ssl::context::no_sslv2 |
+                       net::ssl::context::no_sslv3 | net::ssl::context::no_tlsv1 |
+                       net::ssl::context::no_tlsv1_1 | net::ssl::context::single_dh_use);
+  SSL_CTX_set_min_proto_version(context->native_handle(), TLS1_2_VERSION);
+  error_code ec;
+  context->use_certificate_chain_file(options.tls_cert_file, ec);
+  if (ec)
+    throw std::runtime_error("--tls-cert " + options.tls_cert_file +
+                             ": cannot load a PEM certificate chain: " + ec.message());
+  context->use_private_key_file(options.tls_key_file, net::ssl::context::pem, ec);
+  if (ec)
+    throw std::runtime_error("--tls-key " + options.tls_key_file +
+                             ": cannot load a PEM private key: " + ec.message());
+  if (SSL_CTX_check_private_key(context->native_handle()) != 1)
+    throw std::runtime_error("--tls-key " + options.tls_key_file +
+                             " does not match the certificate in " + options.tls_cert_file);
+  return context;
+}
+
 struct HttpServer::Impl {
   // Declared before io_context: sessions destroyed with the io_context still unregister.
   ServerCore core;
+  std::unique_ptr<net::ssl::context> tls;  // set: HTTPS
   net::io_context io_context;
   tcp::acceptor acceptor;
   net::steady_timer accept_retry;
@@ -450,7 +523,20 @@ struct HttpServer::Impl {
       }
       error_code ignored;
       socket.set_option(tcp::no_delay(true), ignored);
-      std::make_shared<Session>(std::move(socket), core)->start();
+      if (tls)
+        std::make_shared<Session<TlsStream>>(core, std::move(socket), *tls)->start();
+      else
+        std::make_shared<Session<beast::tcp_stream>>(core, std::move(socket))->start();
+      // At max_connections the next connections wait in the kernel's listen queue until a
+      // session ends (it calls resume_accept), rather than being accepted and starved.
+      {
+        std::lock_guard<std::mutex> lock(core.sessions_mutex);
+        if (core.options.max_connections > 0 &&
+            core.sessions.size() >= static_cast<size_t>(core.options.max_connections)) {
+          core.resume_accept = [this] { net::post(acceptor.get_executor(), [this] { accept(); }); };
+          return;
+        }
+      }
       accept();
     });
   }
@@ -476,6 +562,11 @@ void HttpServer::start() {
   if (!ec) impl.acceptor.listen(net::socket_base::max_listen_connections, ec);
   if (ec) throw std::runtime_error("cannot listen on " + where + ": " + ec.message());
   impl.port = impl.acceptor.local_endpoint().port();
+  if (!options.tls_cert_file.empty() || !options.tls_key_file.empty()) {
+    if (options.tls_cert_file.empty() || options.tls_key_file.empty())
+      throw std::runtime_error("TLS needs both --tls-cert and --tls-key");
+    impl.tls = make_tls_context(options);
+  }
   impl.started = true;
   impl.accept();
   const int count = options.threads > 0 ? options.threads : 1;
@@ -487,7 +578,8 @@ uint16_t HttpServer::port() const { return impl_->port; }
 std::string HttpServer::url() const {
   const std::string& address = impl_->core.options.address;
   const bool v6 = address.find(':') != std::string::npos;
-  return "http://" + (v6 ? "[" + address + "]" : address) + ":" + std::to_string(impl_->port);
+  return std::string(impl_->tls ? "https://" : "http://") + (v6 ? "[" + address + "]" : address) +
+         ":" + std::to_string(impl_->port);
 }
 
 void HttpServer::stop() {
@@ -501,7 +593,11 @@ void HttpServer::stop() {
     impl.acceptor.close(ignored);
     impl.accept_retry.cancel();
   });
-  std::vector<std::shared_ptr<Session>> live;
+  {
+    std::lock_guard<std::mutex> lock(impl.core.sessions_mutex);
+    impl.core.resume_accept = nullptr;
+  }
+  std::vector<std::shared_ptr<SessionBase>> live;
   {
     std::lock_guard<std::mutex> lock(impl.core.sessions_mutex);
     for (auto& [raw, weak] : impl.core.sessions)

@@ -1,7 +1,8 @@
 // The socket side of keel-server: an Asio acceptor, `threads` io threads and one Beast
 // session per connection (keep-alive). Each request is read header first; the route's body
 // limit (HttpHandler::body_limit) is applied before the body is read. Every read has a
-// deadline, so idle or stalled clients are dropped; file answers are streamed.
+// deadline, so idle or stalled clients are dropped; file answers are streamed. With a
+// certificate and key the same sessions run over TLS (Beast's OpenSSL stream).
 // Beast stays out of this header (pimpl).
 #pragma once
 
@@ -22,6 +23,11 @@ struct ServerOptions {
   std::chrono::milliseconds read_timeout{30'000};   // per read: header, each body piece
   std::chrono::milliseconds write_timeout{60'000};  // per write of a response piece
   std::chrono::milliseconds shutdown_grace{5'000};  // in-flight requests may finish
+  // Open connections at most; beyond it new ones wait in the listen queue (0 = no limit).
+  int max_connections = 4096;
+  // Both set: HTTPS only (TLS 1.2+), PEM files. Both empty: plain HTTP.
+  std::string tls_cert_file;
+  std::string tls_key_file;
 };
 
 class HttpServer {
@@ -35,7 +41,7 @@ class HttpServer {
   // io threads. Returns at once.
   void start();
   uint16_t port() const;    // the bound port, valid after start()
-  std::string url() const;  // "http://<address>:<port>"
+  std::string url() const;  // "http[s]://<address>:<port>"
 
   // Graceful: stops accepting, closes idle connections, lets requests in flight finish
   // within shutdown_grace, then stops the io threads. Idempotent; blocks until done.

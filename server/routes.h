@@ -78,6 +78,14 @@ Response worker_fail_job(const Call& call);
 // routes_web.cc: the dashboard's files for any GET/HEAD outside /v1 that no route above takes.
 Response web_file(const Call& call);
 
+// routes_admin.cc
+Response create_token(const Call& call);
+Response list_tokens(const Call& call);
+Response revoke_token(const Call& call);
+Response list_projects(const Call& call);
+Response get_project(const Call& call);
+Response put_project(const Call& call);
+
 // Projects (storage/store.h): another project's object answers 404 with the same message
 // as an unknown id, so ids leak nothing. `not_found_message` is that message.
 void require_reach(const Call& call, const std::string& project,
@@ -87,6 +95,13 @@ void require_reach(const Call& call, const std::string& project,
 std::string request_project(const Call& call, const std::string& requested);
 // The project filter for listings: the token's ("*" = every project).
 std::string listing_project(const Call& call);
+
+// Storage limits: 507 insufficient_storage when storing `bytes` more would leave less than
+// the free-space reserve; 413 quota_exceeded when the project would hold more than its quota.
+// `what` names the thing refused ("upload 'm.tar'").
+void require_space(const Call& call, int64_t bytes, const std::string& what);
+void require_quota(const Call& call, const std::string& project, int64_t bytes,
+                   const std::string& what);
 
 // Query helpers shared by route files: ApiException 400 `invalid_field` on bad values.
 int64_t query_int(const Call& call, const std::string& name, int64_t fallback, int64_t min,

@@ -9,8 +9,12 @@ namespace keel::server::routes {
 
 namespace {
 
-void require_blob(storage::Store& store, const std::string& field, const std::string& sha256) {
-  if (!store.has_blob(sha256))
+// The blob must exist and, for a token of one project, be its project's (uploaded there):
+// a mission cannot be made of another project's bytes.
+void require_blob(const Call& call, const std::string& project, const std::string& field,
+                  const std::string& sha256) {
+  if (!call.store.has_blob(sha256) ||
+      (!call.principal.all_projects() && !call.store.project_has_blob(project, sha256)))
     throw ApiException(404, "not_found", field + ": no blob " + sha256 + " (upload it first)");
 }
 
@@ -19,8 +23,9 @@ void require_blob(storage::Store& store, const std::string& field, const std::st
 Response create_mission(const Call& call) {
   proto::MissionRequest request = proto::MissionRequest::from_json(parse_json_body(call.request));
   request.project = request_project(call, request.project);
-  require_blob(call.store, "bundle_blob", request.bundle_blob);
-  if (!request.cad_blob.empty()) require_blob(call.store, "cad_blob", request.cad_blob);
+  const std::string project = request.project.empty() ? proto::kDefaultProject : request.project;
+  require_blob(call, project, "bundle_blob", request.bundle_blob);
+  if (!request.cad_blob.empty()) require_blob(call, project, "cad_blob", request.cad_blob);
   try {
     check_mission_bundle(call.store.blob_path(request.bundle_blob));
   } catch (const BundleError& e) {

@@ -35,6 +35,8 @@ Response create_upload(const Call& call) {
   if (request.size < 0)
     throw ApiException(400, "invalid_field", "size: expected a byte count >= 0");
   request.project = request_project(call, request.project);
+  require_quota(call, request.project, request.size, "upload '" + request.name + "'");
+  require_space(call, request.size, "upload '" + request.name + "'");
   return json_response(201, call.store.create_upload(request).to_json());
 }
 
@@ -72,6 +74,7 @@ Response put_upload_chunk(const Call& call) {
     throw offset_mismatch(upload.offset, "chunk starts at " + std::to_string(range->first) +
                                              " but " + std::to_string(upload.offset) +
                                              " bytes are committed");
+  require_space(call, body_size, "chunk of upload " + id);
   try {
     upload = call.store.append_upload(id, range->first, call.request.body.data(),
                                       call.request.body.size());
@@ -116,6 +119,11 @@ Response get_blob(const Call& call) {
   if (!proto::is_sha256_hex(sha256))
     throw ApiException(404, "not_found",
                        "blob '" + sha256 + "': not a SHA-256 (64 lowercase hex digits)");
+  // A token of one project fetches only the blobs its project references: a hash must not
+  // tell whether another project holds some content.
+  if (!call.principal.all_projects() &&
+      !call.store.project_has_blob(call.principal.project, sha256))
+    throw ApiException(404, "not_found", "blob " + sha256 + " not found");
   StoredFile file;
   file.path = call.store.blob_path(sha256);
   file.size = static_cast<uint64_t>(call.store.blob_size(sha256));

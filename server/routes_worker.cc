@@ -72,10 +72,18 @@ Response worker_add_artifact(const Call& call) {
     throw ApiException(400, "invalid_field", "stage: unknown stage '" + registration.stage + "'");
   if (!proto::is_sha256_hex(registration.blob))
     throw ApiException(400, "invalid_field", "blob: expected 64 lowercase hex digits");
-  if (!call.store.has_blob(registration.blob))
+  if (!call.store.has_blob(registration.blob) ||
+      (!call.principal.all_projects() &&
+       !call.store.project_has_blob(call.principal.project, registration.blob)))
     throw ApiException(404, "not_found",
                        "blob: no blob " + registration.blob + " (upload it first)");
   require_job_reach(call, call.params[0]);
+  // A blob new to the job's project counts against its quota (the upload may have been
+  // skipped because another project holds the same bytes).
+  const std::string project = call.store.get_job(call.params[0]).project;
+  if (!call.store.project_has_blob(project, registration.blob))
+    require_quota(call, project, call.store.blob_size(registration.blob),
+                  "artifact '" + registration.name + "'");
   return with_lease([&] {
     return json_response(201, call.store.add_artifact(call.params[0], registration).to_json());
   });

@@ -136,6 +136,21 @@ CREATE INDEX jobs_by_finished ON jobs (finished_at_ms);
 CREATE INDEX missions_by_project ON missions (project, seq);
 )sql";
 
+// Version 4: which project references which blob, for per-project usage and quotas and so
+// a token of one project fetches only its blobs. Existing missions and artifacts are read in.
+const char* const kBlobRefs = R"sql(
+CREATE TABLE blob_refs (
+  project TEXT NOT NULL,
+  sha256  TEXT NOT NULL,
+  PRIMARY KEY (project, sha256)
+) WITHOUT ROWID;
+INSERT OR IGNORE INTO blob_refs (project, sha256) SELECT project, bundle_blob FROM missions;
+INSERT OR IGNORE INTO blob_refs (project, sha256)
+  SELECT project, cad_blob FROM missions WHERE cad_blob IS NOT NULL AND cad_blob <> '';
+INSERT OR IGNORE INTO blob_refs (project, sha256)
+  SELECT j.project, a.sha256 FROM artifacts a JOIN jobs j ON j.id = a.job_id;
+)sql";
+
 void record_version(Database& db, int version) {
   auto statement = db.cached("UPDATE schema_version SET version = ?1");
   statement->bind_int64(1, version).run();
@@ -148,6 +163,7 @@ const std::vector<Migration>& sqlite_migrations() {
       {1, "core tables", kCoreTables},
       {2, "listing indexes", kListingIndexes},
       {3, "projects, roles, batches and workers", kProjectsAndRoles},
+      {4, "blob references by project", kBlobRefs},
   };
   return migrations;
 }

@@ -145,11 +145,28 @@ int read_version(PgTx& tx) {
   return row[0][0].is_null() ? 0 : row[0][0].as<int>();
 }
 
+// Version 2 (SQLite's version 4): which project references which blob, for per-project
+// usage and quotas and so a token of one project fetches only its blobs.
+const char* const kBlobRefs = R"sql(
+CREATE TABLE blob_refs (
+  project text COLLATE "C" NOT NULL,
+  sha256  text COLLATE "C" NOT NULL,
+  PRIMARY KEY (project, sha256)
+);
+INSERT INTO blob_refs (project, sha256) SELECT project, bundle_blob FROM missions
+  ON CONFLICT DO NOTHING;
+INSERT INTO blob_refs (project, sha256) SELECT project, cad_blob FROM missions
+  WHERE cad_blob IS NOT NULL AND cad_blob <> '' ON CONFLICT DO NOTHING;
+INSERT INTO blob_refs (project, sha256) SELECT j.project, a.sha256 FROM artifacts a
+  JOIN jobs j ON j.id = a.job_id ON CONFLICT DO NOTHING;
+)sql";
+
 }  // namespace
 
 const std::vector<Migration>& pg_migrations() {
   static const std::vector<Migration> migrations = {
       {1, "keel schema (SQLite versions 1-3)", kSchema},
+      {2, "blob references by project", kBlobRefs},
   };
   return migrations;
 }

@@ -222,4 +222,9 @@ std::string pg_text_array(const std::vector<std::string>& values) {
   return out;
 }
 
+void pg_note_blob_ref(PgTx& tx, const std::string& project, const std::string& sha256) {
+  tx.exec("INSERT INTO blob_refs (project, sha256) VALUES ($1, $2) ON CONFLICT DO NOTHING", project,
+          sha256);
+}
+
 }  // namespace keel::storage

@@ -28,6 +28,8 @@ std::optional<proto::Mission> pg_find_mission(PgTx& tx, const std::string& missi
 std::optional<proto::Job> pg_find_job(PgTx& tx, const std::string& job_id);
 std::optional<proto::Artifact> pg_find_artifact(PgTx& tx, const std::string& artifact_id);
 std::optional<int64_t> pg_find_blob_size(PgTx& tx, const std::string& sha256);
+// Notes that `project` references the blob (Store::project_usage, project_has_blob).
+void pg_note_blob_ref(PgTx& tx, const std::string& project, const std::string& sha256);
 
 // The newest jobs first that pass `filter`.
 std::vector<proto::Job> pg_query_jobs(PgTx& tx, const JobFilter& filter);

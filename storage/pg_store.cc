@@ -240,8 +240,8 @@ std::string PgStore::complete_upload(const std::string& upload_id, const std::st
   rules::require_sha256(sha256, "sha256");
   std::exception_ptr refused;
   write([&](PgTx& tx, Changes&) {
-    const pqxx::result rows =
-        tx.exec("SELECT name, size, committed FROM uploads WHERE id = $1 FOR UPDATE", upload_id);
+    const pqxx::result rows = tx.exec(
+        "SELECT name, size, committed, project FROM uploads WHERE id = $1 FOR UPDATE", upload_id);
     if (rows.empty()) throw rules::upload_not_found(upload_id);
     const std::string name = rows[0][0].as<std::string>();
     const int64_t size = rows[0][1].as<int64_t>();
@@ -270,6 +270,7 @@ std::string PgStore::complete_upload(const std::string& upload_id, const std::st
         "ON CONFLICT (sha256) DO NOTHING",
         sha256, size, clock_());
     tx.exec("DELETE FROM uploads WHERE id = $1", upload_id);
+    pg_note_blob_ref(tx, rows[0][3].as<std::string>(), sha256);
   });
   if (refused) {
     uploads_.remove(upload_id);
@@ -338,6 +339,8 @@ proto::Mission PgStore::create_mission(const proto::MissionRequest& request) {
         "project) VALUES ($1, $2, $3, NULLIF($4, ''), $5, $6, $7)",
         mission.id, mission.name, mission.bundle_blob, mission.cad_blob, mission.cad_name,
         mission.created_at_ms, mission.project);
+    pg_note_blob_ref(tx, mission.project, mission.bundle_blob);
+    if (!mission.cad_blob.empty()) pg_note_blob_ref(tx, mission.project, mission.cad_blob);
   });
   return mission;
 }
@@ -435,6 +438,38 @@ proto::Project PgStore::ensure_project(const std::string& name) {
     const pqxx::row row =
         tx.exec("SELECT name, created_at_ms, quota_bytes FROM projects WHERE name = $1", name)[0];
     return proto::Project{row[0].as<std::string>(), row[1].as<int64_t>(), row[2].as<int64_t>()};
+  });
+}
+
+proto::Project PgStore::set_project_quota(const std::string& name, int64_t quota_bytes) {
+  rules::require_project_name(name, "project");
+  if (quota_bytes < 0) throw Invalid("quota_bytes: expected bytes >= 0 (0 = no quota)");
+  return write([&](PgTx& tx, Changes&) {
+    insert_project(tx, name, clock_());
+    const pqxx::row row = tx.exec(
+        "UPDATE projects SET quota_bytes = $2 WHERE name = $1 "
+        "RETURNING name, created_at_ms, quota_bytes",
+        name, quota_bytes)[0];
+    return proto::Project{row[0].as<std::string>(), row[1].as<int64_t>(), row[2].as<int64_t>()};
+  });
+}
+
+int64_t PgStore::project_usage(const std::string& name) {
+  return read([&](PgTx& tx) {
+    return tx
+        .exec(
+            "SELECT (SELECT COALESCE(SUM(b.size), 0) FROM blob_refs r "
+            "        JOIN blobs b ON b.sha256 = r.sha256 WHERE r.project = $1) + "
+            "       (SELECT COALESCE(SUM(size), 0) FROM uploads WHERE project = $1)",
+            name)[0][0]
+        .as<int64_t>();
+  });
+}
+
+bool PgStore::project_has_blob(const std::string& name, const std::string& sha256) {
+  return read([&](PgTx& tx) {
+    return !tx.exec("SELECT 1 FROM blob_refs WHERE project = $1 AND sha256 = $2", name, sha256)
+                .empty();
   });
 }
 

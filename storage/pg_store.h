@@ -101,6 +101,9 @@ class PgStore : public Store {
 
   std::vector<proto::Project> list_projects() override;
   proto::Project ensure_project(const std::string& name) override;
+  proto::Project set_project_quota(const std::string& name, int64_t quota_bytes) override;
+  int64_t project_usage(const std::string& name) override;
+  bool project_has_blob(const std::string& name, const std::string& sha256) override;
 
   std::unique_ptr<Subscription> subscribe(ChangeListener listener) override;
   proto::QueueSummary queue_summary() override;

@@ -354,6 +354,7 @@ proto::Artifact PgStore::add_artifact(const std::string& job_id,
         artifact.id, job_id, artifact.stage, artifact.name, artifact.sha256, artifact.size,
         artifact.created_at_ms);
     artifact.project = inserted[0][0].as<std::string>();
+    pg_note_blob_ref(tx, artifact.project, artifact.sha256);
     return artifact;
   });
 }

@@ -22,6 +22,8 @@ SqliteError::SqliteError(const std::string& message, int code)
 
 // --- Statement ---
 
+bool SqliteError::disk_full() const { return (code_ & 0xff) == SQLITE_FULL; }
+
 Statement::Statement(sqlite3* db, const std::string& sql) : db_(db), sql_(sql) {
   const int code = sqlite3_prepare_v3(db_, sql.c_str(), static_cast<int>(sql.size() + 1),
                                       SQLITE_PREPARE_PERSISTENT, &stmt_, nullptr);

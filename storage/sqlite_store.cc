@@ -2,6 +2,10 @@
 // Jobs, leases, artifacts and logs are in sqlite_store_jobs.cc.
 #include "storage/sqlite_store.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <functional>
 #include <system_error>
@@ -44,8 +48,22 @@ SqliteStore::SqliteStore(const fs::path& data_dir, Clock clock)
       writer_(std::make_unique<Database>(data_dir_ / "keel.db")),
       readers_(data_dir_ / "keel.db", DatabaseOptions{5000, /*query_only=*/true}) {
   apply_migrations(*writer_, sqlite_migrations());
+  // Recovery (temp files of cut writes, uncommitted upload bytes) is for the first process
+  // on the folder only: a second one (`keel-server token ...` while the server runs) must
+  // not cut files the live server is writing. An exclusive flock held for the store's
+  // lifetime tells which one is first; the kernel drops it when the process dies.
+  lock_fd_ = ::open((data_dir_ / "keel.lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd_ >= 0 && ::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    return;
+  }
   blobs_.clear_tmp();
   recover_uploads();
+}
+
+SqliteStore::~SqliteStore() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 // --- uploads ---
@@ -189,6 +207,7 @@ std::string SqliteStore::complete_upload(const std::string& upload_id, const std
     insert->bind_text(1, sha256).bind_int64(2, upload.size).bind_int64(3, clock_()).run();
     auto remove = db.cached("DELETE FROM uploads WHERE id = ?1");
     remove->bind_text(1, upload_id).run();
+    note_blob_ref(db, upload.project, sha256);
   });
   return sha256;
 }
@@ -263,6 +282,8 @@ proto::Mission SqliteStore::create_mission(const proto::MissionRequest& request)
         .bind_int64(6, mission.created_at_ms)
         .bind_text(7, mission.project)
         .run();
+    note_blob_ref(db, mission.project, mission.bundle_blob);
+    if (!mission.cad_blob.empty()) note_blob_ref(db, mission.project, mission.cad_blob);
   });
   return mission;
 }
@@ -410,6 +431,44 @@ proto::Project SqliteStore::ensure_project(const std::string& name) {
     return proto::Project{statement->column_text(0), statement->column_int64(1),
                           statement->column_int64(2)};
   });
+}
+
+proto::Project SqliteStore::set_project_quota(const std::string& name, int64_t quota_bytes) {
+  require_project_name(name, "project");
+  if (quota_bytes < 0) throw Invalid("quota_bytes: expected bytes >= 0 (0 = no quota)");
+  write([&](Database& db) {
+    insert_project(db, name, clock_());
+    auto statement = db.cached("UPDATE projects SET quota_bytes = ?2 WHERE name = ?1");
+    statement->bind_text(1, name).bind_int64(2, quota_bytes).run();
+  });
+  return ensure_project(name);
+}
+
+int64_t SqliteStore::project_usage(const std::string& name) {
+  return read([&](Database& db) {
+    auto statement = db.cached(
+        "SELECT (SELECT COALESCE(SUM(b.size), 0) FROM blob_refs r "
+        "        JOIN blobs b ON b.sha256 = r.sha256 WHERE r.project = ?1) + "
+        "       (SELECT COALESCE(SUM(size), 0) FROM uploads WHERE project = ?1)");
+    statement->bind_text(1, name);
+    statement->step();
+    return statement->column_int64(0);
+  });
+}
+
+bool SqliteStore::project_has_blob(const std::string& name, const std::string& sha256) {
+  return read([&](Database& db) {
+    auto statement = db.cached("SELECT 1 FROM blob_refs WHERE project = ?1 AND sha256 = ?2");
+    statement->bind_text(1, name).bind_text(2, sha256);
+    return statement->step();
+  });
+}
+
+void SqliteStore::note_blob_ref(Database& db, const std::string& project,
+                                const std::string& sha256) {
+  auto statement =
+      db.cached("INSERT OR IGNORE INTO blob_refs (project, sha256) VALUES (?1, ?2)");
+  statement->bind_text(1, project).bind_text(2, sha256).run();
 }
 
 // --- live changes ---

@@ -31,6 +31,7 @@ namespace keel::storage {
 class SqliteStore : public Store {
  public:
   SqliteStore(const std::filesystem::path& data_dir, Clock clock);
+  ~SqliteStore() override;
 
   proto::Upload create_upload(const proto::UploadRequest& request) override;
   proto::Upload get_upload(const std::string& upload_id) override;
@@ -83,6 +84,9 @@ class SqliteStore : public Store {
 
   std::vector<proto::Project> list_projects() override;
   proto::Project ensure_project(const std::string& name) override;
+  proto::Project set_project_quota(const std::string& name, int64_t quota_bytes) override;
+  int64_t project_usage(const std::string& name) override;
+  bool project_has_blob(const std::string& name, const std::string& sha256) override;
 
   std::unique_ptr<Subscription> subscribe(ChangeListener listener) override;
   proto::QueueSummary queue_summary() override;
@@ -94,6 +98,16 @@ class SqliteStore : public Store {
   // outside the lock, publishes the changes `work` noted (note_job / note_log).
   template <typename Work>
   auto write(Work work) {
+    try {
+      return write_unchecked(work);
+    } catch (const SqliteError& e) {
+      // A full disk rolls the transaction back: tell the caller in its own terms.
+      if (e.disk_full()) throw StorageFull(std::string("no space left for the database: ") + e.what());
+      throw;
+    }
+  }
+  template <typename Work>
+  auto write_unchecked(Work work) {
     std::vector<Change> changes;
     if constexpr (std::is_void_v<decltype(work(*writer_))>) {
       {
@@ -149,10 +163,13 @@ class SqliteStore : public Store {
   int expire_leases(Database& db, int64_t now_ms);
   // The project a request names ("" = default), created when new; Invalid for a bad name.
   std::string project_of_request(Database& db, const std::string& project);
+  // Inside write(): the project references the blob (project_usage, project_has_blob).
+  void note_blob_ref(Database& db, const std::string& project, const std::string& sha256);
   void insert_log_lines(Database& db, const std::string& job_id,
                         const std::vector<std::string>& lines, int64_t now_ms);
 
   std::filesystem::path data_dir_;
+  int lock_fd_ = -1;  // flock on <data_dir>/keel.lock while this store did the recovery
   Clock clock_;
   BlobStore blobs_;
   UploadArea uploads_;

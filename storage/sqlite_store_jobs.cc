@@ -272,6 +272,7 @@ proto::Artifact SqliteStore::add_artifact(const std::string& job_id,
         .bind_int64(6, artifact.size)
         .bind_int64(7, artifact.created_at_ms)
         .run();
+    note_blob_ref(db, job.project, artifact.sha256);
     return artifact;
   });
 }

@@ -12,7 +12,9 @@
 // Every method is atomic (one transaction) and thread-safe. Errors:
 //   NotFound  - the id names nothing,
 //   Conflict  - the request does not fit the current state (wrong offset, lost lease, ...),
-//   Invalid   - the request itself is wrong (bad hash, bad name, ...).
+//   Invalid   - the request itself is wrong (bad hash, bad name, ...),
+//   StorageFull - no space left (the call kept nothing; reads keep working); file writes
+//               may also throw std::system_error with ENOSPC or EDQUOT.
 #pragma once
 
 #include <cstdint>
@@ -37,6 +39,8 @@ struct Invalid : std::runtime_error { using std::runtime_error::runtime_error; }
 // The database cannot be reached now (PostgreSQL down, network cut): nothing was changed,
 // or the outcome of a commit is unknown; the caller may try again later (503).
 struct Unavailable : std::runtime_error { using std::runtime_error::runtime_error; };
+// The disk or the database is full: nothing of the call was kept (the server answers 507).
+struct StorageFull : std::runtime_error { using std::runtime_error::runtime_error; };
 
 // Refinements, so the server can choose the HTTP code (catching the base still works).
 // append_upload: the chunk does not start at the committed offset (409 offset_mismatch).
@@ -205,6 +209,15 @@ class Store {
   // --- projects ---
   virtual std::vector<proto::Project> list_projects() = 0;  // by name
   virtual proto::Project ensure_project(const std::string& name) = 0;  // Invalid for a bad name
+  // Sets the project's quota (bytes stored, 0 = none), creating the project when new.
+  virtual proto::Project set_project_quota(const std::string& name, int64_t quota_bytes) = 0;
+  // Bytes the project holds: each distinct blob it references once (uploaded through its
+  // uploads, named by its missions, or an artifact of its jobs) plus the announced size of
+  // its open uploads (space they will take). 0 for an unknown project.
+  virtual int64_t project_usage(const std::string& name) = 0;
+  // True when the project references the blob (see project_usage): a token of one project
+  // fetches only those blobs, so a hash cannot probe another project's data.
+  virtual bool project_has_blob(const std::string& name, const std::string& sha256) = 0;
 
   // --- live changes and the queue ---
   virtual std::unique_ptr<Subscription> subscribe(ChangeListener listener) = 0;

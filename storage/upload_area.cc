@@ -30,8 +30,18 @@ void UploadArea::write_chunk(const std::string& upload_id, int64_t committed, co
   DurableFile file(part_path(upload_id), DurableFile::Mode::kOpenOrCreate);
   // Bytes past the committed offset are leftovers of a chunk that never committed.
   if (file.size() != committed) file.truncate(committed);
-  file.write_at(committed, data, size);
-  file.sync();
+  try {
+    file.write_at(committed, data, size);
+    file.sync();
+  } catch (...) {
+    // A full disk (ENOSPC) cut the chunk: give back the space its bytes took. The offset was
+    // not committed, so the next append or a restart would cut them anyway.
+    try {
+      file.truncate(committed);
+    } catch (...) {
+    }
+    throw;
+  }
 }
 
 int64_t UploadArea::truncate_to(const std::string& upload_id, int64_t committed) {

@@ -19,7 +19,8 @@ class UploadArea {
   std::filesystem::path part_path(const std::string& upload_id) const;
   // Creates an empty part file (durably: the folder is fsynced).
   void create(const std::string& upload_id);
-  // Cuts the file to `committed` bytes, writes `size` bytes there and fsyncs.
+  // Cuts the file to `committed` bytes, writes `size` bytes there and fsyncs. On a failed
+  // write (a full disk) the file is cut back to `committed` bytes and the error rethrown.
   void write_chunk(const std::string& upload_id, int64_t committed, const char* data, size_t size);
   // Cuts bytes beyond `committed` (created if missing) and returns the file's size, which is
   // less than `committed` only if bytes acknowledged earlier were lost.

@@ -57,8 +57,13 @@ TEST(HttpUrl, ParsesBaseUrls) {
   const BaseUrl c = parse_base_url("http://[::1]:9000");
   EXPECT_EQ(c.host, "::1");
   EXPECT_EQ(c.port, "9000");
-  for (const char* bad : {"https://h:1", "h:1", "http://", "http://h:", "http://h:99999",
-                          "http://h:x1", "http://u:p@h:1"})
+  const BaseUrl d = parse_base_url("https://keel.example.org");
+  EXPECT_TRUE(d.tls);
+  EXPECT_EQ(d.port, "443");
+  EXPECT_EQ(d.origin(), "https://keel.example.org:443");
+  EXPECT_FALSE(c.tls);
+  for (const char* bad : {"ftp://h:1", "h:1", "http://", "http://h:", "http://h:99999",
+                          "http://h:x1", "http://u:p@h:1", "https://", "httpss://h:1"})
     EXPECT_THROW(parse_base_url(bad), std::invalid_argument) << bad;
 }
 

@@ -26,7 +26,8 @@ TempDir::~TempDir() {
   if (!std::getenv("KEEL_KEEP_TEST_DIRS")) fs::remove_all(path_, ec);
 }
 
-Cluster::Cluster(const fs::path& root, int workers, int port) : root_(root), workers_(workers), port_(port) {
+Cluster::Cluster(const fs::path& root, int workers, int port, std::vector<std::string> server_args)
+    : root_(root), workers_(workers), port_(port), server_args_(std::move(server_args)) {
   fs::create_directories(data_dir());
   start_server();
 }
@@ -34,10 +35,10 @@ Cluster::Cluster(const fs::path& root, int workers, int port) : root_(root), wor
 void Cluster::start_server() {
   fs::remove(data_dir() / "server.url");
   const std::string listen = "127.0.0.1:" + std::to_string(port_);
-  server_ = std::make_unique<Process>(
-      std::vector<std::string>{Programs().server.string(), "--data-dir", data_dir().string(), "--listen",
-                               listen, "--workers", std::to_string(workers_), "--worker-lease-seconds", "2"},
-      root_ / ("server-" + std::to_string(starts_++) + ".log"));
+  std::vector<std::string> argv{Programs().server.string(), "--data-dir", data_dir().string(), "--listen",
+                                listen, "--workers", std::to_string(workers_), "--worker-lease-seconds", "2"};
+  argv.insert(argv.end(), server_args_.begin(), server_args_.end());
+  server_ = std::make_unique<Process>(argv, root_ / ("server-" + std::to_string(starts_++) + ".log"));
   if (!wait_for_file(data_dir() / "server.url", 20s))
     throw std::runtime_error("keel-server did not start; see " + (root_ / "server-*.log").string());
   url_ = read_file(data_dir() / "server.url");

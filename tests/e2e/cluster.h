@@ -33,7 +33,9 @@ class TempDir {
 class Cluster {
  public:
   // `port` 0 = ephemeral. The data folder survives restarts of the server.
-  Cluster(const std::filesystem::path& root, int workers, int port = 0);
+  // `server_args` are added to keel-server's command line (--tls-cert F, ...).
+  Cluster(const std::filesystem::path& root, int workers, int port = 0,
+          std::vector<std::string> server_args = {});
 
   void start_server();
   void kill_server();  // SIGKILL: no chance to clean up
@@ -51,6 +53,7 @@ class Cluster {
   std::filesystem::path root_;
   int workers_;
   int port_;
+  std::vector<std::string> server_args_;
   std::string url_;
   std::unique_ptr<Process> server_;
   std::vector<std::unique_ptr<Process>> extra_workers_;

@@ -200,7 +200,7 @@ TEST_F(EndToEnd, ServerKilledDuringRunningJobRunsAgainAfterRestart) {
 // The pids of keel-worker processes whose command line names this data folder's token.
 std::vector<int> workers_of(const fs::path& data_dir) {
   std::vector<int> pids;
-  const std::string token_file = (data_dir / "token").string();
+  const std::string token_file = (data_dir / "worker-token").string();
   for (const auto& entry : fs::directory_iterator("/proc")) {
     const std::string name = entry.path().filename().string();
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;

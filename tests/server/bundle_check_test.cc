@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <random>
 
@@ -140,6 +141,64 @@ TEST_F(BundleCheckTest, RejectsNonTarAndCompressedAndTruncated) {
     ADD_FAILURE() << "truncated tar accepted";
   } catch (const BundleError& e) {
     EXPECT_EQ(e.code(), "bad_bundle");
+  }
+}
+
+TEST_F(BundleCheckTest, RefusesTooManyMembersBeforeReadingTheRest) {
+  std::vector<TarMember> members = {tar_file("mission.yaml", minimal_manifest())};
+  for (int i = 0; i < 10; ++i) members.push_back(tar_file("f" + std::to_string(i), "x"));
+  write(build_tar(members));
+  BundleLimits limits;
+  limits.max_members = 11;
+  EXPECT_EQ(check_mission_bundle(path_, limits).members, 11);
+  limits.max_members = 10;
+  try {
+    check_mission_bundle(path_, limits);
+    ADD_FAILURE() << "11 members accepted with a limit of 10";
+  } catch (const BundleError& e) {
+    EXPECT_EQ(e.code(), "bad_bundle");
+    EXPECT_STREQ(e.what(), "bundle has more than 10 members (the limit)");
+  }
+}
+
+TEST_F(BundleCheckTest, RefusesMembersNestedDeeperThanTheLimit) {
+  std::string deep;
+  for (int i = 0; i < 63; ++i) deep += "d/";
+  // 63 folders and a file: 64 components, the limit.
+  write(build_tar({tar_file("mission.yaml", minimal_manifest()), tar_file(deep + "f", "x")}));
+  EXPECT_EQ(check_mission_bundle(path_).members, 2);
+  auto [code, message] =
+      reject({tar_file("mission.yaml", minimal_manifest()), tar_file(deep + "d/f", "x")});
+  EXPECT_EQ(code, "bad_bundle");
+  EXPECT_NE(message.find("is nested 65 folders deep (limit 64)"), std::string::npos) << message;
+}
+
+// GNU tar stores a 1 GiB hole in a few kilobytes: a sparse member that would unpack to far
+// more than was uploaded is refused.
+TEST_F(BundleCheckTest, RefusesSparseMembersThatUnpackToMoreThanTheBundle) {
+  const auto dir = std::filesystem::path(path_).replace_extension(".d");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "mission.yaml") << minimal_manifest();
+  { std::ofstream(dir / "hole.bin"); }
+  std::filesystem::resize_file(dir / "hole.bin", int64_t{1} << 30);
+  const std::string command = "tar --sparse -C '" + dir.string() + "' -cf '" + path_.string() +
+                              "' mission.yaml hole.bin 2>&1";
+  const int status = std::system(command.c_str());
+  std::filesystem::remove_all(dir);
+  if (status != 0) GTEST_SKIP() << "no GNU tar with --sparse here";
+  ASSERT_LT(std::filesystem::file_size(path_), 1u << 20) << "tar did not store a sparse member";
+  try {
+    check_mission_bundle(path_);
+    ADD_FAILURE() << "a 1 GiB sparse member was accepted";
+  } catch (const BundleError& e) {
+    EXPECT_EQ(e.code(), "bad_bundle");
+    const std::string total = std::to_string((int64_t{1} << 30) + minimal_manifest().size());
+    EXPECT_NE(std::string(e.what()).find("member 'hole.bin' makes the files add up to " + total +
+                                         " bytes, more than the " +
+                                         std::to_string(std::filesystem::file_size(path_)) +
+                                         "-byte bundle holds"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -178,6 +178,13 @@ class ThrowingStore : public storage::Store {
   int64_t token_count() override { return inner_.token_count(); }
   std::vector<proto::Project> list_projects() override { return inner_.list_projects(); }
   proto::Project ensure_project(const std::string& n) override { return inner_.ensure_project(n); }
+  proto::Project set_project_quota(const std::string& n, int64_t q) override {
+    return inner_.set_project_quota(n, q);
+  }
+  int64_t project_usage(const std::string& n) override { return inner_.project_usage(n); }
+  bool project_has_blob(const std::string& n, const std::string& b) override {
+    return inner_.project_has_blob(n, b);
+  }
   std::unique_ptr<storage::Subscription> subscribe(storage::ChangeListener l) override {
     return inner_.subscribe(std::move(l));
   }

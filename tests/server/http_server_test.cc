@@ -5,6 +5,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -30,9 +34,10 @@ class HttpServerTest : public ::testing::Test {
     if (server_) server_->stop();
   }
 
-  void start(std::chrono::milliseconds read_timeout = 5000ms) {
+  void start(std::chrono::milliseconds read_timeout = 5000ms, int max_connections = 4096) {
     ServerOptions options;
     options.port = 0;
+    options.max_connections = max_connections;
     options.threads = 2;
     options.read_timeout = read_timeout;
     options.shutdown_grace = 2000ms;
@@ -264,6 +269,68 @@ TEST_F(HttpServerTest, StopClosesIdleConnectionsAndRefusesNewOnes) {
   server_->stop();
   EXPECT_TRUE(idle->wait_closed());
   EXPECT_THROW(RawClient{port}, std::runtime_error);
+}
+
+TEST_F(HttpServerTest, AtMaxConnectionsANewOneWaitsUntilOneEnds) {
+  start(5000ms, /*max_connections=*/2);
+  auto a = client();
+  auto b = client();
+  EXPECT_EQ(must(a->exchange(request("GET", "/healthz"))).status, 200);
+  EXPECT_EQ(must(b->exchange(request("GET", "/healthz"))).status, 200);
+  RawClient c(server_->port(), /*timeout_ms=*/1000);  // connected by the kernel's queue
+  ASSERT_TRUE(c.send(request("GET", "/healthz")));
+  EXPECT_FALSE(c.read_reply()) << "a third connection was served with max_connections 2";
+  a.reset();
+  const std::optional<HttpReply> late = c.read_reply();
+  ASSERT_TRUE(late) << "the waiting connection was not served once one ended";
+  EXPECT_EQ(late->status, 200);
+}
+
+// A slowloris: 500 connections each sending one header byte per second. Other clients are
+// served all along, and every slow connection is dropped at the header deadline.
+TEST_F(HttpServerTest, SlowHeaderClientsDoNotStopOthersAndAreDroppedAtTheDeadline) {
+  struct rlimit files {};
+  getrlimit(RLIMIT_NOFILE, &files);
+  if (files.rlim_cur < 2048 && files.rlim_max >= 2048) {
+    files.rlim_cur = 2048;
+    setrlimit(RLIMIT_NOFILE, &files);
+  }
+  start(3000ms);
+  constexpr int kSlow = 500;
+  std::vector<std::unique_ptr<RawClient>> slow;
+  for (int i = 0; i < kSlow; ++i)
+    slow.push_back(std::make_unique<RawClient>(server_->port(), /*timeout_ms=*/10000));
+  const std::string header =
+      "GET /healthz HTTP/1.1\r\nHost: slow\r\nX-Pad: " + std::string(64, 'a');
+  std::atomic<bool> stop{false};
+  std::thread sender([&] {
+    for (size_t byte = 0; byte < header.size() && !stop; ++byte) {
+      for (auto& c : slow) c->send(header.substr(byte, 1));
+      for (int i = 0; i < 10 && !stop; ++i) std::this_thread::sleep_for(100ms);
+    }
+  });
+  int served = 0, failed = 0;
+  double slowest_ms = 0;
+  const auto until = std::chrono::steady_clock::now() + 5s;
+  while (std::chrono::steady_clock::now() < until) {
+    const auto start_time = std::chrono::steady_clock::now();
+    RawClient c(server_->port(), 5000);
+    const std::optional<HttpReply> reply = c.exchange(request("GET", "/v1/jobs"));
+    (reply && reply->status == 200 ? served : failed)++;
+    slowest_ms = std::max(slowest_ms, std::chrono::duration<double, std::milli>(
+                                          std::chrono::steady_clock::now() - start_time)
+                                          .count());
+    std::this_thread::sleep_for(20ms);
+  }
+  stop = true;
+  sender.join();
+  EXPECT_EQ(failed, 0);
+  EXPECT_GT(served, 20);
+  int closed = 0;
+  for (auto& c : slow) closed += c->wait_closed() ? 1 : 0;
+  EXPECT_EQ(closed, kSlow) << "slow connections still open after the 3 s header deadline";
+  std::cout << "served " << served << " requests beside " << kSlow << " slow clients; slowest "
+            << slowest_ms << " ms\n";
 }
 
 }  // namespace

@@ -119,6 +119,42 @@ TEST_P(ProjectTest, ObjectsBelongToProjectsAndListingsFilterThem) {
   EXPECT_THROW(store_->create_upload(upload_request), Invalid);
 }
 
+TEST_P(ProjectTest, UsageCountsEachReferencedBlobOnceAndQuotasAreKept) {
+  const std::string bytes = testing::random_bytes(1000, 15);
+  proto::UploadRequest request{"a.bin", 1000, "alpha"};
+  const proto::Upload upload = store_->create_upload(request);
+  store_->append_upload(upload.id, 0, bytes.data(), bytes.size());
+  const std::string sha256 = store_->complete_upload(upload.id, sha256_bytes(bytes));
+  EXPECT_TRUE(store_->project_has_blob("alpha", sha256));
+  EXPECT_FALSE(store_->project_has_blob("beta", sha256));
+  EXPECT_EQ(store_->project_usage("alpha"), 1000);
+  EXPECT_EQ(store_->project_usage("beta"), 0);
+  // beta's mission naming the same bytes: beta holds it too; alpha's mission adds nothing.
+  proto::MissionRequest mission;
+  mission.name = "m";
+  mission.bundle_blob = sha256;
+  mission.project = "beta";
+  store_->create_mission(mission);
+  mission.project = "alpha";
+  store_->create_mission(mission);
+  EXPECT_TRUE(store_->project_has_blob("beta", sha256));
+  EXPECT_EQ(store_->project_usage("alpha"), 1000);
+  EXPECT_EQ(store_->project_usage("beta"), 1000);
+  // An open upload counts with its announced size.
+  store_->create_upload({"b.bin", 500, "alpha"});
+  EXPECT_EQ(store_->project_usage("alpha"), 1500);
+  EXPECT_EQ(store_->project_usage("nobody"), 0);
+
+  EXPECT_EQ(store_->set_project_quota("alpha", 4096).quota_bytes, 4096);
+  EXPECT_EQ(store_->set_project_quota("gamma", 10).name, "gamma");  // made when new
+  int64_t alpha_quota = -1;
+  for (const proto::Project& project : store_->list_projects())
+    if (project.name == "alpha") alpha_quota = project.quota_bytes;
+  EXPECT_EQ(alpha_quota, 4096);
+  EXPECT_THROW(store_->set_project_quota("alpha", -1), Invalid);
+  EXPECT_THROW(store_->set_project_quota("bad name!", 1), Invalid);
+}
+
 TEST_P(ProjectTest, LeaseTakesOnlyTheWorkersProject) {
   const proto::Mission a = mission_in(*store_, "harbour", "pier-a");
   const proto::Mission b = mission_in(*store_, "dock", "pier-b");

@@ -35,6 +35,19 @@ struct Abandon {
   std::string why;
 };
 
+// The worker's disk budget for a bundle: at most 90% of what the job folder's disk has free
+// (the stages' outputs need the rest), so a bundle that does not fit is refused while
+// unpacking, before the disk is full, and the partial folder is removed.
+pipeline::UnpackLimits unpack_budget(const fs::path& job_dir) {
+  pipeline::UnpackLimits limits;
+  std::error_code error;
+  const fs::space_info space = fs::space(job_dir, error);
+  if (!error)
+    limits.max_total_bytes =
+        std::min(limits.max_total_bytes, static_cast<int64_t>(space.available / 10 * 9));
+  return limits;
+}
+
 }  // namespace
 
 std::string to_string(JobEnd end) {
@@ -168,7 +181,8 @@ pipeline::JobSpec LeasedJob::prepare() {
     const fs::path bundle = blobs_.fetch(api_, mission.bundle_blob);
     check_stop("bundle download");
     try {
-      spec.mission_dir = pipeline::unpack_bundle(bundle, job_dir_ / "mission");
+      spec.mission_dir =
+          pipeline::unpack_bundle(bundle, job_dir_ / "mission", unpack_budget(job_dir_));
     } catch (const pipeline::BundleError& e) {
       // Name the bundle by its blob id, not by this worker's cache path.
       std::string message = e.what();
@@ -232,7 +246,7 @@ void LeasedJob::on_stage_done(const std::string& stage, const pipeline::StageRes
 
 void LeasedJob::upload_artifact(const std::string& stage, const std::string& name) {
   const fs::path file = work_dir_ / name;
-  const std::string blob = api_.upload_file(file, options_.uploads_dir);
+  const std::string blob = api_.upload_file(file, options_.uploads_dir, {}, "", lease_.job.project);
   proto::ArtifactRegistration registration;
   registration.lease_id = lease_.lease_id;
   registration.stage = stage;

@@ -22,6 +22,7 @@ struct ServeArgs {
   std::string token;
   std::string token_file;
   std::string cache_dir;
+  std::string ca_file;
   LeaseLoopOptions loop;
   double request_timeout_s = 60.0;
   int parent_pid = 0;  // --exit-with-parent PID
@@ -65,6 +66,7 @@ int serve(const ServeArgs& args) {
   client::ClientConfig config;
   config.url = args.server;
   config.timeout_s = args.request_timeout_s;
+  config.ca_file = args.ca_file;
   try {
     config.token = resolve_token(args);
   } catch (const std::exception& e) {
@@ -92,7 +94,10 @@ Subcommand add_serve_command(CLI::App& app) {
   auto args = std::make_shared<ServeArgs>();
   CLI::App* cmd = app.add_subcommand(
       "serve", "Lease jobs from a Keel server and run them (the default subcommand)");
-  cmd->add_option("--server", args->server, "Server URL, http://host:port")->required();
+  cmd->add_option("--server", args->server, "Server URL, http://host:port or https://host:port")
+      ->required();
+  cmd->add_option("--ca-file", args->ca_file,
+                  "https: PEM CA certificates to trust instead of the system's");
   auto* token = cmd->add_option("--token", args->token, "API token");
   cmd->add_option("--token-file", args->token_file, "File whose first line is the API token")
       ->excludes(token);
