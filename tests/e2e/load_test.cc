@@ -60,6 +60,7 @@ TEST(Load, TwoHundredClientsMixingPollsLogsChunksAndRangesGetNoError) {
   config.url = cluster.url();
   config.token = cluster.token();
   config.timeout_s = 60;
+  config.chunk_bytes = 512 << 10;  // under the server's --max-chunk-bytes
   std::string job_id;
   std::string blob;
   std::string blob_bytes;
