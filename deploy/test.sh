@@ -23,8 +23,10 @@ if [ "${KEEL_SKIP_FUZZ:-0}" != 1 ]; then
 fi
 # Issue 15, within CI's time: the network-facing tests again under ASan + UBSan (a second
 # tree holding only what they need), then every fuzz harness for a bounded time
-# (KEEL_CI_FUZZ_SECONDS each; 0 skips). KEEL_CI_HARDENING=0 skips both.
-if [ "${KEEL_CI_HARDENING:-1}" = 1 ]; then
+# (KEEL_CI_FUZZ_SECONDS each; 0 skips). Opt in with KEEL_CI_HARDENING=1: this step has not
+# yet been run end to end or timed (see the closing note of 2026-11-25), so CI leaves it out
+# until it has.
+if [ "${KEEL_CI_HARDENING:-0}" = 1 ]; then
   asan="$build-asan"
   cmake -G Ninja -S "$here" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEEL_SANITIZE=ON >/dev/null
   targets=$(ninja -C "$asan" -t targets all | grep -oE '^test_(server|storage|proto|client)_[a-z0-9_]+' | sort -u)
