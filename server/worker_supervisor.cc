@@ -65,6 +65,10 @@ struct WorkerSupervisor::Impl {
     posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
                                      O_WRONLY | O_CREAT | O_APPEND, 0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+    // Nothing else of the server's: Asio opens its listening and connection sockets without
+    // close-on-exec, and a worker that outlives a killed server (it stops at its next safe
+    // point) would hold the listening port, so the restarted server could not bind it.
+    posix_spawn_file_actions_addclosefrom_np(&actions, STDERR_FILENO + 1);
 
     posix_spawnattr_t attributes;
     posix_spawnattr_init(&attributes);

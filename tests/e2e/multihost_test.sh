@@ -209,15 +209,17 @@ echo "jobs run more than once after a fault: $lost"
 
 while read -r job; do
   arts="$(api "$url_b" "/v1/jobs/$job/artifacts")" || fail "artifacts of $job"
+  # An ingest job writes report.json and report.html, each once however often it was leased.
   names="$(echo "$arts" | /usr/bin/python3 -c 'import json,sys; print(" ".join(sorted(a["name"] for a in json.load(sys.stdin)["artifacts"])))')"
-  [ "$names" = "report.json" ] || fail "job $job has artifacts [$names], expected one report.json"
+  [ "$names" = "report.html report.json" ] || fail "job $job has artifacts [$names], expected report.html and report.json once each"
   KEEL_URL="$url_b" KEEL_TOKEN="$token" "$bin/keel" fetch -q "$job" -o "$tmp/fetched/$job" >/dev/null ||
     fail "fetch of $job through b (SHA-256 checked)"
-  expected="$(echo "$arts" | /usr/bin/python3 -c 'import json,sys; print(json.load(sys.stdin)["artifacts"][0]["sha256"])')"
-  got="$(sha256sum "$tmp/fetched/$job/report.json" | cut -d' ' -f1)"
-  [ "$got" = "$expected" ] || fail "report.json of $job: sha256 $got, recorded $expected"
+  while read -r name expected; do
+    got="$(sha256sum "$tmp/fetched/$job/$name" | cut -d' ' -f1)"
+    [ "$got" = "$expected" ] || fail "$name of $job: sha256 $got, recorded $expected"
+  done < <(echo "$arts" | /usr/bin/python3 -c 'import json,sys; [print(a["name"], a["sha256"]) for a in json.load(sys.stdin)["artifacts"]]')
 done <"$tmp/jobs.txt"
-echo "every job has one report.json whose SHA-256 matches"
+echo "every job has one report.json and one report.html whose SHA-256 match"
 bad=0
 while read -r file; do
   [ "$(sha256sum "$file" | cut -d' ' -f1)" = "$(basename "$file")" ] || { echo "blob $file"; bad=$((bad + 1)); }

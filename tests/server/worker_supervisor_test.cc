@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <fstream>
@@ -83,6 +84,25 @@ TEST_F(SupervisorTest, StartsWorkersWithArgsAndLogsAndRestartsACrashedOne) {
   supervisor.stop();
   EXPECT_EQ(supervisor.alive(), 0);
   for (pid_t pid : last) EXPECT_FALSE(process_exists(pid)) << pid;  // reaped, not zombies
+}
+
+// A worker that outlives a killed server must not hold the server's listening socket (or any
+// other descriptor of the server's), or the restarted server cannot bind its port.
+TEST_F(SupervisorTest, WorkersInheritOnlyStdinStdoutAndStderr) {
+  const int inherited = ::dup(STDERR_FILENO);  // a descriptor without close-on-exec
+  ASSERT_GE(inherited, 3);
+  auto binary = script("fds.sh", "ls /proc/$$/fd | sort -n | tr '\\n' ' '; echo\nexec sleep 60");
+  WorkerSupervisor supervisor(options(binary, 1));
+  supervisor.start({});
+  ::close(inherited);
+  const auto log = dir_.path() / "logs" / "worker-0.log";
+  ASSERT_TRUE(eventually([&] { return read(log).find('\n') != std::string::npos; }));
+  // The shell's own descriptor for reading its script may follow 0 1 2 (dash keeps it at 10).
+  const std::string fds = read(log);
+  EXPECT_EQ(fds.rfind("0 1 2 ", 0), 0u) << fds;
+  EXPECT_EQ(fds.find(" " + std::to_string(inherited) + " "), std::string::npos)
+      << "descriptor " << inherited << " of the server reached the worker: " << fds;
+  supervisor.stop();
 }
 
 TEST_F(SupervisorTest, WorkerIgnoringSigtermIsKilledAfterTheGrace) {

@@ -248,6 +248,8 @@ test('the viewer shows every map with its point count and a legend equal to the 
       const expected = mode === 'height' ? {min: sidecar.bbox_min[2], max: sidecar.bbox_max[2]} : sidecar.attributes[mode];
       assert.equal(min, expected.min, `${name} ${mode} min`);
       assert.equal(max, expected.max, `${name} ${mode} max`);
+      // An attribute with undefined points says how they are drawn.
+      assert.equal(Boolean(await legend.$('.no-data')), expected.no_data !== undefined, `${name} ${mode}: no-data entry`);
       if (level === 'full') {
         const decodedRange = await page.evaluate(([l, m]) => window.keelViewer.attributeRange(l, m === 'height' ? 'position' : m), [name, mode]);
         const tolerance = 1e-5 * Math.max(1, Math.abs(expected.max - expected.min));

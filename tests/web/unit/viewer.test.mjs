@@ -7,6 +7,7 @@ import {decodeCamera, encodeCamera} from '../../../web/js/viewer/camera_url.js';
 import {strideFor, strided} from '../../../web/js/viewer/thinning.js';
 import {parseResiduals} from '../../../web/js/viewer/residual_layer.js';
 import {taskConfigFor} from '../../../web/js/viewer/draco.js';
+import {NO_NO_DATA, noDataBelow} from '../../../web/js/viewer/materials.js';
 
 test('viridis ends are matplotlib\'s #440154 and #fde725', () => {
   assert.deepEqual(rampColor('viridis', 0), [0x44, 0x01, 0x54]);
@@ -35,6 +36,19 @@ test('range and histogram equal a brute-force count', () => {
   }
   const xyz = Float32Array.from([0, 0, 5, 1, 1, -2, 2, 2, 9]);
   assert.deepEqual(finiteRange(xyz, 3, 2), {min: -2, max: 9});
+});
+
+// docs/artifacts.md: where a metric is undefined a point holds the attribute's no_data, just
+// below its smallest defined value; the range of the defined values leaves it out, and the
+// shader greys every value below the legend's minimum.
+test('no_data is left out of the range and greyed below the legend', () => {
+  const noData = 0.01 - 0.5 / 1024;
+  const values = Float32Array.from([0.01, 0.2, noData, 0.51, noData]);
+  assert.deepEqual(finiteRange(values), {min: Math.fround(noData), max: Math.fround(0.51)});
+  assert.deepEqual(finiteRange(values, 1, 0, Math.fround(noData)), {min: Math.fround(0.01), max: Math.fround(0.51)});
+  assert.equal(noDataBelow({min: 0.01, max: 0.51, ramp: 'viridis', noData}), 0.01);
+  assert.equal(noDataBelow({min: 0.01, max: 0.51, ramp: 'viridis'}), NO_NO_DATA);
+  assert.equal(noDataBelow({min: 0, max: 2, ramp: 'categorical', noData: -1}), NO_NO_DATA);
 });
 
 test('the camera survives the URL to the millimetre and junk is refused', () => {

@@ -693,11 +693,13 @@ export function mount(container, {id, query}) {
     layers,
     camera: () => scene.cameraText(),
     flyToShape,
+    // The range of the values a layer holds, leaving out the attribute's no_data value.
     attributeRange(layerName, attribute) {
       const layer = layers.get(layerName);
       const geometry = layer?.decoded || layer?.mesh?.geometry;
       const a = geometry?.getAttribute(attribute);
-      return a ? finiteRange(a.array, a.itemSize, attribute === 'position' ? 2 : 0) : null;
+      const noData = layer?.sidecar?.attributes?.[attribute]?.no_data;
+      return a ? finiteRange(a.array, a.itemSize, attribute === 'position' ? 2 : 0, noData === undefined ? undefined : Math.fround(noData)) : null;
     },
   };
 

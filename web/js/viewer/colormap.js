@@ -48,12 +48,14 @@ export function cssGradient(name) {
   return `linear-gradient(to right, ${stops.join(', ')})`;
 }
 
-// Min and max of the finite values of an array (strided: every `stride`-th from `offset`).
-export function finiteRange(array, stride = 1, offset = 0) {
+// Min and max of the finite values of an array (strided: every `stride`-th from `offset`),
+// leaving out the values equal to `skip` (an attribute's no_data).
+export function finiteRange(array, stride = 1, offset = 0, skip = undefined) {
   let min = Infinity;
   let max = -Infinity;
   for (let i = offset; i < array.length; i += stride) {
     const v = array[i];
+    if (v === skip) continue;
     if (v < min) min = v;
     if (v > max) max = v;
   }

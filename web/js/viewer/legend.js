@@ -19,6 +19,8 @@ export function legendBox(legend, layerName) {
   box.append(h('div', {class: 'ramp', style: {background: cssGradient(legend.ramp)}}),
              h('div', {class: 'ends'}, h('span', {class: 'min'}, formatNumber(legend.min)),
                h('span', {class: 'max'}, formatNumber(legend.max))));
+  if (legend.noData !== undefined)
+    box.append(h('div', {class: 'no-data'}, h('span', {class: 'swatch', style: {background: 'rgb(115,115,115)'}}), 'undefined here'));
   return box;
 }
 

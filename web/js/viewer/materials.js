@@ -12,12 +12,22 @@ export function rampTexture(name, categories = 0) {
   return texture;
 }
 
+// An attribute with a `no_data` value (docs/artifacts.md: just below its smallest defined
+// value) colours the points holding it grey: every value below the legend's minimum.
+export const NO_NO_DATA = -3.0e38;
+
+// The noDataBelow uniform for a legend: its minimum when the attribute has a no_data value.
+export function noDataBelow(legend) {
+  return legend.noData !== undefined && legend.ramp !== 'categorical' ? legend.min : NO_NO_DATA;
+}
+
 const valueChunk = /* glsl */ `
 attribute float value;
 uniform float vmin;
 uniform float vmax;
 uniform int useHeight;
 uniform float threshold;
+uniform float noDataBelow;
 uniform sampler2D ramp;
 varying vec3 vColor;
 vec3 rampColor() {
@@ -28,6 +38,7 @@ vec3 rampColor() {
 #endif
   float v = useHeight == 1 ? z : value;
   if (abs(v) < threshold) return vec3(0.62);
+  if (useHeight == 0 && v < noDataBelow) return vec3(0.45);  // a point where the metric is undefined
   float t = clamp((v - vmin) / max(vmax - vmin, 1e-12), 0.0, 1.0);
   return texture2D(ramp, vec2(t, 0.5)).rgb;
 }`;
@@ -38,7 +49,7 @@ export function pointMaterial({worldHeight = false} = {}) {
   return new THREE.ShaderMaterial({
     defines: worldHeight ? {WORLD_HEIGHT: 1} : {},
     uniforms: {
-      vmin: {value: 0}, vmax: {value: 1}, useHeight: {value: 1}, threshold: {value: -1},
+      vmin: {value: 0}, vmax: {value: 1}, useHeight: {value: 1}, threshold: {value: -1}, noDataBelow: {value: NO_NO_DATA},
       ramp: {value: rampTexture('viridis')}, pointSize: {value: 2},
     },
     vertexShader: `${valueChunk}
@@ -58,7 +69,7 @@ void main() { gl_FragColor = vec4(vColor, 1.0); }`,
 export function meshMaterial({flat = false, opacity = 1} = {}) {
   return new THREE.ShaderMaterial({
     uniforms: {
-      vmin: {value: 0}, vmax: {value: 1}, useHeight: {value: 0}, threshold: {value: -1},
+      vmin: {value: 0}, vmax: {value: 1}, useHeight: {value: 0}, threshold: {value: -1}, noDataBelow: {value: NO_NO_DATA},
       ramp: {value: rampTexture('viridis')}, flatColor: {value: flat ? 1 : 0}, opacity: {value: opacity},
     },
     vertexShader: `${valueChunk}

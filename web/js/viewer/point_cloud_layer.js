@@ -4,7 +4,7 @@
 // picture fast and is drawn while the camera moves; the budgeted copy when it rests.
 import * as THREE from 'three';
 import {decodeDraco} from './draco.js';
-import {pointMaterial, rampTexture} from './materials.js';
+import {NO_NO_DATA, noDataBelow, pointMaterial, rampTexture} from './materials.js';
 import {strideFor, thinGeometry} from './thinning.js';
 
 export const COARSE_POINTS = 250000;
@@ -160,7 +160,7 @@ export class PointCloudLayer {
     if (mode === 'sensor')
       return {title: `${this.name}: sensor`, min: info.min, max: info.max, ramp: 'categorical', labels: info.labels || [], mode};
     const unit = {intensity: '', density: ' (points/m³)', roughness: ' (m)', planarity: ''}[mode] ?? '';
-    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode};
+    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode, noData: info.no_data};
   }
 
   setColorMode(mode) {
@@ -177,6 +177,7 @@ export class PointCloudLayer {
     uniforms.useHeight.value = this.colorMode === 'height' ? 1 : 0;
     uniforms.vmin.value = categories ? legend.min - 0.5 : legend.min;
     uniforms.vmax.value = categories ? legend.max + 0.5 : legend.max;
+    uniforms.noDataBelow.value = this.colorMode === 'height' ? NO_NO_DATA : noDataBelow(legend);
     uniforms.ramp.value.dispose();
     uniforms.ramp.value = rampTexture('viridis', categories);
     for (const points of [this.coarse, ...(this.details || [])]) {

@@ -7,7 +7,7 @@
 // by height or by a batch-table attribute (intensity, sensor, density, roughness, planarity).
 import * as THREE from 'three';
 import {TilesRenderer} from '3d-tiles-renderer/three';
-import {pointMaterial, rampTexture} from './materials.js';
+import {NO_NO_DATA, noDataBelow, pointMaterial, rampTexture} from './materials.js';
 
 // Target screen-space error in pixels: a tile is refined while its points would be more
 // than this far apart on screen (its geometricError is its point spacing in metres), so
@@ -211,7 +211,7 @@ export class TilesLayer {
     if (mode === 'sensor')
       return {title: `${this.name}: sensor`, min: info.min, max: info.max, ramp: 'categorical', labels: this.info.sensors, mode};
     const unit = {intensity: '', density: ' (points/m³)', roughness: ' (m)', planarity: ''}[mode] ?? '';
-    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode};
+    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode, noData: info.no_data};
   }
 
   setColorMode(mode) {
@@ -238,6 +238,7 @@ export class TilesLayer {
     const categories = legend.ramp === 'categorical' ? Math.max(1, Math.round(legend.max - legend.min) + 1) : 0;
     uniforms.vmin.value = categories ? legend.min - 0.5 : legend.min;
     uniforms.vmax.value = categories ? legend.max + 0.5 : legend.max;
+    uniforms.noDataBelow.value = this.colorMode === 'height' ? NO_NO_DATA : noDataBelow(legend);
     return categories;
   }
 
