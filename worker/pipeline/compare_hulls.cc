@@ -13,6 +13,7 @@
 #include "worker/io/mesh_ply_writer.h"
 #include "worker/mapping/map_metrics.h"
 #include "worker/pipeline/ba_stage.h"
+#include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/inspect_stage.h"
 #include "worker/pipeline/report.h"
 
@@ -170,6 +171,8 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
   const io::DracoEncoded encoded = io::encode_draco_mesh(b.mesh.mesh, fields, draco);
   io::write_draco_file(context.work_dir / change_draco_file(kHullChangeName), encoded.bytes);
   artifacts->push_back(change_draco_file(kHullChangeName));
+  artifacts->push_back(write_draco_sidecar(context.work_dir, change_draco_file(kHullChangeName),
+                                           encoded.summary, "model"));
   if (options.write_ply) {
     io::write_ply_mesh(context.work_dir / change_ply_file(kHullChangeName), b.mesh.mesh, fields);
     artifacts->push_back(change_ply_file(kHullChangeName));

@@ -17,6 +17,7 @@
 #include "worker/io/ply_cloud_writer.h"
 #include "worker/io/tum.h"
 #include "worker/mapping/map_metrics.h"
+#include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/map_stage.h"
 
 namespace keel::pipeline {
@@ -269,6 +270,9 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     const io::DracoEncoded encoded = io::encode_draco_point_cloud(b, fields, draco);
     io::write_draco_file(context.work_dir / change_draco_file(map), encoded.bytes);
     artifacts->push_back(change_draco_file(map));
+    // The viewer finds the attributes and their ranges here (A's world frame).
+    artifacts->push_back(
+        write_draco_sidecar(context.work_dir, change_draco_file(map), encoded.summary, "world"));
     if (options.write_ply) {
       PointCloud cloud;
       cloud.xyz = b;

@@ -16,6 +16,7 @@
 #include "worker/io/draco_codec.h"
 #include "worker/pipeline/ba_stage.h"
 #include "worker/pipeline/compare_runs.h"
+#include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/inspect_stage.h"
 #include "worker/pipeline/map_stage.h"
 #include "worker/pipeline/report.h"
@@ -158,6 +159,19 @@ TEST_F(CompareStageTest, LaterSurveyRegisteredAndItsNewSlabSignificant) {
   }
   EXPECT_LT(double(far_significant), 0.01 * far);
   EXPECT_TRUE(fs::exists(root_ / "out" / kChangesFile));
+
+  // The sidecar: the decoded file's count and each attribute's range (brute force).
+  const std::string sidecar_name = sidecar_file(change_draco_file(kCombinedMapName));
+  EXPECT_NE(std::find(result.artifacts.begin(), result.artifacts.end(), sidecar_name),
+            result.artifacts.end());
+  const json sidecar = json::parse(std::ifstream(root_ / "out" / sidecar_name));
+  EXPECT_EQ(sidecar["frame"], "world");
+  EXPECT_EQ(sidecar["points"].get<size_t>(), change.positions.size());
+  for (const char* name : {"m3c2_m", "lod95_m", "significant", "c2c_m"}) {
+    const auto [lo, hi] = std::minmax_element(field[name]->begin(), field[name]->end());
+    EXPECT_EQ(sidecar["attributes"][name]["min"].get<double>(), double(*lo)) << name;
+    EXPECT_EQ(sidecar["attributes"][name]["max"].get<double>(), double(*hi)) << name;
+  }
 }
 
 TEST_F(CompareStageTest, AJobWithItselfGivesZeroChange) {
@@ -260,6 +274,18 @@ TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
         EXPECT_NEAR(f.values[i],
                     change.mesh.vertices[i].isApprox(Eigen::Vector3d(1, 1, 0), 1e-3) ? 0.05f : 0.0f,
                     1e-3);
+  // The sidecar (model frame): vertex count and each attribute's range from the decoded mesh.
+  const json sidecar =
+      json::parse(std::ifstream(root_ / "out" / sidecar_file(change_draco_file(kHullChangeName))));
+  EXPECT_EQ(sidecar["frame"], "model");
+  EXPECT_EQ(sidecar["kind"], "mesh");
+  EXPECT_EQ(sidecar["points"].get<size_t>(), change.mesh.vertices.size());
+  ASSERT_EQ(change.fields.size(), 3u);
+  for (const auto& f : change.fields) {
+    const auto [lo, hi] = std::minmax_element(f.values.begin(), f.values.end());
+    EXPECT_EQ(sidecar["attributes"][f.name]["min"].get<double>(), double(*lo)) << f.name;
+    EXPECT_EQ(sidecar["attributes"][f.name]["max"].get<double>(), double(*hi)) << f.name;
+  }
 }
 
 TEST(CompareRuns, OptionsAndFiguresThatDiffer) {
