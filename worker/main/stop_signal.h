@@ -1,5 +1,6 @@
 // SIGINT/SIGTERM handling shared by the subcommands: the first signal asks the program to
-// stop (polled through stop_requested()); a second one ends the process at once.
+// stop (polled through stop_requested()); a second one, 2 s or more later, ends the process at
+// once (sooner it is the same stop delivered twice, as Slurm and a batch shell both do).
 #pragma once
 
 namespace keel::worker {
