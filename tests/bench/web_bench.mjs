@@ -92,7 +92,7 @@ async function benchBigMap(browser) {
 }
 
 async function benchDashboard(browser) {
-  const server = await new Server(binDir, webDir, {workers: 0}).start();
+  const server = await new Server(binDir, webDir, {workers: 0, serverArgs: ['--rate-limit', '0']}).start();
   try {
     const mission = path.join(tempDir('keel-web-bench-'), 'small');
     simulate(binDir, mission, {scenario: 'usv-bridge', duration: 5, sensors: 'imu,dvl'});

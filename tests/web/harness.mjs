@@ -48,8 +48,11 @@ export function run(binary, args, {env = {}, timeoutMs = 600000} = {}) {
   return r.stdout.trim();
 }
 
-export function simulate(binDir, out, {scenario = 'usv-bridge', duration = 20, sensors = '', seed = 1, set = []} = {}) {
+// survey: 1 = the first survey of a scene, 2, 3, ... the same scene again with known changes
+// (usv-bridge, hauv-hull); left out, keel-sim's default (the first).
+export function simulate(binDir, out, {scenario = 'usv-bridge', duration = 20, sensors = '', seed = 1, survey, set = []} = {}) {
   const args = ['--scenario', scenario, '--seed', String(seed), '--duration', String(duration), '--out', out];
+  if (survey !== undefined) args.push('--survey', String(survey));
   if (sensors) args.push('--sensors', sensors);
   for (const s of set) args.push('--set', s);
   run(path.join(binDir, 'keel-sim'), args);
@@ -65,8 +68,11 @@ process.on('exit', () => {
 });
 
 export class Server {
-  constructor(binDir, webDir, {workers = 1, dataDir = tempDir('keel-web-data-')} = {}) {
+  // serverArgs: more keel-server options (a benchmark that makes 1,000 jobs at once turns
+  // the per-token request rate limit off with ['--rate-limit', '0']).
+  constructor(binDir, webDir, {workers = 1, dataDir = tempDir('keel-web-data-'), serverArgs = []} = {}) {
     this.binDir = binDir;
+    this.serverArgs = serverArgs;
     this.webDir = webDir;
     this.workers = workers;
     this.dataDir = dataDir;
@@ -77,7 +83,7 @@ export class Server {
     fs.rmSync(path.join(this.dataDir, 'server.url'), {force: true});  // a reused folder's old one
     const log = fs.openSync(this.log, 'a');
     this.process = spawn(path.join(this.binDir, 'keel-server'),
-      ['--data-dir', this.dataDir, '--listen', '127.0.0.1:0', '--workers', String(this.workers), '--web-dir', this.webDir],
+      ['--data-dir', this.dataDir, '--listen', '127.0.0.1:0', '--workers', String(this.workers), '--web-dir', this.webDir, ...this.serverArgs],
       {stdio: ['ignore', log, log]});
     started.add(this.process);
     const urlFile = path.join(this.dataDir, 'server.url');
