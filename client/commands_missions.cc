@@ -1,5 +1,5 @@
 // keel missions [--prefix P] | reprocess (--mission ID... | --prefix P | --all)
-//                                        [--stages a,b] [--set stage.option=value]...
+//                                        [--stages a,b] [--set stage.option=value]... [--compare]
 #include <cstdio>
 #include <memory>
 
@@ -18,6 +18,7 @@ struct MissionArgs {
   bool all = false;
   std::string stages = kDefaultStages;
   std::vector<std::string> assignments;
+  bool compare = false;
 };
 
 int run_missions(CliContext& context, const MissionArgs& args) {
@@ -35,12 +36,18 @@ int run_reprocess(CliContext& context, const MissionArgs& args) {
   request.stages = proto::parse_stage_list(args.stages);
   for (const auto& assignment : args.assignments)
     proto::apply_option_assignment(request.options, assignment);
+  request.compare = args.compare;
   // The server makes every job in one transaction and answers at once, whatever the count.
   const auto reprocessed = context.api().reprocess(request);
   for (const proto::Job& job : reprocessed.jobs) std::printf("%s\n", job.id.c_str());
   std::fprintf(stderr, "batch %s: %ld jobs queued; follow it with: keel jobs --batch %s\n",
                reprocessed.batch.id.c_str(), long(reprocessed.batch.jobs),
                reprocessed.batch.id.c_str());
+  if (args.compare)
+    std::fprintf(stderr,
+                 "%ld of them compare with the job they reprocess (the rest have no succeeded "
+                 "job to compare with): their report's stages.compare, keel fetch for change_*\n",
+                 long(reprocessed.batch.compared));
   return 0;
 }
 
@@ -63,6 +70,9 @@ void add_mission_commands(CLI::App& app, CliContext& context) {
       ->default_str(kDefaultStages);
   reprocess->add_option("--set", args->assignments,
                         "Stage option, stage.option=value (repeatable)");
+  reprocess->add_flag("--compare", args->compare,
+                      "Each new job then compares its products with the job it reprocesses "
+                      "(its mission's latest succeeded job): stage compare, last");
   reprocess->callback([&context, args] { context.exit_code = run_reprocess(context, *args); });
 }
 

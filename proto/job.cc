@@ -1,5 +1,7 @@
 #include "proto/job.h"
 
+#include <algorithm>
+
 #include "proto/auth.h"
 #include "proto/contract_error.h"
 #include "proto/options.h"
@@ -131,12 +133,13 @@ nlohmann::json ReprocessRequest::to_json() const {
                         {"stages", stages},
                         {"options", options}};
   if (!project.empty()) out["project"] = project;
+  if (compare) out["compare"] = true;
   return out;
 }
 
 ReprocessRequest ReprocessRequest::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
-  r.reject_unknown({"mission_ids", "name_prefix", "stages", "options", "project"});
+  r.reject_unknown({"mission_ids", "name_prefix", "stages", "options", "project", "compare"});
   ReprocessRequest out;
   out.project = optional_project(r);
   out.mission_ids = r.optional<std::vector<std::string>>("mission_ids", {});
@@ -145,23 +148,29 @@ ReprocessRequest ReprocessRequest::from_json(const nlohmann::json& body, const s
   validate_stage_list(out.stages, r.child("stages"));
   out.options = r.optional<nlohmann::json>("options", nlohmann::json::object());
   validate_options(out.options, r.child("options"));
+  out.compare = r.optional<bool>("compare", false);
+  if (out.compare && std::find(out.stages.begin(), out.stages.end(), "compare") != out.stages.end())
+    throw ContractError(r.child("stages") +
+                        ": 'compare' is added by \"compare\": true; list the stages to run again");
   return out;
 }
 
 nlohmann::json Batch::to_json() const {
-  return {{"id", id},
-          {"project", project},
-          {"created_at_ms", created_at_ms},
-          {"jobs", jobs},
-          {"jobs_by_state", state_counts(jobs_by_state)},
-          {"mean_job_seconds", mean_job_seconds},
-          {"finished_jobs_timed", finished_jobs_timed}};
+  nlohmann::json out = {{"id", id},
+                        {"project", project},
+                        {"created_at_ms", created_at_ms},
+                        {"jobs", jobs},
+                        {"jobs_by_state", state_counts(jobs_by_state)},
+                        {"mean_job_seconds", mean_job_seconds},
+                        {"finished_jobs_timed", finished_jobs_timed}};
+  if (compared > 0) out["compared"] = compared;
+  return out;
 }
 
 Batch Batch::from_json(const nlohmann::json& body, const std::string& path) {
   FieldReader r(body, path);
   r.reject_unknown({"id", "project", "created_at_ms", "jobs", "jobs_by_state", "mean_job_seconds",
-                    "finished_jobs_timed"});
+                    "finished_jobs_timed", "compared"});
   Batch out;
   out.id = r.required<std::string>("id");
   out.project = r.optional<std::string>("project", "");
@@ -180,6 +189,7 @@ Batch Batch::from_json(const nlohmann::json& body, const std::string& path) {
   }
   out.mean_job_seconds = r.optional<double>("mean_job_seconds", 0.0);
   out.finished_jobs_timed = r.optional<int64_t>("finished_jobs_timed", 0);
+  out.compared = r.optional<int64_t>("compared", 0);
   return out;
 }
 

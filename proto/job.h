@@ -72,6 +72,10 @@ struct ReprocessRequest {
   std::vector<std::string> stages;
   nlohmann::json options = nlohmann::json::object();
   std::string project;                   // optional in JSON; the server sets the token's
+  // Each new job also compares its products with the job it reprocesses: the latest
+  // succeeded job of its mission (a comparison job aside). Such a job runs `compare` after its
+  // stages, with options.compare.job_a = that job (issue 16; docs/api.md "Reprocess").
+  bool compare = false;
 
   nlohmann::json to_json() const;
   static ReprocessRequest from_json(const nlohmann::json& body, const std::string& path = "");
@@ -83,6 +87,7 @@ struct Batch {
   std::string project;
   int64_t created_at_ms = 0;
   int64_t jobs = 0;                              // jobs made
+  int64_t compared = 0;  // of them, comparing with the job they reprocess (in create's answer)
   std::map<std::string, int64_t> jobs_by_state;  // every state, 0 included
   // Seconds of the batch's finished jobs (finished - started), for an ETA.
   double mean_job_seconds = 0.0;

@@ -4,7 +4,8 @@
 // succeeded, jobs of two projects, a map job against a hull job 409 `not_comparable`. The job
 // runs on B's mission with stages ["compare"] and options {"compare": {...options, "job_a",
 // "job_b"}}; the lease gives the worker both jobs' records and artifacts
-// (compare_lease_inputs).
+// (compare_lease_inputs). A reprocess job made with "compare": true has options.compare.job_a
+// alone: its lease gives job A, and the stage compares A with the job's own products.
 #include <algorithm>
 
 #include "proto/job.h"
@@ -87,10 +88,15 @@ void compare_lease_inputs(storage::Store& store, proto::Lease* lease) {
   if (std::find(job.stages.begin(), job.stages.end(), "compare") == job.stages.end()) return;
   if (!job.options.contains("compare") || !job.options["compare"].is_object()) return;
   const nlohmann::json& o = job.options["compare"];
-  for (const char* key : {"job_a", "job_b"}) {
+  // A reprocess job with `"compare": true` runs its stages, then compares job_a with itself
+  // (its own products: no job_b); a comparison job names both.
+  const bool with_itself = job.stages.size() > 1 && !o.contains("job_b");
+  std::vector<const char*> keys = {"job_a"};
+  if (!with_itself) keys.push_back("job_b");
+  for (const char* key : keys) {
     if (!o.contains(key) || !o[key].is_string()) return;  // the stage says what is missing
   }
-  for (const char* key : {"job_a", "job_b"}) {
+  for (const char* key : keys) {
     proto::LeaseInput input;
     input.job = store.get_job(o[key].get<std::string>());
     if (input.job.project != job.project) return;  // never hand out another project's job

@@ -1,5 +1,6 @@
 // PgStore: reprocess batches (one transaction and a few statements for any number of
 // missions) and the queue summary behind GET /v1/queue.
+#include <map>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -39,6 +40,20 @@ std::vector<std::string> batch_missions(PgTx& tx, const proto::ReprocessRequest&
   return ids;
 }
 
+// The job each reprocess job reprocesses, by mission: the mission's latest succeeded job that
+// is not a comparison job (missions without one are absent). One statement for the batch.
+std::map<std::string, std::string> earlier_jobs(PgTx& tx, const std::vector<std::string>& missions,
+                                                const std::string& project) {
+  const pqxx::result rows = tx.exec(
+      "SELECT DISTINCT ON (mission_id) mission_id, id FROM jobs "
+      "WHERE mission_id = ANY($1::text[]) AND project = $2 AND state = 'succeeded' "
+      "AND stages <> $3 ORDER BY mission_id, finished_at_ms DESC, seq DESC",
+      pg_text_array(missions), project, std::string(rules::kCompareOnlyStages));
+  std::map<std::string, std::string> out;
+  for (const auto& row : rows) out[row[0].as<std::string>()] = row[1].as<std::string>();
+  return out;
+}
+
 }  // namespace
 
 proto::Batch PgStore::create_batch(const proto::ReprocessRequest& request) {
@@ -56,14 +71,26 @@ proto::Batch PgStore::create_batch(const proto::ReprocessRequest& request) {
     std::vector<std::string> job_ids;
     job_ids.reserve(missions.size());
     for (size_t i = 0; i < missions.size(); ++i) job_ids.push_back(new_id(kJobPrefix));
+    std::vector<std::string> job_stages(missions.size(), stages), job_options(missions.size(), options);
+    if (request.compare) {
+      const std::map<std::string, std::string> earlier = earlier_jobs(tx, missions, batch.project);
+      for (size_t i = 0; i < missions.size(); ++i) {
+        const auto found = earlier.find(missions[i]);
+        if (found == earlier.end()) continue;
+        const rules::BatchJobPipeline pipeline = rules::with_compare(request.stages, request.options, found->second);
+        job_stages[i] = pipeline.stages;
+        job_options[i] = pipeline.options;
+        ++batch.compared;
+      }
+    }
     // One INSERT for every job, in the missions' order (their seq follows it).
     tx.exec(
         "INSERT INTO jobs (id, mission_id, state, stages, options, created_at_ms, project, "
-        "batch_id) SELECT j.id, j.mission, 'queued', $3, $4, $5, $6, $7 "
-        "FROM unnest($1::text[], $2::text[]) WITH ORDINALITY AS j(id, mission, ord) "
-        "ORDER BY j.ord",
-        pg_text_array(job_ids), pg_text_array(missions), stages, options, batch.created_at_ms,
-        batch.project, batch.id);
+        "batch_id) SELECT j.id, j.mission, 'queued', j.stages, j.options, $5, $6, $7 "
+        "FROM unnest($1::text[], $2::text[], $3::text[], $4::text[]) WITH ORDINALITY "
+        "AS j(id, mission, stages, options, ord) ORDER BY j.ord",
+        pg_text_array(job_ids), pg_text_array(missions), pg_text_array(job_stages),
+        pg_text_array(job_options), batch.created_at_ms, batch.project, batch.id);
     tx.exec("INSERT INTO batches (id, project, jobs, created_at_ms) VALUES ($1, $2, $3, $4)",
             batch.id, batch.project, static_cast<int64_t>(missions.size()), batch.created_at_ms);
     batch.jobs = static_cast<int64_t>(missions.size());

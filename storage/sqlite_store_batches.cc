@@ -39,6 +39,16 @@ std::vector<std::string> batch_missions(Database& db, const proto::ReprocessRequ
   return ids;
 }
 
+// The job a reprocess job reprocesses: its mission's latest succeeded job that is not a
+// comparison job, or "" when there is none.
+std::string earlier_job(Database& db, const std::string& mission_id, const std::string& project) {
+  auto statement = db.cached(
+      "SELECT id FROM jobs WHERE mission_id = ?1 AND project = ?2 AND state = 'succeeded' "
+      "AND stages <> ?3 ORDER BY finished_at_ms DESC, seq DESC LIMIT 1");
+  statement->bind_text(1, mission_id).bind_text(2, project).bind_text(3, kCompareOnlyStages);
+  return statement->step() ? statement->column_text(0) : "";
+}
+
 }  // namespace
 
 proto::Batch SqliteStore::create_batch(const proto::ReprocessRequest& request) {
@@ -58,11 +68,19 @@ proto::Batch SqliteStore::create_batch(const proto::ReprocessRequest& request) {
         "batch_id) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)");
     for (const std::string& mission_id : missions) {
       const std::string job_id = new_id(kJobPrefix);
+      BatchJobPipeline pipeline{stages, options};
+      if (request.compare) {
+        const std::string earlier = earlier_job(db, mission_id, batch.project);
+        if (!earlier.empty()) {
+          pipeline = with_compare(request.stages, request.options, earlier);
+          ++batch.compared;
+        }
+      }
       insert->reset();
       insert->bind_text(1, job_id)
           .bind_text(2, mission_id)
-          .bind_text(3, stages)
-          .bind_text(4, options)
+          .bind_text(3, pipeline.stages)
+          .bind_text(4, pipeline.options)
           .bind_int64(5, batch.created_at_ms)
           .bind_text(6, batch.project)
           .bind_text(7, batch.id)

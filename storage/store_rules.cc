@@ -58,6 +58,17 @@ void require_pipeline(const std::vector<std::string>& stages, const nlohmann::js
   }
 }
 
+BatchJobPipeline with_compare(const std::vector<std::string>& stages, nlohmann::json options,
+                              const std::string& earlier_job) {
+  std::vector<std::string> with = stages;
+  with.push_back("compare");
+  if (!options.is_object()) options = nlohmann::json::object();
+  if (!options.contains("compare") || !options["compare"].is_object())
+    options["compare"] = nlohmann::json::object();
+  options["compare"]["job_a"] = earlier_job;  // job_b: the job itself (compare_stage.h)
+  return {nlohmann::json(with).dump(), options.dump()};
+}
+
 void require_idempotency_key(const std::string& key) {
   if (key.size() > kMaxIdempotencyKeyBytes)
     throw Invalid("Idempotency-Key: expected at most " + std::to_string(kMaxIdempotencyKeyBytes) +

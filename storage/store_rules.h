@@ -45,6 +45,18 @@ void require_list_limit(int limit);
 // The project a token spec may name ('*' only for admin and worker tokens).
 void require_token_spec(const std::string& token, const TokenSpec& spec);
 
+// A reprocess job that also compares with the job it reprocesses (ReprocessRequest::compare):
+// its stages with `compare` last, and its options with options.compare.job_a = `earlier_job`.
+struct BatchJobPipeline {
+  std::string stages;   // JSON text, as the jobs table holds them
+  std::string options;  // JSON text
+};
+BatchJobPipeline with_compare(const std::vector<std::string>& stages, nlohmann::json options,
+                              const std::string& earlier_job);
+// The jobs table's text of a comparison job's stages: such a job is never "the job a
+// reprocess job reprocesses".
+inline constexpr const char* kCompareOnlyStages = "[\"compare\"]";
+
 // An Idempotency-Key reused with another request is a conflict.
 bool same_request(const proto::Job& job, const proto::JobRequest& request);
 // "" when succeeded, else the worker's message or a default.

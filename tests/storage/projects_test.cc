@@ -231,6 +231,65 @@ TEST_P(ProjectTest, BatchIsMadeInOneTransactionAndCountedByState) {
   EXPECT_THROW(store_->get_batch("b_0000000000000000"), NotFound);
 }
 
+// `keel reprocess --compare`: each new job compares with the job it reprocesses, its mission's
+// latest succeeded job that is not a comparison job; a mission without one is reprocessed
+// without comparing.
+TEST_P(ProjectTest, ReprocessWithCompareNamesTheJobEachNewJobReprocesses) {
+  const proto::Mission done = mission_in(*store_, "harbour", "survey-1");
+  const proto::Mission fresh = mission_in(*store_, "harbour", "survey-2");
+  auto finish = [&](const proto::Mission& mission, const std::vector<std::string>& stages,
+                    bool ok) {
+    proto::JobRequest request = job_request(mission);
+    request.project = "harbour";
+    request.stages = stages;
+    const proto::Job job = store_->create_job(request, "");
+    proto::LeaseRequest lease_request{"w", 30};
+    lease_request.project = "harbour";
+    const auto lease = store_->lease_job(lease_request);
+    EXPECT_TRUE(lease && lease->job.id == job.id);
+    clock_.advance_ms(1000);
+    store_->finish_job(job.id, {lease->lease_id, ok ? "" : "broken"}, ok);
+    return job.id;
+  };
+  const std::string older = finish(done, {"ingest"}, true);
+  const std::string latest = finish(done, {"ingest", "refine"}, true);
+  finish(done, {"ingest"}, false);    // later, but failed
+  finish(done, {"compare"}, true);    // later, but a comparison job
+  finish(fresh, {"ingest"}, false);   // the other mission never succeeded
+
+  proto::ReprocessRequest request;
+  request.project = "harbour";
+  request.name_prefix = "survey-";
+  request.stages = {"ingest", "map"};
+  request.options = {{"map", {{"voxel_m", 0.05}}}, {"compare", {{"sensors", {"combined"}}}}};
+  request.compare = true;
+  const proto::Batch batch = store_->create_batch(request);
+  EXPECT_EQ(batch.jobs, 2);
+  EXPECT_EQ(batch.compared, 1);
+  JobFilter filter;
+  filter.batch_id = batch.id;
+  for (const proto::Job& job : store_->list_jobs(filter)) {
+    if (job.mission_id == done.id) {
+      EXPECT_EQ(job.stages, (std::vector<std::string>{"ingest", "map", "compare"}));
+      EXPECT_EQ(job.options["compare"]["job_a"], latest) << "not " << older;
+      EXPECT_EQ(job.options["compare"]["sensors"], nlohmann::json({"combined"}));
+      EXPECT_FALSE(job.options["compare"].contains("job_b")) << "B is the job itself";
+      EXPECT_EQ(job.options["map"]["voxel_m"], 0.05);
+    } else {
+      EXPECT_EQ(job.mission_id, fresh.id);
+      EXPECT_EQ(job.stages, (std::vector<std::string>{"ingest", "map"}));
+      EXPECT_FALSE(job.options.contains("compare") && job.options["compare"].contains("job_a"));
+    }
+  }
+  // Without --compare nothing is added.
+  request.compare = false;
+  const proto::Batch plain = store_->create_batch(request);
+  EXPECT_EQ(plain.compared, 0);
+  filter.batch_id = plain.id;
+  for (const proto::Job& job : store_->list_jobs(filter))
+    EXPECT_EQ(job.stages, (std::vector<std::string>{"ingest", "map"}));
+}
+
 TEST_P(ProjectTest, ReleasedJobIsQueuedAtOnceAndNotCountedAsExpiry) {
   const proto::Job job = store_->create_job(job_request(make_mission()), "");
   for (int round = 1; round <= 4; ++round) {  // more releases than the 3-expiry limit

@@ -156,6 +156,7 @@ pipeline::JobSpec LeasedJob::prepare() {
   fs::create_directories(work_dir_);
 
   pipeline::JobSpec spec;
+  spec.job = lease_.job.to_json();
   const proto::Mission& mission = lease_.mission;
 
   // A compare job reads two finished jobs' artifacts, not the mission (issue 16).

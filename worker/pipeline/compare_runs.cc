@@ -17,6 +17,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 json load_report(const InputJob& input, const std::string& which) {
+  if (!input.report.is_null()) return input.report;
   const fs::path path = input.dir / kReportFileName;
   std::ifstream in(path);
   if (!in) throw std::runtime_error("job " + input.job.value("id", which) + " has no report.json");

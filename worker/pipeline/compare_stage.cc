@@ -25,12 +25,25 @@ std::string id_of(const InputJob& job, const char* fallback) {
   return job.job.value("id", fallback);
 }
 
+// A reprocess job made with "compare": true (options.compare.job_a alone, the lease giving job
+// A) compares A with its own products: B is this job, its report its earlier stages' sections.
+InputJob this_job(const StageContext& context) {
+  InputJob b;
+  b.dir = context.work_dir;
+  b.job = context.job;
+  b.job["state"] = "succeeded";  // its stages before this one did
+  b.report = {{"job", {{"options", context.job.value("options", json::object())}}},
+              {"stages", context.reports}};
+  return b;
+}
+
 // Step 1: refusals that name the reason.
 void check_pair(const std::vector<InputJob>& jobs) {
   if (jobs.size() != 2)
     throw std::runtime_error("compare needs two finished jobs, A (earlier) and B (later); got " +
                              std::to_string(jobs.size()));
   for (const InputJob& j : jobs) {
+    if (!j.report.is_null()) continue;  // this job itself
     const std::string state = j.job.value("state", "succeeded");
     if (state != "succeeded")
       throw std::runtime_error("job " + id_of(j, "?") + " is " + state +
@@ -58,6 +71,9 @@ class CompareStage : public Stage {
   std::string name() const override { return "compare"; }
   StageResult run(StageContext& context) override {
     const CompareStageOptions options = CompareStageOptions::from_json(context.options);
+    if (context.input_jobs.size() == 1 && context.options.contains("job_a") &&
+        !context.options.contains("job_b"))
+      context.input_jobs.push_back(this_job(context));
     check_pair(context.input_jobs);
     const InputJob& a = context.input_jobs[0];
     const InputJob& b = context.input_jobs[1];

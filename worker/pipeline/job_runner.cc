@@ -139,6 +139,7 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     context.cad_path = spec.cad_path;
     context.work_dir = spec.work_dir;
     context.input_jobs = spec.input_jobs;
+    context.job = spec.job;
     if (spec.options.is_object() && spec.options.contains(name))
       context.options = spec.options.at(name);
     context.reports = result.reports;

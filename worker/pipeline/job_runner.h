@@ -39,6 +39,7 @@ struct JobSpec {
   nlohmann::json options = nlohmann::json::object();  // {"stage": {"option": value}}
   std::vector<CompletedStage> completed;              // skipped; reports passed on
   std::vector<InputJob> input_jobs;                   // the jobs a `compare` stage reads
+  nlohmann::json job = nlohmann::json::object();      // the job's own record (a lease's)
 };
 
 // Every hook is optional. They are called on the thread that calls run(). An exception

@@ -22,9 +22,12 @@ struct Canceled : std::runtime_error {
 
 // A finished job that a `compare` stage reads: its artifacts, downloaded into `dir` (report.json
 // among them), and its record ({"id", "mission_id", "project", "stages", "options", ...}).
+// `report`, when not null, stands for dir/report.json: the job running the stage compares with
+// itself (a reprocess with "compare": true), its report so far being its earlier stages.
 struct InputJob {
   std::filesystem::path dir;
   nlohmann::json job = nlohmann::json::object();
+  nlohmann::json report = nullptr;
 };
 
 struct StageContext {
@@ -34,6 +37,9 @@ struct StageContext {
   nlohmann::json options = nlohmann::json::object();  // this stage's options (--set stage.x=v)
   nlohmann::json reports = nlohmann::json::object();  // sections of earlier stages, by stage name
   std::vector<InputJob> input_jobs;  // `compare`: the earlier job A, then the later job B
+  // The job's own record from its lease ({"id", "mission_id", "project", "options", ...});
+  // empty when the pipeline runs without a server (keel-worker run).
+  nlohmann::json job = nlohmann::json::object();
 
   // Progress of this stage in [0, 1]; a line for the job log. Both cheap; call freely.
   std::function<void(double)> progress = [](double) {};

@@ -174,6 +174,42 @@ TEST_F(CompareStageTest, LaterSurveyRegisteredAndItsNewSlabSignificant) {
   }
 }
 
+// A reprocess job made with "compare": true runs its stages, then compare with options.compare
+// naming job_a alone: B is the job itself, its products in its own work folder and its report
+// the sections of its earlier stages.
+TEST_F(CompareStageTest, AReprocessJobComparesTheJobItReprocessesWithItself) {
+  const InputJob a = map_job("a", scene(1, false), {{"options", {{"map", {{"radius_m", 0.25}}}}}});
+  StageContext context;
+  context.work_dir = root_ / "out";
+  fs::create_directories(context.work_dir);
+  const std::vector<Eigen::Vector3f> b = scene(2, true);
+  io::write_draco_file(context.work_dir / map_draco_file(kCombinedMapName),
+                       io::encode_draco_point_cloud(b, {}, {18, 12, 5}).bytes);
+  context.reports = {{"map", {{"points", b.size()}, {"radius_m", 0.3}}}};
+  context.job = {{"id", "j_new"}, {"state", "running"}, {"project", "p1"}, {"mission_id", "m_a"},
+                 {"options", {{"map", {{"radius_m", 0.3}}}, {"compare", {{"job_a", "a"}}}}}};
+  context.options = {{"job_a", "a"}};
+  context.input_jobs = {a};
+  const StageResult result = make_compare_stage()->run(context);
+  const json& r = result.report;
+  EXPECT_EQ(r["job_a"], "a");
+  EXPECT_EQ(r["job_b"], "j_new");
+  EXPECT_EQ(r["kind"], "maps");
+  const json& m = r["maps"]["maps"][kCombinedMapName];
+  EXPECT_EQ(m["points_b"].get<size_t>(), b.size());
+  EXPECT_GT(m["significant_area_m2"].get<double>(), 1.2);  // the new slab, as between two jobs
+  // Runs: the same mission, the option that differs, and the earlier stages' figures.
+  EXPECT_TRUE(r["runs"]["same_mission"].get<bool>());
+  bool radius_differs = false;
+  for (const json& d : r["runs"]["options_differ"])
+    radius_differs |= d["option"] == "map.radius_m" && d["a"] == 0.25 && d["b"] == 0.3;
+  EXPECT_TRUE(radius_differs) << r["runs"]["options_differ"].dump();
+  bool points_compared = false;
+  for (const json& f : r["runs"]["figures"])
+    points_compared |= f["figure"] == "map.points" && f["b"].get<double>() == double(b.size());
+  EXPECT_TRUE(points_compared);
+}
+
 TEST_F(CompareStageTest, AJobWithItselfGivesZeroChange) {
   const InputJob a = map_job("a", scene(3, false));
   const StageResult result = run({a, a});
