@@ -1,8 +1,10 @@
-// The viewer's pure parts: colour ramps against matplotlib's viridis ends, histograms and
-// ranges against brute force, the camera in the URL, even thinning, the residual CSV.
+// The viewer's pure parts: colour ramps against matplotlib's viridis and ColorBrewer's RdBu
+// ends, legends and ramp ends, histograms and ranges against brute force, the camera in the
+// URL, even thinning, the residual CSV.
 import assert from 'node:assert/strict';
 import {test} from 'node:test';
-import {finiteRange, histogram, rampColor, rampTexels} from '../../../web/js/viewer/colormap.js';
+import {attributeLegend, heightLegend, legendCategories, rampEnds, rampSpan} from '../../../web/js/viewer/attribute_legend.js';
+import {categoryColor, finiteRange, histogram, rampColor, rampTexels, symmetricRange} from '../../../web/js/viewer/colormap.js';
 import {decodeCamera, encodeCamera} from '../../../web/js/viewer/camera_url.js';
 import {strideFor, strided} from '../../../web/js/viewer/thinning.js';
 import {parseResiduals} from '../../../web/js/viewer/residual_layer.js';
@@ -17,6 +19,51 @@ test('viridis ends are matplotlib\'s #440154 and #fde725', () => {
   // Three categories fill the 256 texels in three flat runs.
   assert.deepEqual([...texels.slice(0, 3)], [...texels.slice(4 * 80, 4 * 80 + 3)]);
   assert.notDeepEqual([...texels.slice(0, 3)], [...texels.slice(4 * 100, 4 * 100 + 3)]);
+});
+
+// ColorBrewer's 7-class RdBu (colorbrewer2.org), reversed: blue for negative, red for positive.
+test('the diverging ramp is ColorBrewer RdBu: #2166ac, #f7f7f7 in the middle, #b2182b', () => {
+  assert.deepEqual(rampColor('diverging', 0), [0x21, 0x66, 0xac]);
+  assert.deepEqual(rampColor('diverging', 0.5), [0xf7, 0xf7, 0xf7]);
+  assert.deepEqual(rampColor('diverging', 1), [0xb2, 0x18, 0x2b]);
+  assert.deepEqual(rampColor('diverging', 2), rampColor('diverging', 1));
+});
+
+test('a signed attribute: legend = the sidecar range, ramp symmetric about 0 so 0 is white', () => {
+  const legend = attributeLegend('change_combined', 'm3c2_m', {unique_id: 1, min: -0.12, max: 0.5});
+  assert.deepEqual([legend.min, legend.max, legend.ramp, legend.mode], [-0.12, 0.5, 'diverging', 'm3c2_m']);
+  assert.equal(legend.title, 'change_combined: M3C2 change B − A (m)');
+  const {vmin, vmax, categories} = rampEnds(legend);
+  assert.deepEqual([vmin, vmax, categories], [-0.5, 0.5, 0]);
+  assert.deepEqual(rampColor('diverging', (0 - vmin) / (vmax - vmin)), [0xf7, 0xf7, 0xf7]);
+  // The legend bar shows the part of the ramp its values span.
+  assert.deepEqual(rampSpan(legend), {from: (0.5 - 0.12) / 1, to: 1});
+  assert.deepEqual(symmetricRange(0.2, 0.3), {min: -0.3, max: 0.3});
+  // All zero (a job compared with itself): zero still in the white middle.
+  const zero = rampEnds(attributeLegend('c', 'deviation_change', {min: 0, max: 0}));
+  assert.equal((0 - zero.vmin) / (zero.vmax - zero.vmin), 0.5);
+  // Unsigned attributes keep viridis over their range.
+  assert.deepEqual(rampEnds(attributeLegend('c', 'c2c_m', {min: 0.001, max: 0.8})), {vmin: 0.001, vmax: 0.8, categories: 0});
+  assert.deepEqual(rampEnds(heightLegend('m', {min: {z: -2}, max: {z: 3}})), {vmin: -2, vmax: 3, categories: 0});
+});
+
+test('significance: three fixed categories, each value its colour and label whatever the file holds', () => {
+  const all = attributeLegend('change_combined', 'significant', {min: -1, max: 1});
+  assert.deepEqual(rampEnds(all), {vmin: -1.5, vmax: 1.5, categories: 3});
+  assert.deepEqual(legendCategories(all).map((c) => [c.value, c.index, c.label]),
+                   [[-1, 0, 'undefined (too few points)'], [0, 1, 'not significant'], [1, 2, 'significant']]);
+  // A file without undefined points: 0 and 1 keep their colours (the ramp still spans -1..1).
+  const defined = attributeLegend('change_combined', 'significant', {min: 0, max: 1});
+  assert.deepEqual(rampEnds(defined), rampEnds(all));
+  assert.deepEqual(legendCategories(defined).map((c) => c.index), [1, 2]);
+  assert.deepEqual(categoryColor('significance', 2), rampColor('diverging', 1));  // significant: the ramp's red
+  const texels = rampTexels('significance', 3);
+  assert.deepEqual([...texels.slice(4 * 255, 4 * 255 + 3)], categoryColor('significance', 2));
+  // Sensors: names from the sidecar, colours from the first sensor in the file.
+  const sensor = attributeLegend('map_combined', 'sensor', {min: 0, max: 1, labels: ['lidar_h', 'sonar']});
+  assert.deepEqual(legendCategories(sensor).map((c) => c.label), ['lidar_h', 'sonar']);
+  assert.deepEqual(rampEnds(sensor), {vmin: -0.5, vmax: 1.5, categories: 2});
+  assert.equal(attributeLegend('m', 'roughness', {min: 0.01, max: 0.5, no_data: 0.0095}).noData, 0.0095);
 });
 
 test('range and histogram equal a brute-force count', () => {

@@ -1,6 +1,6 @@
 // Colour ramps for the viewer and its legends: viridis (sequential, for height, intensity
-// and the point metrics), a diverging blue-white-red for signed deviations, and a
-// categorical palette for sensors. Pure (tested in node).
+// and the point metrics), a diverging blue-white-red for signed values (deviations, changes),
+// and categorical palettes (sensors; the significance of a change). Pure (tested in node).
 
 // Viridis at 9 evenly spaced stops (matplotlib's values), linearly interpolated.
 const VIRIDIS = [
@@ -13,8 +13,24 @@ const DIVERGING = [[33, 102, 172], [103, 169, 207], [209, 229, 240], [247, 247, 
 export const CATEGORICAL = [
   [78, 121, 167], [242, 142, 43], [225, 87, 89], [118, 183, 178], [89, 161, 79],
   [237, 201, 72], [176, 122, 161], [255, 157, 167], [156, 117, 95], [186, 176, 172]];
+// A change's significance, values -1, 0, 1 (docs/artifacts.md `significant`): undefined in
+// mid grey, not significant in a pale blue-grey that recedes, significant in the diverging
+// ramp's red, so what changed stands out.
+const SIGNIFICANCE = [[150, 150, 150], [196, 210, 226], [178, 24, 43]];
 
 const RAMPS = {viridis: VIRIDIS, diverging: DIVERGING};
+const PALETTES = {categorical: CATEGORICAL, significance: SIGNIFICANCE};
+
+// Whether a legend's ramp is a palette of flat colours, one per integer value.
+export function isCategorical(ramp) {
+  return ramp in PALETTES;
+}
+
+// The flat colour of category `index` (0 = the palette's first) of a palette.
+export function categoryColor(palette, index) {
+  const colors = PALETTES[palette] || CATEGORICAL;
+  return colors[((index % colors.length) + colors.length) % colors.length];
+}
 
 // [r, g, b] in 0..255 at t in [0, 1] (clamped; NaN gives grey).
 export function rampColor(name, t) {
@@ -26,11 +42,12 @@ export function rampColor(name, t) {
   return stops[i].map((c, k) => Math.round(c + f * (stops[i + 1][k] - c)));
 }
 
-// A 256 x 1 RGBA ramp for a texture, or `count` flat categorical colours stretched over it.
+// A 256 x 1 RGBA ramp for a texture, or `count` flat colours of the palette `name`
+// (categorical when it names a ramp) stretched over it.
 export function rampTexels(name, count = 0) {
   const texels = new Uint8Array(256 * 4);
   for (let i = 0; i < 256; i += 1) {
-    const color = count > 0 ? CATEGORICAL[Math.min(count - 1, Math.floor((i / 256) * count)) % CATEGORICAL.length]
+    const color = count > 0 ? categoryColor(isCategorical(name) ? name : 'categorical', Math.min(count - 1, Math.floor((i / 256) * count)))
         : rampColor(name, i / 255);
     texels.set([...color, 255], i * 4);
   }
@@ -41,11 +58,21 @@ export function cssColor([r, g, b]) {
   return `rgb(${r}, ${g}, ${b})`;
 }
 
-// A CSS linear-gradient of a ramp, for the legend bar.
-export function cssGradient(name) {
+// A CSS linear-gradient of the part [from, to] of a ramp, for the legend bar (a legend of a
+// symmetric ramp shows only the part its values span).
+export function cssGradient(name, from = 0, to = 1) {
   const stops = [];
-  for (let i = 0; i <= 8; i += 1) stops.push(`${cssColor(rampColor(name, i / 8))} ${(i / 8) * 100}%`);
+  for (let i = 0; i <= 8; i += 1) stops.push(`${cssColor(rampColor(name, from + (to - from) * (i / 8)))} ${(i / 8) * 100}%`);
   return `linear-gradient(to right, ${stops.join(', ')})`;
+}
+
+// The ends of a ramp centred on zero that holds [min, max]: a signed value's colour then
+// says its sign (white at no change), whatever the range's asymmetry. Values all zero (a job
+// compared with itself) get a ramp of width 2, so zero still falls on its white middle.
+export function symmetricRange(min, max) {
+  const extent = Math.max(Math.abs(min), Math.abs(max));
+  if (!Number.isFinite(extent)) return {min: NaN, max: NaN};
+  return extent > 0 ? {min: -extent, max: extent} : {min: -1, max: 1};
 }
 
 // Min and max of the finite values of an array (strided: every `stride`-th from `offset`),

@@ -2,21 +2,22 @@
 // numbers the layer colours with (data-min/data-max carry them at full precision).
 import {h} from '../dom.js';
 import {formatNumber} from '../format.js';
-import {CATEGORICAL, cssColor, cssGradient} from './colormap.js';
+import {legendCategories, rampSpan} from './attribute_legend.js';
+import {categoryColor, cssColor, cssGradient, isCategorical} from './colormap.js';
 
 export function legendBox(legend, layerName) {
   const box = h('div', {class: 'legend-box', dataset: {layer: layerName, mode: legend.mode,
                                                      min: String(legend.min), max: String(legend.max)}},
                 h('div', {class: 'legend-title'}, legend.title));
-  if (legend.ramp === 'categorical') {
-    const first = Math.round(legend.min);
-    const last = Math.round(legend.max);
-    for (let v = first; v <= last; v += 1)
-      box.append(h('div', null, h('span', {class: 'swatch', style: {background: cssColor(CATEGORICAL[(v - first) % CATEGORICAL.length])}}),
-                   legend.labels?.[v] ?? `sensor ${v}`));
+  if (isCategorical(legend.ramp)) {
+    for (const {value, index, label} of legendCategories(legend))
+      box.append(h('div', {dataset: {value: String(value)}},
+                   h('span', {class: 'swatch', style: {background: cssColor(categoryColor(legend.ramp, index))}}), label));
     return box;
   }
-  box.append(h('div', {class: 'ramp', style: {background: cssGradient(legend.ramp)}}),
+  // A symmetric ramp shows the part the values span: its colours are those on screen.
+  const {from, to} = rampSpan(legend);
+  box.append(h('div', {class: 'ramp', style: {background: cssGradient(legend.ramp, from, to)}}),
              h('div', {class: 'ends'}, h('span', {class: 'min'}, formatNumber(legend.min)),
                h('span', {class: 'max'}, formatNumber(legend.max))));
   if (legend.noData !== undefined)

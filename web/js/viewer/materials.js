@@ -1,9 +1,11 @@
 // Shader materials that colour points and meshes by one float attribute through a ramp
 // texture, so switching what colours a map (height, intensity, sensor, density, roughness,
-// planarity) is a uniform change, not a pass over millions of points.
+// planarity; a change map's M3C2 change, significance, C2C distance) is a uniform change, not
+// a pass over millions of points.
 import * as THREE from 'three';
-import {rampTexels} from './colormap.js';
+import {isCategorical, rampTexels} from './colormap.js';
 
+// `name`: a ramp, or with `categories` > 0 a palette of that many flat colours.
 export function rampTexture(name, categories = 0) {
   const texture = new THREE.DataTexture(rampTexels(name, categories), 256, 1, THREE.RGBAFormat);
   texture.magFilter = categories ? THREE.NearestFilter : THREE.LinearFilter;
@@ -18,7 +20,7 @@ export const NO_NO_DATA = -3.0e38;
 
 // The noDataBelow uniform for a legend: its minimum when the attribute has a no_data value.
 export function noDataBelow(legend) {
-  return legend.noData !== undefined && legend.ramp !== 'categorical' ? legend.min : NO_NO_DATA;
+  return legend.noData !== undefined && !isCategorical(legend.ramp) ? legend.min : NO_NO_DATA;
 }
 
 const valueChunk = /* glsl */ `

@@ -1,19 +1,23 @@
-// A Draco mesh of a job: the remeshed hull (mesh_remeshed.drc, per-vertex `deviation` in
-// metres) coloured by its deviation from the CAD model, vertices under the threshold grey;
-// or the CAD model itself (cad_model.drc), flat and translucent, for point-to-CAD
-// measurement.
+// A Draco mesh of a job coloured by a signed per-vertex attribute in metres, vertices under
+// the threshold grey: the remeshed hull (mesh_remeshed.drc, `deviation` from the CAD model) or
+// a compare job's change hull (change_hull.drc, `deviation_change`, `deviation_a`,
+// `deviation_b`); or the CAD model itself (cad_model.drc), flat and translucent, for
+// point-to-CAD measurement.
 import * as THREE from 'three';
+import {attributeLegend, rampEnds} from './attribute_legend.js';
 import {decodeDraco} from './draco.js';
-import {meshMaterial} from './materials.js';
+import {meshMaterial, rampTexture} from './materials.js';
 
 export class MeshLayer {
   // source: {name, sidecar, artifact, fetchBytes}; kind: 'deviation' | 'cad'
+  // attribute: what colours a 'deviation' mesh (one its sidecar lists).
   // transform: a THREE.Matrix4 placing the mesh in the scene (model -> world), or null.
-  constructor(source, {kind, onChange, transform = null}) {
+  constructor(source, {kind, onChange, transform = null, attribute = 'deviation'}) {
     this.name = source.name;
     this.source = source;
     this.sidecar = source.sidecar;
     this.kind = kind;
+    this.attribute = attribute;
     this.onChange = onChange;
     this.object3d = new THREE.Group();
     this.object3d.name = source.name;
@@ -44,12 +48,12 @@ export class MeshLayer {
       });
       const geometry = await decodeDraco(bytes, this.sidecar, artifact.name);
       if (!geometry.index) throw new Error(`${artifact.name} is a point cloud, not a mesh`);
-      if (this.kind === 'deviation' && !geometry.getAttribute('deviation'))
-        throw new Error(`${artifact.name} has no deviation attribute (its sidecar lists none)`);
+      if (this.kind === 'deviation' && !geometry.getAttribute(this.attribute))
+        throw new Error(`${artifact.name} has no ${this.attribute} attribute (its sidecar lists none)`);
       geometry.computeVertexNormals();
       this.vertices = geometry.getAttribute('position').count;
       this.faces = geometry.index.count / 3;
-      if (this.kind === 'deviation') geometry.setAttribute('value', geometry.getAttribute('deviation'));
+      if (this.kind === 'deviation') geometry.setAttribute('value', geometry.getAttribute(this.attribute));
       this.mesh = new THREE.Mesh(geometry, this.material);
       this.object3d.add(this.mesh);
       this.applyRange();
@@ -62,25 +66,46 @@ export class MeshLayer {
     this.onChange?.(this);
   }
 
+  // The attributes that can colour this mesh: those of its sidecar.
+  attributes() {
+    return this.kind === 'deviation' ? Object.keys(this.sidecar?.attributes || {}) : [];
+  }
+
   range() {
-    const info = this.sidecar?.attributes?.deviation;
+    const info = this.sidecar?.attributes?.[this.attribute];
     if (info && Number.isFinite(info.min) && Number.isFinite(info.max)) return {min: info.min, max: info.max};
     return {min: NaN, max: NaN};
   }
 
   deviations() {
-    return this.mesh?.geometry.getAttribute('deviation')?.array || new Float32Array(0);
+    return this.mesh?.geometry.getAttribute(this.attribute)?.array || new Float32Array(0);
   }
 
   applyRange() {
     if (this.kind !== 'deviation') return;
-    const {min, max} = this.range();
-    this.material.uniforms.vmin.value = min;
-    this.material.uniforms.vmax.value = max;
-    this.material.uniforms.threshold.value = this.threshold > 0 ? this.threshold : -1;
+    const legend = this.legend();
+    const {vmin, vmax} = rampEnds(legend);
+    const uniforms = this.material.uniforms;
+    uniforms.vmin.value = vmin;
+    uniforms.vmax.value = vmax;
+    uniforms.threshold.value = this.threshold > 0 ? this.threshold : -1;
+    if (this.rampName !== legend.ramp) {
+      uniforms.ramp.value.dispose();
+      uniforms.ramp.value = rampTexture(legend.ramp);
+      this.rampName = legend.ramp;
+    }
   }
 
-  // Vertices whose |deviation| is below `metres` are drawn grey (on the CAD model).
+  // Colours the mesh by another of its attributes.
+  setAttribute(name) {
+    if (!this.attributes().includes(name)) return false;
+    this.attribute = name;
+    if (this.mesh) this.mesh.geometry.setAttribute('value', this.mesh.geometry.getAttribute(name));
+    this.applyRange();
+    return true;
+  }
+
+  // Vertices whose |value| is below `metres` are drawn grey (on the CAD model).
   setThreshold(metres) {
     this.threshold = metres;
     this.applyRange();
@@ -88,8 +113,7 @@ export class MeshLayer {
 
   legend() {
     if (this.kind !== 'deviation') return null;
-    const {min, max} = this.range();
-    return {title: `${this.name}: deviation from CAD (m)`, min, max, ramp: 'viridis', mode: 'deviation'};
+    return attributeLegend(this.name, this.attribute, {...this.range()});
   }
 
   boundingBox() {

@@ -1,8 +1,10 @@
-// One Draco map of a job (map_<sensor>.drc or map_combined.drc) with its sidecar: the
-// preview first when the map stage wrote one, the full map on demand, both kept within the
-// point budget by even thinning. A coarse copy (at most COARSE_POINTS) gives the first
-// picture fast and is drawn while the camera moves; the budgeted copy when it rests.
+// One Draco point cloud of a job with its sidecar (a map, map_<sensor>.drc or
+// map_combined.drc, or a compare job's change map, change_<map>.drc): the preview first when
+// the map stage wrote one, the full map on demand, both kept within the point budget by even
+// thinning. A coarse copy (at most COARSE_POINTS) gives the first picture fast and is drawn
+// while the camera moves; the budgeted copy when it rests.
 import * as THREE from 'three';
+import {attributeLegend, heightLegend, rampEnds} from './attribute_legend.js';
 import {decodeDraco} from './draco.js';
 import {NO_NO_DATA, noDataBelow, pointMaterial, rampTexture} from './materials.js';
 import {strideFor, thinGeometry} from './thinning.js';
@@ -28,12 +30,16 @@ function pieces(geometry, size) {
 
 // What a map can be coloured by: height always; the rest when the sidecar lists them.
 export const COLOR_MODES = ['height', 'intensity', 'sensor', 'density', 'roughness', 'planarity'];
+// A change map (docs/artifacts.md, compare): the change first, the layer's first colouring.
+export const CHANGE_COLOR_MODES = ['m3c2_m', 'significant', 'lod95_m', 'c2c_m', 'height'];
 
 export class PointCloudLayer {
   // source: {name, sidecar (or null), full: artifact, preview: artifact or null,
   //          fetchBytes(artifact, onProgress) -> ArrayBuffer}
-  constructor(source, {budget, onChange}) {
+  // colorModes: the colourings it offers, in order, those its sidecar lists.
+  constructor(source, {budget, onChange, colorModes = COLOR_MODES}) {
     this.name = source.name;
+    this.colorModes = colorModes;
     this.source = source;
     this.sidecar = source.sidecar;
     this.budget = budget;
@@ -55,7 +61,7 @@ export class PointCloudLayer {
 
   modes() {
     const attributes = this.sidecar?.attributes || {};
-    return COLOR_MODES.filter((m) => m === 'height' || attributes[m]);
+    return this.colorModes.filter((m) => m === 'height' || attributes[m]);
   }
 
   hasPreview() {
@@ -151,16 +157,8 @@ export class PointCloudLayer {
   // The legend of the current colouring: range = the attribute's min/max from the sidecar
   // (the values stored in the file), height = the map's z extent.
   legend() {
-    const mode = this.colorMode;
-    if (mode === 'height') {
-      const box = this.boundingBox();
-      return {title: `${this.name}: height (z, m)`, min: box ? box.min.z : NaN, max: box ? box.max.z : NaN, ramp: 'viridis', mode};
-    }
-    const info = this.sidecar.attributes[mode];
-    if (mode === 'sensor')
-      return {title: `${this.name}: sensor`, min: info.min, max: info.max, ramp: 'categorical', labels: info.labels || [], mode};
-    const unit = {intensity: '', density: ' (points/m³)', roughness: ' (m)', planarity: ''}[mode] ?? '';
-    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode, noData: info.no_data};
+    if (this.colorMode === 'height') return heightLegend(this.name, this.boundingBox());
+    return attributeLegend(this.name, this.colorMode, this.sidecar.attributes[this.colorMode]);
   }
 
   setColorMode(mode) {
@@ -173,13 +171,13 @@ export class PointCloudLayer {
   applyColor() {
     const uniforms = this.material.uniforms;
     const legend = this.legend();
-    const categories = legend.ramp === 'categorical' ? Math.max(1, Math.round(legend.max - legend.min) + 1) : 0;
+    const {vmin, vmax, categories} = rampEnds(legend);
     uniforms.useHeight.value = this.colorMode === 'height' ? 1 : 0;
-    uniforms.vmin.value = categories ? legend.min - 0.5 : legend.min;
-    uniforms.vmax.value = categories ? legend.max + 0.5 : legend.max;
+    uniforms.vmin.value = vmin;
+    uniforms.vmax.value = vmax;
     uniforms.noDataBelow.value = this.colorMode === 'height' ? NO_NO_DATA : noDataBelow(legend);
     uniforms.ramp.value.dispose();
-    uniforms.ramp.value = rampTexture('viridis', categories);
+    uniforms.ramp.value = rampTexture(legend.ramp, categories);
     for (const points of [this.coarse, ...(this.details || [])]) {
       if (!points) continue;
       const geometry = points.geometry;

@@ -7,6 +7,7 @@
 // by height or by a batch-table attribute (intensity, sensor, density, roughness, planarity).
 import * as THREE from 'three';
 import {TilesRenderer} from '3d-tiles-renderer/three';
+import {attributeLegend, heightLegend, rampEnds} from './attribute_legend.js';
 import {NO_NO_DATA, noDataBelow, pointMaterial, rampTexture} from './materials.js';
 
 // Target screen-space error in pixels: a tile is refined while its points would be more
@@ -202,16 +203,8 @@ export class TilesLayer {
   // height = the z extent of the points loaded so far (the first tile's is the map's within
   // its point spacing).
   legend() {
-    const mode = this.colorMode;
-    if (mode === 'height') {
-      const box = this.boundingBox();
-      return {title: `${this.name}: height (z, m)`, min: box ? box.min.z : NaN, max: box ? box.max.z : NaN, ramp: 'viridis', mode};
-    }
-    const info = this.info.attributes[mode];
-    if (mode === 'sensor')
-      return {title: `${this.name}: sensor`, min: info.min, max: info.max, ramp: 'categorical', labels: this.info.sensors, mode};
-    const unit = {intensity: '', density: ' (points/m³)', roughness: ' (m)', planarity: ''}[mode] ?? '';
-    return {title: `${this.name}: ${mode}${unit}`, min: info.min, max: info.max, ramp: 'viridis', mode, noData: info.no_data};
+    if (this.colorMode === 'height') return heightLegend(this.name, this.boundingBox());
+    return attributeLegend(this.name, this.colorMode, this.info.attributes[this.colorMode], {labels: this.info.sensors});
   }
 
   setColorMode(mode) {
@@ -223,23 +216,23 @@ export class TilesLayer {
 
   applyColor() {
     const uniforms = this.material.uniforms;
-    const categories = this.applyRange();
+    const {ramp, categories} = this.applyRange();
     uniforms.useHeight.value = this.colorMode === 'height' ? 1 : 0;
     uniforms.ramp.value.dispose();
-    uniforms.ramp.value = rampTexture('viridis', categories);
+    uniforms.ramp.value = rampTexture(ramp, categories);
     this.tiles?.forEachLoadedModel((scene) => scene.traverse((o) => { if (o.isPoints) this.setValueAttribute(o.geometry); }));
   }
 
   // The colour ramp's ends from the legend (the height range grows as tiles load); returns
-  // the number of categories (0 for a continuous ramp).
+  // the ramp and its number of categories (0 for a continuous ramp).
   applyRange() {
     const uniforms = this.material.uniforms;
     const legend = this.legend();
-    const categories = legend.ramp === 'categorical' ? Math.max(1, Math.round(legend.max - legend.min) + 1) : 0;
-    uniforms.vmin.value = categories ? legend.min - 0.5 : legend.min;
-    uniforms.vmax.value = categories ? legend.max + 0.5 : legend.max;
+    const {vmin, vmax, categories} = rampEnds(legend);
+    uniforms.vmin.value = vmin;
+    uniforms.vmax.value = vmax;
     uniforms.noDataBelow.value = this.colorMode === 'height' ? NO_NO_DATA : noDataBelow(legend);
-    return categories;
+    return {ramp: legend.ramp, categories};
   }
 
   setPointSize(size) {
