@@ -3,8 +3,9 @@
 // roughness or planarity with a legend; the trajectories as lines (refined coloured by its
 // ATE); the remeshed hull coloured by its deviation from the CAD model, with a threshold
 // slider and histogram; the shapes as boxes (a click in the table flies there); the DVL
-// residuals as coloured points; point-to-point and point-to-CAD measurement; and the camera
-// in the URL. An artifact that is missing or does not decode is named in a message.
+// residuals as coloured points; a compare job's change maps and change hull
+// (viewer_changes.js); point-to-point and point-to-CAD measurement; and the camera in the
+// URL. An artifact that is missing or does not decode is named in a message.
 //
 // A big map that has level-of-detail tiles (tiles_<map>.tar) is drawn from them (TilesLayer:
 // the coarsest tiles first, then those the camera needs); a small one from its Draco file.
@@ -25,6 +26,7 @@ import {ResidualLayer, parseResiduals} from '../viewer/residual_layer.js';
 import {Scene3d} from '../viewer/scene.js';
 import {ShapesLayer, validateShapes} from '../viewer/shapes_layer.js';
 import {TrajectoryLayer, validateTrajectories} from '../viewer/trajectory_layer.js';
+import {setupChanges} from './viewer_changes.js';
 
 const DEFAULT_BUDGET = 3000000;
 
@@ -441,6 +443,8 @@ export function mount(container, {id, query}) {
     const counts = histogram(values, 40, min, max);
     const canvasEl = h('canvas', {class: 'hist', id: 'deviation-histogram'});
     const label = h('span', {id: 'threshold-value'}, '0 m');
+    // One deviation mesh per job (a pipeline job's remeshed hull or a compare job's change
+    // hull), so these ids are unique in the page.
     const slider = h('input', {type: 'range', id: 'deviation-threshold', min: 0, max: maxAbs, step: maxAbs / 200, value: 0,
                                on: {input: () => {
       const t = Number(slider.value);
@@ -454,7 +458,7 @@ export function mount(container, {id, query}) {
     }}});
     const share = h('div', {class: 'muted', id: 'threshold-share'});
     layer.deviationControls.replaceChildren(
-      h('label', null, 'Deviation threshold ', label), slider, share, canvasEl);
+      h('label', null, layer.thresholdLabel || 'Deviation threshold ', label), slider, share, canvasEl);
     requestAnimationFrame(() => drawHistogram(canvasEl, counts, {min, max, threshold: 0}));
   }
 
@@ -671,10 +675,13 @@ export function mount(container, {id, query}) {
     document.getElementById('viewer-status').textContent = `${list.length} artifacts`;
     state.T_world_model = await worldFromModel(byName);
     await setupTrajectories(byName);
-    await Promise.all([setupMaps(byName), setupHull(byName), setupShapes(byName), setupResiduals(byName)]);
+    const shared = {section, layerRow, addLayer, notice, updateLegend, scene, fetchBytes, onLayerChange, state, query, saveUrl,
+                    warmDraco, worldFromModel, setupDeviationControls};
+    await Promise.all([setupMaps(byName), setupHull(byName), setupShapes(byName), setupResiduals(byName),
+                       setupChanges(shared, id, byName)]);
     if (disposed) return;
     if (layers.size === 0) {
-      notice('info', 'Nothing to show in 3D', 'This job has no map, mesh, trajectory or shape yet (the map, refine, ba and inspect stages write them).');
+      notice('info', 'Nothing to show in 3D', 'This job has no map, mesh, trajectory or shape yet (the map, refine, ba and inspect stages write them; a compare job its change maps and hull).');
     } else {
       setupMeasure();
     }
