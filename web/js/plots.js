@@ -28,8 +28,9 @@ export function linePlot(container, {id, title, xLabel, yLabel, x, series, log =
   return new uPlot(options, data, el);
 }
 
-// A histogram from bin edges (n + 1) and counts (n); several series share the edges.
-export function histogramPlot(container, {id, title, xLabel, edges, series}) {
+// A histogram from bin edges (n + 1) and counts (n); several series share the edges. The bars
+// may hold another quantity than a count (yLabel: an area per bin).
+export function histogramPlot(container, {id, title, xLabel, yLabel = 'count', edges, series}) {
   const el = h('div', {class: 'plot', id: `plot-${id}`, dataset: {plot: id}}, h('h4', null, title));
   container.append(el);
   const centers = edges.slice(0, -1).map((e, i) => 0.5 * (e + edges[i + 1]));
@@ -38,7 +39,7 @@ export function histogramPlot(container, {id, title, xLabel, edges, series}) {
   const options = {
     ...sizeOf(container),
     scales: {x: {time: false}},
-    axes: [{label: xLabel}, {label: 'count'}],
+    axes: [{label: xLabel}, {label: yLabel}],
     series: [{label: xLabel}, ...series.map((s, i) => ({label: s.label, fill: `${PALETTE[i % PALETTE.length]}99`,
                                                         stroke: PALETTE[i % PALETTE.length], paths: bars, points: {show: false}}))],
   };

@@ -4,7 +4,8 @@
 // map: Table V, the metric distributions as histograms, points per sensor and per filter;
 // ba: the lambda=1 fraction per iteration (Fig. 16), cost per iteration (Fig. 17), DVL
 // residual histograms after GICP and after the BA (Fig. 18c); inspect: the shapes table and,
-// with ground truth, which objects were found or missed.
+// with ground truth, which objects were found or missed; compare: what changed between two
+// jobs (report_compare.js).
 // Every number printed carries data-key (its path in report.json) and data-value, so the
 // browser test compares each one with report.json.
 import {ApiError, fetchArtifactJson, jobsApi} from '../api.js';
@@ -12,39 +13,8 @@ import {h, message} from '../dom.js';
 import {formatNumber, formatSeconds} from '../format.js';
 import {drawnPlots, histogramPlot, linePlot} from '../plots.js';
 import {jobHash} from '../router.js';
-
-export function get(object, path) {
-  let value = object;
-  for (const key of path) {
-    if (value === null || value === undefined) return undefined;
-    value = value[key];
-  }
-  return value;
-}
-
-// A table cell with the figure at `path` of the report (or '–').
-function cell(report, path, digits = 4) {
-  const value = get(report, path);
-  const td = h('td', {class: 'num'});
-  if (value === undefined || value === null) {
-    td.textContent = '–';
-    return td;
-  }
-  td.dataset.key = path.join('.');
-  td.dataset.value = typeof value === 'object' ? JSON.stringify(value) : String(value);
-  td.textContent = typeof value === 'boolean' ? (value ? 'yes' : 'no') : formatNumber(value, digits);
-  return td;
-}
-
-function table(id, head, rows) {
-  return h('table', {class: 'figures-table', id},
-           h('thead', null, h('tr', null, head.map((c) => h('th', null, c)))), h('tbody', null, rows));
-}
-
-function valueWithSigma(report, valuePath, sigmaPath, unit = '') {
-  return h('span', null, cell(report, valuePath).textContent, ' ± ',
-           h('span', {class: 'sigma'}, cell(report, sigmaPath).textContent), unit);
-}
+import {compareSection} from './report_compare.js';
+import {cell, get, table, valueWithSigma} from './report_cells.js';
 
 // ---- stages ---------------------------------------------------------------------------------
 
@@ -240,6 +210,7 @@ function inspectSection(report) {
 
 export function mount(container, {id}) {
   let disposed = false;
+  const disposers = [];  // what a section started that must stop with the page
   const body = h('div', {id: 'report'}, h('p', {class: 'muted'}, 'Reading report.json…'));
   container.append(h('div', {class: 'toolbar'}, h('h1', null, 'Report of job ', h('code', null, id)),
                      h('a', {href: jobHash(id)}, 'job'), h('a', {href: jobHash(id, 'viewer')}, '3D viewer')), body);
@@ -287,7 +258,8 @@ export function mount(container, {id}) {
       body.append(h('p', {class: 'muted'}, 'The same figures as one file to send: report.html among the job\'s artifacts.'));
     body.append(stageTimes(report));
     const sections = [['ingest', ingestSection], ['refine', (r) => refineSection(r, trajectories, trajectoriesError)],
-                      ['map', mapSection], ['ba', baSection], ['inspect', inspectSection]];
+                      ['map', mapSection], ['ba', baSection], ['inspect', inspectSection],
+                      ['compare', (r) => compareSection(r, disposers)]];
     for (const [stage, render] of sections) {
       if (!report.stages[stage]) continue;
       try {
@@ -304,6 +276,7 @@ export function mount(container, {id}) {
   load();
   return () => {
     disposed = true;
+    for (const dispose of disposers) dispose();
     delete document.body.dataset.reportReady;
     delete window.keelReport;
   };
