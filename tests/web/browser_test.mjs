@@ -5,7 +5,10 @@
 // against report.json, the viewer's point and vertex counts against Debian's draco_decoder,
 // the legend's range against the sidecar and the decoded values, a map from its 3D tiles
 // (counts against draco_decoder and the .pnts headers, legends against tileset.json), a shape click moving the
-// camera, the camera restored from the URL, the queue page against GET /v1/queue, missing
+// camera, the camera restored from the URL, a compare job of two surveys of the bridge and of
+// the hull (its report's figures against report.json, the figures that differ reached by
+// scrolling, its change map's and change hull's counts against draco_decoder and each
+// colouring's legend against the sidecar), the queue page against GET /v1/queue, missing
 // and corrupt artifacts shown as messages; and no console error or failed request.
 //   node tests/web/browser_test.mjs --bin build/bin --web build/share/keel/web --out DIR
 // Exits 77 (CTest: skipped) with the reason when Chromium or node_modules are absent.
@@ -13,7 +16,7 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import {after, before, test} from 'node:test';
-import {Server, dracoVertexCount, launchChromium, missingPrerequisite, parseArgs, readPnts, simulate,
+import {Server, dracoVertexCount, launchChromium, missingPrerequisite, parseArgs, readPnts, simulate, simulateAsync,
         sourceDir, tempDir, watchPage} from './harness.mjs';
 
 const args = parseArgs(process.argv.slice(2));
@@ -31,6 +34,8 @@ fs.mkdirSync(outDir, {recursive: true});
 const stageOptions = fs.readFileSync(path.join(sourceDir, 'docs/stage-options.md'), 'utf8');
 const pointMetrics = stageOptions.includes('write_point_metrics');
 
+const BRIDGE_SENSORS = 'imu,dvl,lidar_h,sonar,depth';
+
 let server;
 let browser;
 // GET /v1/events and /v1/queue (docs/api.md "Live events and the queue"): the tests of the
@@ -40,6 +45,8 @@ let hasQueue = true;
 let page;
 let problems;
 const jobs = {};
+let secondSurveys;  // the second surveys' mission folders (a promise)
+let comparisonsMade;  // the compare tests' jobs (comparisons())
 const work = tempDir('keel-web-test-');
 
 // Screenshots of the page when a test fails, named after the test.
@@ -66,8 +73,14 @@ async function signIn(p, srv) {
 before(async () => {
   const bridge = path.join(work, 'bridge');
   const hull = path.join(work, 'hull');
-  simulate(binDir, bridge, {scenario: 'usv-bridge', duration: 20, sensors: 'imu,dvl,lidar_h,sonar,depth'});
-  simulate(binDir, hull, {scenario: 'hauv-hull', duration: 60});
+  // The first surveys of both scenes; the compare test adds their second surveys.
+  simulate(binDir, bridge, {scenario: 'usv-bridge', survey: 1, duration: 20, sensors: BRIDGE_SENSORS});
+  simulate(binDir, hull, {scenario: 'hauv-hull', survey: 1, duration: 60});
+  // The second surveys for the compare tests (comparisons()), made while the first tests run.
+  secondSurveys = Promise.all([
+    simulateAsync(binDir, path.join(work, 'bridge_survey2'), {scenario: 'usv-bridge', survey: 2, duration: 20, sensors: BRIDGE_SENSORS}),
+    simulateAsync(binDir, path.join(work, 'hull_survey2'), {scenario: 'hauv-hull', survey: 2, duration: 60})]);
+  secondSurveys.catch(() => {});  // the compare tests report it
   jobs.bridgeMission = bridge;
   jobs.hullMission = hull;
   server = await new Server(binDir, webDir, {workers: 1}).start();
@@ -171,6 +184,12 @@ async function checkReportNumbers(id, requiredKeys) {
   const cells = await page.$$eval('[data-key]', (els) => els.map((e) => ({key: e.dataset.key, value: e.dataset.value, text: e.textContent})));
   const keys = new Set(cells.map((c) => c.key));
   for (const key of requiredKeys) assert.ok(keys.has(key), `the report view lacks ${key}`);
+  assertCellsMatch(report, cells);
+  return {report, cells};
+}
+
+// Each cell ({key, value, text}) shows the figure report.json has at its key.
+function assertCellsMatch(report, cells) {
   for (const c of cells) {
     const expected = c.key.split('.').reduce((o, k) => (o === undefined || o === null ? undefined : o[k]), report);
     assert.notEqual(expected, undefined, `${c.key} is not in report.json`);
@@ -183,11 +202,13 @@ async function checkReportNumbers(id, requiredKeys) {
       assert.equal(c.value, typeof expected === 'object' ? JSON.stringify(expected) : String(expected), c.key);
     }
   }
-  return {report, cells};
 }
 
 test('the report view shows report.json\'s figures for refine and map', () => step('report bridge', async () => {
   assert.equal((await server.waitJob(jobs.bridge)).state, 'succeeded');
+  // The compare tests' jobs start now, so the worker runs them while the pages of the first
+  // jobs are tested (their own tests report a failure).
+  comparisons().catch(() => {});
   const t = 'stages.refine.evaluation.table';
   const required = [`${t}.map.ate.translation_m.rmse`, `${t}.refined_with_dvl.ate.translation_m.rmse`,
                     `${t}.refined_without_dvl.ate.translation_m.rmse`, `${t}.refined_with_dvl.rpe.translation_m.rmse`,
@@ -383,6 +404,218 @@ test('the hull: ba and inspect figures, mesh vertices, deviation legend, a shape
     shapes[0].centroid_world_m.forEach((c, i) => assert.ok(Math.abs(target[i] - c) <= 1e-3, `camera target ${target} vs shape ${shapes[0].centroid_world_m}`));
   } else {
     console.log('# note: the hull mission gave no shape; the shape click was not exercised');
+  }
+}));
+
+// ---- compare jobs (issue 16) ---------------------------------------------------------------
+// Two surveys of one scene compared through POST /v1/comparisons (docs/api.md "Comparisons"):
+// A is the first survey's job of the tests above, B a job on keel-sim's second survey (the
+// same scene with known changes). The bridge's B runs without point metrics, so the options
+// that differ have a row; the hull's B with A's options.
+function comparisons() {
+  comparisonsMade ||= (async () => {
+    // Without blocking: the pages of the first jobs are tested meanwhile.
+    const [bridgeB, hullB] = await secondSurveys;
+    const b = {bridge: await server.submitAsync(bridgeB, 'ingest,refine,map')};
+    b.hull = await server.submitAsync(hullB, 'ingest,refine,ba,inspect', ['--set', 'ba.mode=proposed']);
+    const compare = async (a, kind) => {
+      for (const id of [a, b[kind]]) {
+        const job = await server.waitJob(id);
+        assert.equal(job.state, 'succeeded', `${kind} job ${id}: ${job.error}`);
+      }
+      return (await server.api('v1/comparisons', {method: 'POST', json: {job_a: a, job_b: b[kind], options: {}}})).id;
+    };
+    const ids = {bridge: await compare(jobs.bridge, 'bridge'), hull: await compare(jobs.hull, 'hull')};
+    for (const id of Object.values(ids)) {
+      const job = await server.waitJob(id);
+      assert.equal(job.state, 'succeeded', `compare job ${id}: ${job.error}`);
+    }
+    return ids;
+  })();
+  return comparisonsMade;
+}
+
+const nextFrame = (p) => p.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+
+// Scrolls the figures that differ from top to bottom: [{index, cells}] of every row in the
+// order the table shows them, and the most rows the page held at once.
+async function scrollFigures() {
+  const seen = new Map();
+  let most = 0;
+  for (let top = 0; ;) {
+    await page.$eval('#compare-figures-scroll', (el, y) => { el.scrollTop = y; }, top);
+    await nextFrame(page);
+    const rows = await page.$$eval('#compare-figures tbody tr[data-index]', (trs) => trs.map((tr) => ({index: Number(tr.dataset.index),
+      cells: [...tr.querySelectorAll('[data-key]')].map((e) => ({key: e.dataset.key, value: e.dataset.value, text: e.textContent}))})));
+    most = Math.max(most, rows.length);
+    for (const row of rows) if (!seen.has(row.index)) seen.set(row.index, row);  // windows overlap, in the list's order
+    const box = await page.$eval('#compare-figures-scroll', (el) => ({top: el.scrollTop, height: el.clientHeight, scroll: el.scrollHeight}));
+    if (box.top + box.height >= box.scroll - 1) break;
+    top = box.top + box.height;
+  }
+  return {rows: [...seen.values()], most};
+}
+
+test('a compare job\'s report: registration, change per map and its histogram, every figure that differs, relative ATE', () => step('compare report', async () => {
+  const {bridge: id} = await comparisons();
+  const expected = await server.artifactJson((await server.artifacts(id))['report.json']);
+  const compare = expected.stages.compare;
+  assert.ok(compare.maps, `the bridge surveys were compared as ${compare.kind}, not maps`);
+  const c = 'stages.compare';
+  const r = `${c}.maps.registration`;
+  const names = Object.keys(compare.maps.maps);
+  assert.ok(names.length >= 1, 'no map compared');
+  const required = [`${c}.job_a`, `${c}.job_b`, `${c}.kind`, `${r}.T_a_b.translation_norm_m`, `${r}.T_a_b.rotation_deg`, `${r}.rms_stable_m`,
+                    `${r}.stable_fraction`, `${r}.converged`, `${r}.iterations`, `${c}.runs.figures_that_differ`];
+  for (const name of names)
+    for (const k of ['points_a', 'points_b', 'core_points', 'compared_area_m2', 'significant_area_m2', 'significant_fraction',
+                     'significant_added_area_m2', 'significant_removed_area_m2', 'registration_error_m', 'points_per_second',
+                     'm3c2_m.mean', 'change_histogram.below', 'change_histogram.above'])
+      required.push(`${c}.maps.maps.${name}.${k}`);
+  compare.runs.options_differ.forEach((o, i) => { if (typeof o.a === 'number') required.push(`${c}.runs.options_differ.${i}.a`); });
+  for (const [trajectory, entry] of Object.entries(compare.runs.relative_ate))
+    if (!entry.error) required.push(`${c}.runs.relative_ate.${trajectory}.ate_none.translation_m.rmse`);
+  const {report, cells} = await checkReportNumbers(id, required);
+  assert.equal(report.stages.compare.job_a, jobs.bridge);
+  assert.ok(cells.filter((x) => x.key.startsWith(`${c}.`)).length >= required.length);
+  // Job A's and B's pages are linked.
+  assert.equal(await page.getAttribute(`#compare-jobs a[data-key="${c}.job_a"]`, 'href'), `#/jobs/${compare.job_a}`);
+  assert.equal(await page.getAttribute(`#compare-jobs a[data-key="${c}.job_b"]`, 'href'), `#/jobs/${compare.job_b}`);
+  // The change histograms drawn from report.json's bins.
+  const plots = await page.evaluate(() => Object.fromEntries(window.keelReport.plots));
+  for (const name of names) {
+    const plot = plots[`change-${name}`];
+    assert.ok(plot, `no change histogram of ${name}`);
+    assert.deepEqual(plot.edges, compare.maps.maps[name].change_histogram.edges_m);
+    assert.deepEqual(plot.series[0].values, compare.maps.maps[name].change_histogram.area_m2);
+  }
+  // The options that differ: B ran without A's point metrics.
+  const options = await page.$$eval('#compare-options tbody tr td:first-child', (tds) => tds.map((td) => td.textContent));
+  assert.deepEqual(options, compare.runs.options_differ.map((o) => o.option));
+  if (pointMetrics) assert.ok(options.includes('map.write_point_metrics'), `options that differ: ${options}`);
+  // Every figure that differs is reached by scrolling, most changed first, and only the rows
+  // in view are in the page.
+  const figures = compare.runs.figures;
+  const differ = figures.map((row, i) => (row.a !== row.b ? i : -1)).filter((i) => i >= 0);
+  assert.ok(differ.length > 0, 'no figure differs between two surveys');
+  const {rows, most} = await scrollFigures();
+  assert.deepEqual(rows.map((row) => row.index).sort((x, y) => x - y), differ);
+  for (const row of rows) assertCellsMatch(report, row.cells);
+  const magnitude = (f) => (f.relative === undefined ? Infinity : Math.abs(f.relative));
+  for (let i = 1; i < rows.length; i += 1)
+    assert.ok(magnitude(figures[rows[i - 1].index]) >= magnitude(figures[rows[i].index]),
+              `${figures[rows[i - 1].index].figure} above the more changed ${figures[rows[i].index].figure}`);
+  if (differ.length > 100) assert.ok(most < differ.length / 2, `${most} of ${differ.length} rows in the page at once`);
+  // Relative ATE: a row per trajectory and alignment, or the reason it was not compared.
+  const ateRows = await page.$$eval('#compare-relative-ate tbody tr', (trs) => trs.map((tr) => tr.textContent));
+  const expectedAte = Object.entries(compare.runs.relative_ate).flatMap(([t, entry]) =>
+    (entry.error ? [`${t}${entry.error}`] : Object.keys(entry).filter((k) => k.startsWith('ate_')).map(() => t)));
+  assert.equal(ateRows.length, expectedAte.length);
+  for (const text of expectedAte) assert.ok(ateRows.some((row) => row.startsWith(text)), `no relative ATE row ${text}`);
+}));
+
+test('a hull compare job\'s report: x_gM difference, deviation change and the per-shape growth table', () => step('compare hull report', async () => {
+  const {hull: id} = await comparisons();
+  const expected = await server.artifactJson((await server.artifacts(id))['report.json']);
+  const hull = expected.stages.compare.hull;
+  assert.ok(hull, `the hull surveys were compared as ${expected.stages.compare.kind}, not hulls`);
+  const b = 'stages.compare.hull';
+  const required = [`${b}.x_gM_difference.translation_norm_m`, `${b}.x_gM_difference.rotation_deg`, `${b}.vertices`,
+                    `${b}.shapes_a`, `${b}.shapes_b`, `${b}.kept`, `${b}.new`, `${b}.gone`, `${b}.significantly_grown`,
+                    `${b}.deviation_change_m.count`];
+  hull.shapes.forEach((shape, i) => {
+    for (const k of ['height_a_m', 'height_b_m', 'height_growth_m', 'height_growth_sigma_m', 'footprint_a_m2', 'footprint_b_m2',
+                     'footprint_growth_m2', 'footprint_growth_sigma_m2', 'significant_growth'])
+      if (shape[k] !== undefined) required.push(`${b}.shapes.${i}.${k}`);
+    required.push(`${b}.shapes.${i}.centroid_model_m.0`);
+  });
+  await checkReportNumbers(id, required);
+  assert.deepEqual(await page.$$eval('#compare-shapes tbody tr', (trs) => trs.map((tr) => tr.dataset.status)), hull.shapes.map((s) => s.status));
+  const plots = await page.evaluate(() => Object.fromEntries(window.keelReport.plots));
+  if (hull.deviation_change_m.histogram_counts)
+    assert.deepEqual(plots['hull-deviation-change'].series[0].values, hull.deviation_change_m.histogram_counts);
+}));
+
+// The legend of `layer` coloured by `mode` against the sidecar's range (height: its bbox's z),
+// and the values the page decoded against the same range.
+async function checkChangeLegend(layer, mode, sidecar) {
+  const legend = await page.waitForSelector(`.legend-box[data-layer="${layer}"][data-mode="${mode}"]`, {timeout: 10000});
+  const expected = mode === 'height' ? {min: sidecar.bbox_min[2], max: sidecar.bbox_max[2]} : sidecar.attributes[mode];
+  assert.equal(Number(await legend.getAttribute('data-min')), expected.min, `${layer} ${mode} min`);
+  assert.equal(Number(await legend.getAttribute('data-max')), expected.max, `${layer} ${mode} max`);
+  const decoded = await page.evaluate(([l, m]) => window.keelViewer.attributeRange(l, m === 'height' ? 'position' : m), [layer, mode]);
+  const tolerance = 1e-5 * Math.max(1, Math.abs(expected.max - expected.min));
+  assert.ok(Math.abs(decoded.min - expected.min) <= tolerance && Math.abs(decoded.max - expected.max) <= tolerance,
+            `${layer} ${mode}: decoded ${decoded.min}..${decoded.max} vs sidecar ${expected.min}..${expected.max}`);
+  // A signed change: the ramp centred on zero (its ends ± the larger magnitude).
+  if (['m3c2_m', 'deviation_a', 'deviation_b', 'deviation_change'].includes(mode)) {
+    const ends = await page.evaluate((l) => {
+      const u = window.keelViewer.layers.get(l).material.uniforms;
+      return [u.vmin.value, u.vmax.value];
+    }, layer);
+    const extent = Math.max(Math.abs(expected.min), Math.abs(expected.max));
+    assert.deepEqual(ends, extent > 0 ? [-extent, extent] : [-1, 1], `${layer} ${mode}: ramp ends`);
+  }
+  if (mode === 'significant') {
+    const entries = await legend.$$eval('[data-value]', (es) => es.map((e) => [Number(e.dataset.value), e.textContent]));
+    const names = {'-1': /undefined/, 0: /not significant/, 1: /^significant$/};
+    assert.deepEqual(entries.map(([v]) => v), Array.from({length: expected.max - expected.min + 1}, (_, i) => expected.min + i));
+    for (const [v, text] of entries) assert.match(text, names[v]);
+  }
+}
+
+// A sidecar the compare stage writes beside each change file (docs/artifacts.md "compare").
+async function changeSidecar(artifacts, name, kind, frame, attributes) {
+  assert.ok(artifacts[`${name}.json`], `the compare job has no ${name}.json (its Draco sidecar, docs/artifacts.md "Draco sidecar")`);
+  const sidecar = await server.artifactJson(artifacts[`${name}.json`]);
+  assert.equal(sidecar.kind, kind, `${name}.json kind`);
+  assert.equal(sidecar.frame, frame, `${name}.json frame`);
+  for (const a of attributes) assert.equal(sidecar.attributes?.[a]?.data_type, 'float32', `${name}.json: attribute ${a}`);
+  return sidecar;
+}
+
+test('the viewer shows a compare job\'s change map: its point count and each colouring\'s legend against the sidecar', () => step('compare viewer', async () => {
+  const {bridge: id} = await comparisons();
+  const artifacts = await server.artifacts(id);
+  const maps = Object.keys(artifacts).filter((n) => /^change_.*\.drc$/.test(n) && n !== 'change_hull.drc');
+  assert.ok(maps.length >= 1, `change maps: ${maps}`);
+  await openViewer(id);
+  for (const file of maps) {
+    const name = file.replace(/\.drc$/, '');
+    const sidecar = await changeSidecar(artifacts, name, 'point_cloud', 'world', ['m3c2_m', 'lod95_m', 'significant', 'c2c_m']);
+    const box = await page.$(`.layer-entry[data-layer="${name}"] input[type=checkbox]`);
+    if (!(await box.isChecked())) await box.check();
+    await layerShown(name);
+    const row = await page.$eval(`.layer-entry[data-layer="${name}"]`, (e) => ({...e.dataset}));
+    const oracle = dracoVertexCount(await server.artifactBytes(artifacts[file]));
+    if (oracle !== null) assert.equal(Number(row.points), oracle, `${file}: page vs draco_decoder`);
+    assert.equal(Number(row.points), sidecar.points, `${name}: page vs sidecar`);
+    const modes = await page.$$eval('#change-color-by option', (os) => os.map((o) => o.value));
+    for (const m of ['m3c2_m', 'significant', 'lod95_m', 'c2c_m', 'height']) assert.ok(modes.includes(m), `no ${m} colouring: ${modes}`);
+    assert.equal(modes[0], 'm3c2_m', 'the change is the first colouring');
+    for (const mode of modes) {
+      await page.selectOption('#change-color-by', mode);
+      await checkChangeLegend(name, mode, sidecar);
+    }
+    await page.selectOption('#change-color-by', 'm3c2_m');
+  }
+}));
+
+test('the viewer shows a compare job\'s change hull: its vertex count and the deviation change legends against the sidecar', () => step('compare hull viewer', async () => {
+  const {hull: id} = await comparisons();
+  const artifacts = await server.artifacts(id);
+  assert.ok(artifacts['change_hull.drc'], 'the hull compare job has no change_hull.drc');
+  const sidecar = await changeSidecar(artifacts, 'change_hull', 'mesh', 'model', ['deviation_a', 'deviation_b', 'deviation_change']);
+  await openViewer(id);
+  await layerShown('change_hull');
+  const vertices = Number(await page.getAttribute('.layer-entry[data-layer="change_hull"]', 'data-vertices'));
+  const oracle = dracoVertexCount(await server.artifactBytes(artifacts['change_hull.drc']));
+  if (oracle !== null) assert.equal(vertices, oracle, 'change_hull.drc: page vs draco_decoder');
+  assert.equal(vertices, sidecar.points, 'change_hull: page vs sidecar');
+  await checkChangeLegend('change_hull', 'deviation_change', sidecar);
+  for (const attribute of ['deviation_a', 'deviation_b', 'deviation_change']) {
+    await page.selectOption('#change-hull-color-by', attribute);
+    await checkChangeLegend('change_hull', attribute, sidecar);
   }
 }));
 

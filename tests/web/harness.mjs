@@ -41,25 +41,56 @@ export function tempDir(prefix = 'keel-web-') {
   return fs.mkdtempSync(path.join(os.tmpdir(), prefix));
 }
 
+function exitError(binary, args, status, signal, stdout, stderr) {
+  return new Error(`${path.basename(binary)} ${args.join(' ')} exited ${status}${signal ? ` (${signal})` : ''}:\n${stdout}\n${stderr}`);
+}
+
 export function run(binary, args, {env = {}, timeoutMs = 600000} = {}) {
   const r = spawnSync(binary, args, {env: {...process.env, ...env}, encoding: 'utf8', timeout: timeoutMs});
-  if (r.status !== 0)
-    throw new Error(`${path.basename(binary)} ${args.join(' ')} exited ${r.status}${r.signal ? ` (${r.signal})` : ''}:\n${r.stdout}\n${r.stderr}`);
+  if (r.status !== 0) throw exitError(binary, args, r.status, r.signal, r.stdout, r.stderr);
   return r.stdout.trim();
+}
+
+// run() without blocking this process: pages keep being driven while the program runs.
+export function runAsync(binary, args, {env = {}, timeoutMs = 600000} = {}) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(binary, args, {env: {...process.env, ...env}, timeout: timeoutMs});
+    let stdout = '';
+    let stderr = '';
+    child.stdout.on('data', (d) => { stdout += d; });
+    child.stderr.on('data', (d) => { stderr += d; });
+    child.on('error', reject);
+    child.on('close', (status, signal) => (status === 0 ? resolve(stdout.trim()) : reject(exitError(binary, args, status, signal, stdout, stderr))));
+  });
 }
 
 // survey: 1 = the first survey of a scene, 2, 3, ... the same scene again with known changes
 // (usv-bridge, hauv-hull); left out, keel-sim's default (the first).
-export function simulate(binDir, out, {scenario = 'usv-bridge', duration = 20, sensors = '', seed = 1, survey, set = []} = {}) {
+function simulateArgs(out, {scenario = 'usv-bridge', duration = 20, sensors = '', seed = 1, survey, set = []}) {
   const args = ['--scenario', scenario, '--seed', String(seed), '--duration', String(duration), '--out', out];
   if (survey !== undefined) args.push('--survey', String(survey));
   if (sensors) args.push('--sensors', sensors);
   for (const s of set) args.push('--set', s);
-  run(path.join(binDir, 'keel-sim'), args);
+  return args;
+}
+
+export function simulate(binDir, out, options = {}) {
+  run(path.join(binDir, 'keel-sim'), simulateArgs(out, options));
+  return out;
+}
+
+export async function simulateAsync(binDir, out, options = {}) {
+  await runAsync(path.join(binDir, 'keel-sim'), simulateArgs(out, options));
   return out;
 }
 
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+function jobIdIn(out) {
+  const match = /j_[0-9a-f]+/.exec(out);
+  if (!match) throw new Error(`no job id in: ${out}`);
+  return match[0];
+}
 
 // Servers this process started, stopped even when a test or benchmark dies with an error.
 const started = new Set();
@@ -108,15 +139,27 @@ export class Server {
 
   // Submits a mission folder with the CLI; returns the job id.
   submit(missionDir, stages, extra = []) {
-    const out = this.keel(['submit', missionDir, '--stages', stages, '-q', ...extra]);
-    const match = /j_[0-9a-f]+/.exec(out);
-    if (!match) throw new Error(`no job id in: ${out}`);
-    return match[0];
+    return jobIdIn(this.keel(['submit', missionDir, '--stages', stages, '-q', ...extra]));
+  }
+
+  // submit() without blocking this process (the upload of a mission takes seconds).
+  async submitAsync(missionDir, stages, extra = []) {
+    return jobIdIn(await runAsync(path.join(this.binDir, 'keel'), ['submit', missionDir, '--stages', stages, '-q', ...extra], {env: this.env()}));
   }
 
   async api(pathname, {method = 'GET', json, token = this.token, raw = false} = {}) {
-    const response = await fetch(`${this.url}/${pathname}`, {method, headers: {Authorization: `Bearer ${token}`,
+    const send = () => fetch(`${this.url}/${pathname}`, {method, headers: {Authorization: `Bearer ${token}`,
       ...(json ? {'Content-Type': 'application/json'} : {})}, body: json ? JSON.stringify(json) : undefined});
+    let response;
+    try {
+      response = await send();
+    } catch (e) {
+      // The server closes a keep-alive connection idle for its read timeout (30 s); when that
+      // happens while this process is blocked in spawnSync (keel-sim, the keel CLI), fetch
+      // can reuse the closed connection ("other side closed"). A GET is sent again.
+      if (e?.cause?.code !== 'UND_ERR_SOCKET' || (method !== 'GET' && method !== 'HEAD')) throw e;
+      response = await send();
+    }
     if (raw) return response;
     const text = await response.text();
     if (!response.ok) throw new Error(`${method} ${pathname}: ${response.status} ${text}`);
