@@ -182,6 +182,7 @@ std::string render_report_html(const nlohmann::ordered_json& report,
     if (stage == "map") page += map_section(section);
     if (stage == "ba") page += ba_section(section);
     if (stage == "inspect") page += inspect_section(section);
+    if (stage == "compare") page += compare_section(section);
     page += "</section>";
   }
   page += all_figures(root);

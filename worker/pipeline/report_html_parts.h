@@ -54,6 +54,7 @@ std::string refine_section(const Ref& stage, const nlohmann::json& trajectories)
 std::string map_section(const Ref& stage);
 std::string ba_section(const Ref& stage);
 std::string inspect_section(const Ref& stage);
+std::string compare_section(const Ref& stage);
 // Every leaf of report.json as a table row (pointer, value).
 std::string all_figures(const Ref& report);
 

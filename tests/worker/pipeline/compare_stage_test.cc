@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
+#include <cstdlib>
 #include <random>
 
 #include "proto/contract_error.h"
@@ -208,6 +209,31 @@ TEST_F(CompareStageTest, AReprocessJobComparesTheJobItReprocessesWithItself) {
   for (const json& f : r["runs"]["figures"])
     points_compared |= f["figure"] == "map.points" && f["b"].get<double>() == double(b.size());
   EXPECT_TRUE(points_compared);
+}
+
+// report.html of a compare job: its section (registration, per-map table, histogram, runs)
+// passes report_html_check.py: every figure shown equals report.json's, nothing to fetch or run.
+TEST_F(CompareStageTest, TheReportPageShowsTheComparison) {
+  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3 for the page check";
+  const StageResult result = run({map_job("a", scene(1, false), {{"options", {{"map", {{"x", 1}}}}}}),
+                                  map_job("b", scene(2, true), {{"options", {{"map", {{"x", 2}}}}}})});
+  ReportInput in;
+  in.job = {{"id", "j_compare"}, {"stages", {"compare"}}};
+  in.stage_order = {"compare"};
+  in.stages = {{"compare", result.report}};
+  in.stage_seconds = {{"compare", 1.5}};
+  const fs::path dir = root_ / "page";
+  fs::create_directories(dir);
+  write_report_files(dir, build_report(in));
+  const std::string command =
+      "/usr/bin/python3 " KEEL_SOURCE_DIR "/tests/worker/pipeline/report_html_check.py '" +
+      (dir / "report.json").string() + "' '" + (dir / "report.html").string() +
+      "' --expect-id stage-compare --expect-id compare-registration --expect-id "
+      "compare-maps-table --expect-id compare-options --expect-id compare-figures "
+      "--expect /stages/compare/maps/maps/combined/significant_area_m2 "
+      "--expect /stages/compare/maps/registration/T_a_b/translation_norm_m "
+      "--expect /stages/compare/runs/options_differ/0/b";
+  EXPECT_EQ(WEXITSTATUS(std::system(command.c_str())), 0) << command;
 }
 
 TEST_F(CompareStageTest, AJobWithItselfGivesZeroChange) {
