@@ -542,7 +542,8 @@ CloudParts cloud_parts(const std::vector<const PointCloud*>& parts,
   for (size_t f = 0; f < attributes.fields.size(); ++f)
     out.fields.push_back({attributes.fields[f].name,
                           {&attributes.fields[f].values},
-                          attributes.fields_no_data.empty()
+                          attributes.fields_no_data.empty() ||
+                                  std::isnan(attributes.fields_no_data[f])
                               ? std::nullopt
                               : std::optional<float>(attributes.fields_no_data[f])});
   if (!attributes.label_name.empty()) {

@@ -51,9 +51,9 @@ struct PartsAttributes {
   // Float fields over the concatenated parts (one value per point, in part order), quantized
   // like every scalar field (DracoOptions::field_bits).
   std::vector<ScalarField> fields;
-  // Empty, or per field a value meaning "undefined here", stored as the field's metadata entry
-  // kDracoNoDataEntry. Keep it below every defined value: quantization returns the attribute's
-  // minimum exactly.
+  // Empty, or per field a value meaning "undefined here" (NaN: the field has none), stored as
+  // the field's metadata entry kDracoNoDataEntry. Keep it below every defined value:
+  // quantization returns the attribute's minimum exactly.
   std::vector<float> fields_no_data;
 };
 

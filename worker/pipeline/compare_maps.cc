@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -100,6 +101,18 @@ json change_histogram(const std::vector<compare::CoreChange>& cores, int bins, d
           {"area_m2", area},
           {"below", below},
           {"above", above}};
+}
+
+// A value just below the smallest defined one (by 1/1024 of the range, as the map stage's
+// per-point metrics): what a point holds where its core point's change is undefined.
+float no_data_below(const std::vector<compare::CoreChange>& cores,
+                    float compare::CoreChange::*field) {
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (const auto& c : cores)
+    if (c.defined()) lo = std::min(lo, c.*field), hi = std::max(hi, c.*field);
+  if (!(lo <= hi)) lo = hi = 0.0f;
+  const float span = std::max(hi - lo, std::max(std::fabs(lo), 1.0f) * 1e-6f);
+  return lo - span / 1024.0f;
 }
 
 }  // namespace
@@ -253,13 +266,16 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     seconds["m3c2"] = seconds_since(t);
     progress(0.8);
 
-    // Per point of B: its core point's change.
+    // Per point of B: its core point's change; where it is undefined the attribute's no_data
+    // (docs/artifacts.md), so a viewer tells "unmeasured" from "unchanged".
     t = std::chrono::steady_clock::now();
+    const float m3c2_no_data = no_data_below(changes, &compare::CoreChange::distance_m);
+    const float lod_no_data = no_data_below(changes, &compare::CoreChange::lod95_m);
     std::vector<float> m3c2(b.size()), lod(b.size()), significant(b.size());
     for (size_t i = 0; i < b.size(); ++i) {
       const compare::CoreChange& c = changes[cores.voxel_of[i]];
-      m3c2[i] = c.defined() ? c.distance_m : 0.0f;
-      lod[i] = c.defined() ? c.lod95_m : 0.0f;
+      m3c2[i] = c.defined() ? c.distance_m : m3c2_no_data;
+      lod[i] = c.defined() ? c.lod95_m : lod_no_data;
       significant[i] = c.defined() ? (c.significant ? 1.0f : 0.0f) : -1.0f;
     }
     const std::vector<io::ScalarField> fields = {
@@ -267,17 +283,20 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     io::DracoOptions draco;
     draco.position_bits = options.draco_position_bits;
     draco.field_bits = options.draco_field_bits;
-    const io::DracoEncoded encoded = io::encode_draco_point_cloud(b, fields, draco);
+    PointCloud cloud_b;
+    cloud_b.xyz = b;
+    io::PartsAttributes attributes;
+    attributes.fields = fields;
+    attributes.fields_no_data = {m3c2_no_data, lod_no_data, std::nanf(""), std::nanf("")};
+    const io::DracoEncoded encoded = io::encode_draco_point_cloud({&cloud_b}, draco, attributes);
     io::write_draco_file(context.work_dir / change_draco_file(map), encoded.bytes);
     artifacts->push_back(change_draco_file(map));
     // The viewer finds the attributes and their ranges here (A's world frame).
     artifacts->push_back(
         write_draco_sidecar(context.work_dir, change_draco_file(map), encoded.summary, "world"));
     if (options.write_ply) {
-      PointCloud cloud;
-      cloud.xyz = b;
-      cloud.frame = "world";
-      io::write_ply_cloud(context.work_dir / change_ply_file(map), cloud, fields);
+      cloud_b.frame = "world";
+      io::write_ply_cloud(context.work_dir / change_ply_file(map), cloud_b, fields);
       artifacts->push_back(change_ply_file(map));
     }
     seconds["write"] = seconds_since(t);

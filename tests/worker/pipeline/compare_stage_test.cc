@@ -9,6 +9,8 @@
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <cmath>
 #include <cstdlib>
 #include <random>
 
@@ -116,6 +118,8 @@ TEST_F(CompareStageTest, LaterSurveyRegisteredAndItsNewSlabSignificant) {
       Eigen::AngleAxisd(0.01, Eigen::Vector3d(0.3, 0.1, 1).normalized()).toRotationMatrix();
   T_b_a.translation() = Eigen::Vector3d(0.05, -0.04, 0.02);
   for (auto& p : b) p = (T_b_a * p.cast<double>()).cast<float>();
+  // A few points of B far from A: their change is undefined (A has none in the cylinder).
+  for (int i = 0; i < 6; ++i) b.push_back(Eigen::Vector3f(20.0f + 0.01f * i, 20.0f, 1.0f));
   const StageResult result = run({map_job("a", a), map_job("b", b)});
 
   const json& r = result.report;
@@ -168,10 +172,26 @@ TEST_F(CompareStageTest, LaterSurveyRegisteredAndItsNewSlabSignificant) {
   const json sidecar = json::parse(std::ifstream(root_ / "out" / sidecar_name));
   EXPECT_EQ(sidecar["frame"], "world");
   EXPECT_EQ(sidecar["points"].get<size_t>(), change.positions.size());
+  // Where the change is undefined (significant -1) m3c2_m and lod95_m hold their no_data,
+  // below every defined value; the ranges leave it out.
+  size_t undefined = 0;
+  for (size_t i = 0; i < change.positions.size(); ++i) {
+    if ((*field["significant"])[i] != -1.0f) continue;
+    ++undefined;
+    for (const char* name : {"m3c2_m", "lod95_m"})
+      EXPECT_EQ((*field[name])[i], sidecar["attributes"][name]["no_data"].get<float>()) << name;
+  }
+  EXPECT_GE(undefined, 6u) << "the points far from A";
+  for (const char* name : {"significant", "c2c_m"})
+    EXPECT_FALSE(sidecar["attributes"][name].contains("no_data")) << name;
   for (const char* name : {"m3c2_m", "lod95_m", "significant", "c2c_m"}) {
-    const auto [lo, hi] = std::minmax_element(field[name]->begin(), field[name]->end());
-    EXPECT_EQ(sidecar["attributes"][name]["min"].get<double>(), double(*lo)) << name;
-    EXPECT_EQ(sidecar["attributes"][name]["max"].get<double>(), double(*hi)) << name;
+    const double no_data = sidecar["attributes"][name].value("no_data", std::nan(""));
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (float v : *field[name])
+      if (double(v) != double(float(no_data))) lo = std::min(lo, v), hi = std::max(hi, v);
+    EXPECT_EQ(sidecar["attributes"][name]["min"].get<double>(), double(lo)) << name;
+    EXPECT_EQ(sidecar["attributes"][name]["max"].get<double>(), double(hi)) << name;
+    if (!std::isnan(no_data)) EXPECT_LT(no_data, double(lo)) << name;
   }
 }
 
