@@ -16,7 +16,7 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import {after, before, test} from 'node:test';
-import {Server, dracoVertexCount, launchChromium, missingPrerequisite, parseArgs, readPnts, simulate, simulateAsync,
+import {Server, distanceToMesh, dracoMesh, dracoVertexCount, poseTransform, launchChromium, missingPrerequisite, parseArgs, readPnts, simulate, simulateAsync,
         sourceDir, tempDir, watchPage} from './harness.mjs';
 
 const args = parseArgs(process.argv.slice(2));
@@ -405,6 +405,59 @@ test('the hull: ba and inspect figures, mesh vertices, deviation legend, a shape
   } else {
     console.log('# note: the hull mission gave no shape; the shape click was not exercised');
   }
+}));
+
+// Measurements on the hull: a point picked on the remeshed hull lies on it, point to point
+// gives the distance between the two picked points, and point to CAD the distance of the
+// picked point to the CAD mesh (cad_model.drc moved into the world by ba_solution.json's
+// T_world_model), each against a brute-force distance over draco_decoder's triangles.
+test('measurements: point to point on the hull and point to CAD against brute-force distances', (t) => step('measure', async () => {
+  const artifacts = await server.artifacts(jobs.hull);
+  if (!artifacts['cad_model.drc'] || !artifacts['ba_solution.json']) {
+    t.skip('the hull job wrote no cad_model.drc or ba_solution.json');
+    return;
+  }
+  const cad = dracoMesh(await server.artifactBytes(artifacts['cad_model.drc']));
+  const remeshed = dracoMesh(await server.artifactBytes(artifacts['mesh_remeshed.drc']));
+  if (!cad || !remeshed) {
+    t.skip('no draco_decoder for the oracle');
+    return;
+  }
+  const toWorld = poseTransform((await server.artifactJson(artifacts['ba_solution.json'])).T_world_model);
+  await openViewer(jobs.hull);
+  await layerShown('mesh_remeshed');
+  const box = await page.$('#viewer-canvas');
+  const area = await box.boundingBox();
+  // Clicks around the middle of the view until `count` measurements are made; each click is
+  // answered on the page (a miss says so, a first point asks for the second).
+  const clickOnHull = async (count) => {
+    for (let i = 0; i < 25; i += 1) {
+      const x = area.x + area.width * (0.3 + 0.1 * (i % 5)), y = area.y + area.height * (0.3 + 0.1 * Math.floor(i / 5));
+      await page.evaluate(() => { document.getElementById('readout').textContent = ''; });
+      await page.mouse.click(x, y);
+      await page.waitForFunction((n) => window.keelViewer.state.measurements.length >= n ||
+                                        /No point there|Click the second point/.test(document.getElementById('readout').textContent),
+                                 count, {timeout: 60000});
+      if (await page.evaluate((n) => window.keelViewer.state.measurements.length >= n, count)) return;
+    }
+    throw new Error('no click landed on the hull');
+  };
+  await page.click('button.measure-mode[data-mode="cad"]');
+  await clickOnHull(1);
+  const toCad = (await page.evaluate(() => window.keelViewer.state.measurements))[0];
+  assert.equal(toCad.kind, 'cad');
+  const oracle = distanceToMesh(toCad.from, cad, toWorld);
+  assert.ok(Math.abs(toCad.metres - oracle) <= 1e-4, `point to CAD: page ${toCad.metres} m, brute force ${oracle} m`);
+  assert.ok(distanceToMesh(toCad.to, cad, toWorld) <= 1e-4, 'the closest point lies on the CAD mesh');
+  assert.ok(distanceToMesh(toCad.from, remeshed) <= 1e-4, 'the picked point lies on the remeshed hull');
+
+  await page.click('button.measure-mode[data-mode="distance"]');
+  await clickOnHull(2);  // clicks until a first and a second point landed on the hull
+  const between = (await page.evaluate(() => window.keelViewer.state.measurements))[1];
+  assert.equal(between.kind, 'distance');
+  for (const p of [between.from, between.to]) assert.ok(distanceToMesh(p, remeshed) <= 1e-4, `picked ${p} lies on the remeshed hull`);
+  assert.ok(Math.abs(between.metres - Math.hypot(...between.to.map((v, i) => v - between.from[i]))) <= 1e-9);
+  assert.equal(Number(await page.getAttribute('#measurements li[data-kind="cad"]', 'data-metres')), toCad.metres);
 }));
 
 // ---- compare jobs (issue 16) ---------------------------------------------------------------

@@ -286,3 +286,69 @@ export function readPnts(bytes) {
   }
   return {points, zMin, zMax};
 }
+
+// A Draco mesh as Debian's draco_decoder reads it (an independent decoder), as an OBJ:
+// {vertices: [[x, y, z]...], faces: [[i, j, k]...]} (0-based), or null when the tool is absent.
+export function dracoMesh(bytes) {
+  const tool = '/usr/bin/draco_decoder';
+  if (!fs.existsSync(tool)) return null;
+  const dir = tempDir('keel-draco-');
+  try {
+    fs.writeFileSync(path.join(dir, 'in.drc'), bytes);
+    run(tool, ['-i', path.join(dir, 'in.drc'), '-o', path.join(dir, 'out.obj')]);
+    const vertices = [];
+    const faces = [];
+    for (const line of fs.readFileSync(path.join(dir, 'out.obj'), 'utf8').split('\n')) {
+      const f = line.trim().split(/\s+/);
+      if (f[0] === 'v') vertices.push(f.slice(1, 4).map(Number));
+      if (f[0] === 'f') faces.push(f.slice(1, 4).map((x) => Number(x.split('/')[0]) - 1));
+    }
+    return {vertices, faces};
+  } finally {
+    fs.rmSync(dir, {recursive: true, force: true});
+  }
+}
+
+// The point of triangle abc closest to p (Ericson, Real-Time Collision Detection, 5.1.5).
+function closestOnTriangle(p, a, b, c) {
+  const sub = (u, v) => [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
+  const dot = (u, v) => u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+  const at = (o, u, s, v = [0, 0, 0], t = 0) => [0, 1, 2].map((i) => o[i] + s * u[i] + t * v[i]);
+  const ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+  const d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const bp = sub(p, b), d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return at(a, ab, d1 / (d1 - d3));
+  const cp = sub(p, c), d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return at(a, ac, d2 / (d2 - d6));
+  const va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return at(b, sub(c, b), (d4 - d3) / (d4 - d3 + d5 - d6));
+  const denom = 1 / (va + vb + vc);
+  return at(a, ab, vb * denom, ac, vc * denom);
+}
+
+// The distance from p to a mesh ({vertices, faces}) by brute force over every triangle, the
+// vertices first mapped by `transform(v)` (e.g. the CAD model frame into the world).
+export function distanceToMesh(p, mesh, transform = (v) => v) {
+  const v = mesh.vertices.map(transform);
+  let best = Infinity;
+  for (const [i, j, k] of mesh.faces) {
+    const q = closestOnTriangle(p, v[i], v[j], v[k]);
+    best = Math.min(best, Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]));
+  }
+  return best;
+}
+
+// x -> R x + t for a pose {translation: [x, y, z], rotation_xyzw: [x, y, z, w]}.
+export function poseTransform({translation, rotation_xyzw: [x, y, z, w]}) {
+  const n = Math.hypot(x, y, z, w);
+  [x, y, z, w] = [x / n, y / n, z / n, w / n];
+  const R = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]];
+  return (p) => R.map((row, i) => row[0] * p[0] + row[1] * p[1] + row[2] * p[2] + translation[i]);
+}
