@@ -57,7 +57,7 @@ PointMetricFields point_metric_fields(const std::vector<Eigen::Vector3f>& xyz,
 }
 
 nlohmann::json preview_entry(const std::string& sensor, size_t points, size_t max_points) {
-  if (points <= max_points) return nullptr;
+  if (max_points == 0 || points <= max_points) return nullptr;
   return {{"file", map_preview_file(sensor)}, {"points", max_points}};
 }
 

@@ -839,7 +839,7 @@ class MapRun {
     const double n = static_cast<double>(points);
     double bytes = (kGatheredBytesPerPoint + kDracoBytesPerPoint) * n;
     if (options_.write_point_metrics) bytes += kPointMetricsBytesPerPoint * n;
-    if (points > options_.preview_max_points)
+    if (wants_preview(points))
       bytes += kPreviewBytesPerPoint * static_cast<double>(options_.preview_max_points);
     return bytes;
   }
@@ -848,7 +848,7 @@ class MapRun {
     const double n = static_cast<double>(points);
     double seconds = encode_seconds_per_point * n;
     if (options_.write_point_metrics) seconds += kPointMetricsSecondsPerPoint * n;
-    if (points > options_.preview_max_points)
+    if (wants_preview(points))
       seconds += kDracoSecondsPerPoint * static_cast<double>(options_.preview_max_points);
     return seconds;
   }
@@ -873,6 +873,9 @@ class MapRun {
                                             context_.work_dir));
   }
   bool draco_fits(size_t points) const { return draco_bytes(points) <= output_budget_; }
+  bool wants_preview(size_t points) const {
+    return options_.preview_max_points > 0 && points > options_.preview_max_points;
+  }
 
   // The tasks of a sensor whose map is built, each reading its tiles: the LOD tiles, the PLY
   // file, the Draco file when the map fits the budget (gathered in memory), and the
@@ -896,7 +899,7 @@ class MapRun {
                              write_map_draco(io::encode_draco_point_cloud(
                                                  {&map}, draco_options(options_), attributes),
                                              n, start, 0.0, name, options_, context_.work_dir);
-                         if (n > options_.preview_max_points)
+                         if (wants_preview(n))
                            preview_.at(name) = write_preview({&map}, attributes, name);
                        }});
     } else {
@@ -962,7 +965,7 @@ class MapRun {
              }
              combined_encoded_ = io::encode_draco_point_cloud_bytes(parts, draco_options(options_),
                                                                     combined_attributes_);
-             if (combined_points_ > options_.preview_max_points)
+             if (wants_preview(combined_points_))
                combined_preview_ = write_preview(parts, combined_attributes_, kCombinedMapName);
              combined_encode_seconds_ = seconds_since(start);
              runner_->add(guarded({combined_draco_check()}));
@@ -1177,11 +1180,6 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.draco_compression_level = r.optional<int>("draco_compression_level", o.draco_compression_level);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);
   o.write_point_metrics = r.optional<bool>("write_point_metrics", o.write_point_metrics);
-  const long long preview_max =
-      r.optional<long long>("preview_max_points", static_cast<long long>(o.preview_max_points));
-  require(preview_max >= 1000 && preview_max <= 1000000000LL, "preview_max_points",
-          "an integer in [1000, 1e9]");
-  o.preview_max_points = static_cast<size_t>(preview_max);
   o.metrics_radius_m = r.optional<double>("metrics_radius_m", o.metrics_radius_m);
   const long long max_points =
       r.optional<long long>("metrics_max_points", static_cast<long long>(o.metrics_max_points));
@@ -1192,6 +1190,12 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.threads = r.optional<int>("threads", o.threads);
   o.memory_budget_mb = r.optional<int>("memory_budget_mb", o.memory_budget_mb);
   o.write_tiles = r.optional<bool>("write_tiles", o.write_tiles);
+  const long long preview_max = r.optional<long long>(
+      "preview_max_points",
+      static_cast<long long>(o.write_tiles ? 0 : MapStageOptions::kDefaultPreviewPoints));
+  require(preview_max == 0 || (preview_max >= 1000 && preview_max <= 1000000000LL),
+          "preview_max_points", "0 (none) or an integer in [1000, 1e9]");
+  o.preview_max_points = static_cast<size_t>(preview_max);
   r.finish();
 
   require(o.lidar_filters.is_object(), "lidar_filters",

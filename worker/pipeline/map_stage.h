@@ -78,8 +78,12 @@ struct MapStageOptions {
   // (metrics_max_points), hence off by default.
   bool write_point_metrics = false;
   // A map larger than this also gets map_<sensor>_preview.drc, an even thinning to this many
-  // points that a viewer opens first (software WebGL draws ~2 M points in about a second).
-  size_t preview_max_points = 2000000;
+  // points that a viewer opens first (software WebGL draws ~2 M points in about a second);
+  // 0: none. Default: none when the maps are written as level-of-detail tiles (write_tiles,
+  // the default: the viewer opens a big map from its coarsest tiles; a preview costs a quarter
+  // of the stage's output time on the 220 s bridge), else kDefaultPreviewPoints.
+  static constexpr size_t kDefaultPreviewPoints = 2000000;
+  size_t preview_max_points = 0;
 
   // Table V metrics (Eqs. (23)-(26)).
   double metrics_radius_m = 0.25;

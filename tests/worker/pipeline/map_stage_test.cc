@@ -461,6 +461,20 @@ TEST_F(MapStageTest, OptionErrorsNameTheOption) {
   EXPECT_NE(twice.find("'lidar_fixed' is listed twice"), std::string::npos) << twice;
   const std::string radius = error_of(mission, {{"metrics_radius_m", 1e9}});
   EXPECT_NE(radius.find("options.map.metrics_radius_m"), std::string::npos) << radius;
+  const std::string preview = error_of(mission, {{"preview_max_points", 500}});
+  EXPECT_NE(preview.find("options.map.preview_max_points"), std::string::npos) << preview;
+}
+
+// Previews are what a viewer opens first where a big map has no level-of-detail tiles: none
+// by default (tiles are written), 2 M points without tiles, any explicit value kept.
+TEST(MapStageOptions, PreviewsByDefaultOnlyWithoutTiles) {
+  EXPECT_EQ(MapStageOptions::from_json(json::object()).preview_max_points, 0u);
+  EXPECT_EQ(MapStageOptions::from_json({{"write_tiles", false}}).preview_max_points,
+            MapStageOptions::kDefaultPreviewPoints);
+  EXPECT_EQ(MapStageOptions::from_json({{"preview_max_points", 5000}}).preview_max_points, 5000u);
+  EXPECT_EQ(MapStageOptions::from_json({{"write_tiles", false}, {"preview_max_points", 0}})
+                .preview_max_points,
+            0u);
 }
 
 }  // namespace
