@@ -251,15 +251,22 @@ export function watchPage(page, {allowStatus = () => false} = {}) {
 // The number of vertices of a Draco file as Debian's draco_decoder (an independent decoder)
 // reads it, or null when the tool is absent.
 export function dracoVertexCount(bytes) {
+  return dracoDecoded(bytes, 'ply', (out) => {
+    const match = /element vertex (\d+)/.exec(fs.readFileSync(out).subarray(0, 4096).toString('latin1'));
+    return match ? Number(match[1]) : null;
+  });
+}
+
+// `read(file)` of the file draco_decoder writes from `bytes` (its format by `extension`), or
+// null when the tool is absent.
+function dracoDecoded(bytes, extension, read) {
   const tool = '/usr/bin/draco_decoder';
   if (!fs.existsSync(tool)) return null;
   const dir = tempDir('keel-draco-');
   try {
     fs.writeFileSync(path.join(dir, 'in.drc'), bytes);
-    run(tool, ['-i', path.join(dir, 'in.drc'), '-o', path.join(dir, 'out.ply')]);
-    const header = fs.readFileSync(path.join(dir, 'out.ply')).subarray(0, 4096).toString('latin1');
-    const match = /element vertex (\d+)/.exec(header);
-    return match ? Number(match[1]) : null;
+    run(tool, ['-i', path.join(dir, 'in.drc'), '-o', path.join(dir, `out.${extension}`)]);
+    return read(path.join(dir, `out.${extension}`));
   } finally {
     fs.rmSync(dir, {recursive: true, force: true});
   }
@@ -290,23 +297,16 @@ export function readPnts(bytes) {
 // A Draco mesh as Debian's draco_decoder reads it (an independent decoder), as an OBJ:
 // {vertices: [[x, y, z]...], faces: [[i, j, k]...]} (0-based), or null when the tool is absent.
 export function dracoMesh(bytes) {
-  const tool = '/usr/bin/draco_decoder';
-  if (!fs.existsSync(tool)) return null;
-  const dir = tempDir('keel-draco-');
-  try {
-    fs.writeFileSync(path.join(dir, 'in.drc'), bytes);
-    run(tool, ['-i', path.join(dir, 'in.drc'), '-o', path.join(dir, 'out.obj')]);
+  return dracoDecoded(bytes, 'obj', (out) => {
     const vertices = [];
     const faces = [];
-    for (const line of fs.readFileSync(path.join(dir, 'out.obj'), 'utf8').split('\n')) {
+    for (const line of fs.readFileSync(out, 'utf8').split('\n')) {
       const f = line.trim().split(/\s+/);
       if (f[0] === 'v') vertices.push(f.slice(1, 4).map(Number));
       if (f[0] === 'f') faces.push(f.slice(1, 4).map((x) => Number(x.split('/')[0]) - 1));
     }
     return {vertices, faces};
-  } finally {
-    fs.rmSync(dir, {recursive: true, force: true});
-  }
+  });
 }
 
 // The point of triangle abc closest to p (Ericson, Real-Time Collision Detection, 5.1.5).
