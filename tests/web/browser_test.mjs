@@ -591,7 +591,9 @@ test('a hull compare job\'s report: x_gM difference, deviation change and the pe
 
 // The legend of `layer` coloured by `mode` against the sidecar's range (height: its bbox's z),
 // and the values the page decoded against the same range.
-async function checkChangeLegend(layer, mode, sidecar) {
+// `clip`: the ramp's ends expected for a change map's M3C2 colouring (its ± box), else ± the
+// attribute's larger magnitude.
+async function checkChangeLegend(layer, mode, sidecar, clip = null) {
   const legend = await page.waitForSelector(`.legend-box[data-layer="${layer}"][data-mode="${mode}"]`, {timeout: 10000});
   const expected = mode === 'height' ? {min: sidecar.bbox_min[2], max: sidecar.bbox_max[2]} : sidecar.attributes[mode];
   assert.equal(Number(await legend.getAttribute('data-min')), expected.min, `${layer} ${mode} min`);
@@ -606,8 +608,9 @@ async function checkChangeLegend(layer, mode, sidecar) {
       const u = window.keelViewer.layers.get(l).material.uniforms;
       return [u.vmin.value, u.vmax.value];
     }, layer);
-    const extent = Math.max(Math.abs(expected.min), Math.abs(expected.max));
+    const extent = clip ?? Math.max(Math.abs(expected.min), Math.abs(expected.max));
     assert.deepEqual(ends, extent > 0 ? [-extent, extent] : [-1, 1], `${layer} ${mode}: ramp ends`);
+    if (clip) assert.equal(Number(await legend.$eval('.clip', (e) => e.dataset.clip)), clip, `${layer}: the legend names the clip`);
   }
   if (mode === 'significant') {
     const entries = await legend.$$eval('[data-value]', (es) => es.map((e) => [Number(e.dataset.value), e.textContent]));
@@ -646,11 +649,21 @@ test('the viewer shows a compare job\'s change map: its point count and each col
     const modes = await page.$$eval('#change-color-by option', (os) => os.map((o) => o.value));
     for (const m of ['m3c2_m', 'significant', 'lod95_m', 'c2c_m', 'height']) assert.ok(modes.includes(m), `no ${m} colouring: ${modes}`);
     assert.equal(modes[0], 'm3c2_m', 'the change is the first colouring');
+    // The M3C2 ramp spans ± four times the median level of detection of changes.json.
+    const figures = (await server.artifactJson(artifacts['changes.json'])).maps.maps[name.replace(/^change_/, '')];
+    const clip = 4 * figures.lod95_m.median;
     for (const mode of modes) {
       await page.selectOption('#change-color-by', mode);
-      await checkChangeLegend(name, mode, sidecar);
+      await checkChangeLegend(name, mode, sidecar, mode === 'm3c2_m' ? clip : null);
     }
     await page.selectOption('#change-color-by', 'm3c2_m');
+    // A clip typed in the box moves the ramp's ends and is kept in the URL.
+    await page.fill('#change-clip', '0.05');
+    await page.dispatchEvent('#change-clip', 'change');
+    await checkChangeLegend(name, 'm3c2_m', sidecar, 0.05);
+    assert.match(page.url(), /[?&]clip=0\.05/);
+    await page.fill('#change-clip', '');  // back to the default, for the next map
+    await page.dispatchEvent('#change-clip', 'change');
   }
 }));
 

@@ -59,3 +59,13 @@ test('change maps and the change hull are found by name, each with its sidecar o
   assert.deepEqual(hull, {name: 'change_hull', artifact: byName['change_hull.drc'], sidecarArtifact: byName['change_hull.json']});
   assert.deepEqual(changesOf({'map_combined.drc': a('map_combined.drc')}), {maps: [], hull: null});
 });
+
+test('the M3C2 colours saturate at four levels of detection, or at the larger magnitude without one', async () => {
+  const {changeClip, rampEnds, rampSpan} = await import('../../../web/js/viewer/attribute_legend.js');
+  assert.equal(changeClip({lod95_m: {median: 0.0234}}), 4 * 0.0234);
+  for (const bad of [undefined, {}, {lod95_m: {median: 0}}, {lod95_m: {median: NaN}}]) assert.equal(changeClip(bad), null);
+  const legend = {min: -1.0, max: 0.76, ramp: 'diverging', mode: 'm3c2_m'};
+  assert.deepEqual(rampEnds(legend), {vmin: -1.0, vmax: 1.0, categories: 0});
+  assert.deepEqual(rampEnds({...legend, clip: 0.1}), {vmin: -0.1, vmax: 0.1, categories: 0});
+  assert.deepEqual(rampSpan({...legend, clip: 0.1}), {from: 0, to: 1}, 'values beyond the clip: the whole ramp shows');
+});

@@ -10,6 +10,7 @@ import {fetchArtifactJson, jobsApi} from '../api.js';
 import {h} from '../dom.js';
 import {formatNumber} from '../format.js';
 import {jobHash} from '../router.js';
+import {changeClip} from '../viewer/attribute_legend.js';
 import {changesOf} from '../viewer/change_artifacts.js';
 import {MeshLayer} from '../viewer/mesh_layer.js';
 import {CHANGE_COLOR_MODES, PointCloudLayer} from '../viewer/point_cloud_layer.js';
@@ -24,6 +25,18 @@ async function readSidecar(ctx, name, artifact, without) {
     return await fetchArtifactJson(artifact);
   } catch (e) {
     ctx.notice('warning', `${name}.json cannot be read`, `${e.message}; ${name} ${without}.`);
+    return null;
+  }
+}
+
+// changes.json (the comparison's figures), or null with a notice: the M3C2 colours then span
+// the attribute's whole range.
+async function readChanges(ctx, artifact) {
+  try {
+    if (!artifact) throw new Error('the job has no changes.json');
+    return await fetchArtifactJson(artifact);
+  } catch (e) {
+    ctx.notice('warning', 'changes.json cannot be read', `${e.message || e}; the M3C2 colours span the change's whole range.`);
     return null;
   }
 }
@@ -44,7 +57,26 @@ async function jobAWorldFromModel(ctx, id) {
   }
 }
 
-function setupChangeMaps(ctx, maps, sidecars, el) {
+// The ± box of the M3C2 colouring: the ramp's ends, by default changeClip() of the map's
+// figures in changes.json (the first map's for the box), kept in the URL (?clip=).
+function clipControl(ctx, layers, changes) {
+  const defaults = layers.map((layer) => changeClip(changes?.maps?.maps?.[layer.name.replace(/^change_/, '')]));
+  const wanted = Number(ctx.query.get('clip'));
+  const apply = (value) => layers.forEach((layer, i) => layer.setClip('m3c2_m', value > 0 ? value : defaults[i]));
+  apply(wanted);
+  const input = h('input', {type: 'number', id: 'change-clip', min: 0, step: 0.005,
+                            value: String(wanted > 0 ? wanted : defaults[0] ?? ''), on: {change: () => {
+    const value = Number(input.value);
+    apply(value);
+    ctx.saveUrl({clip: value > 0 ? String(value) : ''});
+    ctx.updateLegend();
+    ctx.scene.requestRender();
+  }}});
+  return h('label', {title: 'the M3C2 colours saturate beyond this change (m); empty: four times the median level of detection'},
+           'M3C2 colours ± ', input, ' m');
+}
+
+function setupChangeMaps(ctx, maps, sidecars, changes, el) {
   const layers = maps.map((map, i) => {
     const layer = new PointCloudLayer({name: map.name, sidecar: sidecars[i], full: map.full, preview: null, fetchBytes: ctx.fetchBytes},
                                       {budget: ctx.state.budget, onChange: ctx.onLayerChange, colorModes: CHANGE_COLOR_MODES});
@@ -65,7 +97,7 @@ function setupChangeMaps(ctx, maps, sidecars, el) {
     for (const layer of layers) layer.setPointSize(Number(size.value));
     ctx.scene.requestRender();
   }}});
-  el.append(h('label', null, 'Colour by ', select), h('label', null, 'Point size ', size));
+  el.append(h('label', null, 'Colour by ', select), clipControl(ctx, layers, changes), h('label', null, 'Point size ', size));
   layers.forEach((layer, i) => {
     layer.setColorMode(select.value) || layer.setColorMode('height');
     el.append(ctx.layerRow(layer, {checked: i === 0, onToggle: (on) => {
@@ -109,12 +141,13 @@ export async function setupChanges(ctx, id, byName) {
   const {maps, hull} = changesOf(byName);
   if (maps.length === 0 && !hull) return;
   const el = ctx.section('changes', 'Changes (B against A)');
-  const [sidecars, hullSidecar, transform] = await Promise.all([
+  const [sidecars, hullSidecar, transform, changes] = await Promise.all([
     Promise.all(maps.map((map) => readSidecar(ctx, map.name, map.sidecarArtifact, 'is drawn by height only'))),
     hull ? readSidecar(ctx, hull.name, hull.sidecarArtifact, 'is drawn without its change colours') : null,
     hull && maps.length > 0 ? jobAWorldFromModel(ctx, id) : null,
+    maps.length > 0 ? readChanges(ctx, byName['changes.json']) : null,
   ]);
-  if (maps.length > 0) setupChangeMaps(ctx, maps, sidecars, el);
+  if (maps.length > 0) setupChangeMaps(ctx, maps, sidecars, changes, el);
   if (hull) setupChangeHull(ctx, hull, hullSidecar, transform, el);
   el.append(h('p', {class: 'muted'}, `${formatNumber(maps.length)} change map${maps.length === 1 ? '' : 's'}`,
               hull ? ' and the change hull' : '', '; their figures are in the ', h('a', {href: jobHash(id, 'report')}, 'report'), '.'));

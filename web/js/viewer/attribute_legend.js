@@ -53,10 +53,21 @@ export function rampEnds(legend) {
     return {vmin: first - 0.5, vmax: last + 0.5, categories: Math.max(1, last - first + 1)};
   }
   if (legend.ramp === 'diverging') {
+    // A clip (a change map's ± box) puts the ramp's ends there; beyond, the colours saturate.
+    if (legend.clip > 0) return {vmin: -legend.clip, vmax: legend.clip, categories: 0};
     const {min, max} = symmetricRange(legend.min, legend.max);
     return {vmin: min, vmax: max, categories: 0};
   }
   return {vmin: legend.min, vmax: legend.max, categories: 0};
+}
+
+// The default clip of a change map's M3C2 colouring: four times the median 95 % level of
+// detection (the compare report's lod95_m), so a change at the level of detection shows at a
+// quarter of the ramp and the noise of unchanged structure stays pale, however far the few
+// largest changes reach; null when the report has no such figure.
+export function changeClip(report) {
+  const lod = report?.lod95_m?.median;
+  return Number.isFinite(lod) && lod > 0 ? 4 * lod : null;
 }
 
 // The part of the ramp a legend's values span, as fractions [from, to] of it.

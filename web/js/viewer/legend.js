@@ -20,6 +20,9 @@ export function legendBox(legend, layerName) {
   box.append(h('div', {class: 'ramp', style: {background: cssGradient(legend.ramp, from, to)}}),
              h('div', {class: 'ends'}, h('span', {class: 'min'}, formatNumber(legend.min)),
                h('span', {class: 'max'}, formatNumber(legend.max))));
+  if (legend.clip > 0)
+    box.append(h('div', {class: 'clip', dataset: {clip: String(legend.clip)}},
+                 `colours saturate beyond ±${formatNumber(legend.clip)}`));
   if (legend.noData !== undefined)
     box.append(h('div', {class: 'no-data'}, h('span', {class: 'swatch', style: {background: 'rgb(115,115,115)'}}), 'undefined here'));
   return box;

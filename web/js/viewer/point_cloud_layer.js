@@ -158,7 +158,15 @@ export class PointCloudLayer {
   // (the values stored in the file), height = the map's z extent.
   legend() {
     if (this.colorMode === 'height') return heightLegend(this.name, this.boundingBox());
-    return attributeLegend(this.name, this.colorMode, this.sidecar.attributes[this.colorMode]);
+    const legend = attributeLegend(this.name, this.colorMode, this.sidecar.attributes[this.colorMode]);
+    if (this.clips?.[this.colorMode] > 0) legend.clip = this.clips[this.colorMode];
+    return legend;
+  }
+
+  // Ramp ends at ±value for a signed attribute (0 or null: the attribute's own extent).
+  setClip(mode, value) {
+    this.clips = {...this.clips, [mode]: value};
+    if (this.colorMode === mode) this.applyColor();
   }
 
   setColorMode(mode) {
