@@ -6,9 +6,11 @@
 #include "worker/mapping/parallel_for.h"
 
 namespace keel::compare {
+namespace {
 
-std::vector<float> c2c_distances(const NearestIndex& reference,
-                                 const std::vector<Eigen::Vector3f>& compared, int threads) {
+template <class Index>  // NearestIndex or PointGrid: both find the nearest point exactly
+std::vector<float> distances(const Index& reference, const std::vector<Eigen::Vector3f>& compared,
+                             int threads) {
   for (size_t i = 0; i < compared.size(); ++i)
     if (!compared[i].allFinite())
       throw std::invalid_argument("C2C: compared point " + std::to_string(i) + " is not finite");
@@ -17,6 +19,21 @@ std::vector<float> c2c_distances(const NearestIndex& reference,
     for (size_t i = begin; i < end; ++i)
       out[i] = static_cast<float>(reference.nearest(compared[i]).distance_m);
   });
+  return out;
+}
+
+}  // namespace
+
+std::vector<float> c2c_distances(const NearestIndex& reference,
+                                 const std::vector<Eigen::Vector3f>& compared, int threads) {
+  return distances(reference, compared, threads);
+}
+
+std::vector<float> c2c_distances(const PointGrid& reference, const PointGrid& compared,
+                                 int threads) {
+  const std::vector<float> in_cell_order = distances(reference, compared.points(), threads);
+  std::vector<float> out(in_cell_order.size());
+  for (size_t i = 0; i < out.size(); ++i) out[compared.input_index()[i]] = in_cell_order[i];
   return out;
 }
 

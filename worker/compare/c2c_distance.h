@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "worker/compare/nearest_index.h"
+#include "worker/compare/point_grid.h"
 
 namespace keel::compare {
 
@@ -14,5 +15,10 @@ namespace keel::compare {
 // std::invalid_argument for a non-finite compared point.
 std::vector<float> c2c_distances(const NearestIndex& reference,
                                  const std::vector<Eigen::Vector3f>& compared, int threads = 2);
+// The same distances from grids (faster on dense maps), one per point of `compared` in the
+// order its constructor was given them; the points are visited cell by cell, so consecutive
+// queries read the same cells of the reference.
+std::vector<float> c2c_distances(const PointGrid& reference, const PointGrid& compared,
+                                 int threads = 2);
 
 }  // namespace keel::compare

@@ -7,6 +7,8 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include "worker/mapping/parallel_for.h"
 
@@ -31,23 +33,56 @@ struct Projection {
   uint32_t count = 0;
 };
 
+// Adds v's projection on the normal when v (a point minus the core) is inside the cylinder.
+void add_if_inside(const Eigen::Vector3d& v, const Eigen::Vector3d& normal, double r2, double depth,
+                   Projection* p) {
+  const double t = v.dot(normal);
+  if (std::abs(t) > depth || v.squaredNorm() - t * t > r2) return;
+  p->sum += t;
+  p->sum_squares += t * t;
+  ++p->count;
+}
+
 // Points of `cloud` in the cylinder of radius r and half-length `depth` about core + t n.
 Projection project(const NearestIndex& cloud, const Eigen::Vector3d& core,
                    const Eigen::Vector3d& normal, double radius, double depth,
                    std::vector<uint32_t>* scratch) {
   cloud.within(core.cast<float>(), std::sqrt(radius * radius + depth * depth), scratch);
   Projection p;
-  const double r2 = radius * radius;
-  for (const uint32_t i : *scratch) {
-    const Eigen::Vector3d v = cloud.point(i).cast<double>() - core;
-    const double t = v.dot(normal);
-    if (std::abs(t) > depth || v.squaredNorm() - t * t > r2) continue;
-    p.sum += t;
-    p.sum_squares += t * t;
-    ++p.count;
-  }
+  for (const uint32_t i : *scratch)
+    add_if_inside(cloud.point(i).cast<double>() - core, normal, radius * radius, depth, &p);
   return p;
 }
+
+// The same from a grid: the points of the cells along the cylinder's axis.
+Projection project(const PointGrid& cloud, const Eigen::Vector3d& core,
+                   const Eigen::Vector3d& normal, double radius, double depth,
+                   std::vector<PointGrid::Run>* scratch) {
+  cloud.near_segment(core - depth * normal, core + depth * normal, radius, scratch);
+  Projection p;
+  const std::vector<Eigen::Vector3f>& points = cloud.points();
+  for (const PointGrid::Run& run : *scratch)
+    for (uint32_t i = run.begin; i < run.end; ++i)
+      add_if_inside(points[i].cast<double>() - core, normal, radius * radius, depth, &p);
+  return p;
+}
+
+// The two clouds' projections, from the grids when the clouds have them.
+struct Cylinders {
+  const M3c2Clouds& clouds;
+  std::vector<uint32_t> indices;
+  std::vector<PointGrid::Run> runs;
+
+  std::pair<Projection, Projection> project_both(const Eigen::Vector3d& core,
+                                                 const Eigen::Vector3d& normal, double radius,
+                                                 double depth) {
+    if (clouds.reference_grid && clouds.compared_grid)
+      return {project(*clouds.reference_grid, core, normal, radius, depth, &runs),
+              project(*clouds.compared_grid, core, normal, radius, depth, &runs)};
+    return {project(*clouds.reference, core, normal, radius, depth, &indices),
+            project(*clouds.compared, core, normal, radius, depth, &indices)};
+  }
+};
 
 double sample_sigma(const Projection& p) {
   if (p.count < 2) return 0.0;
@@ -112,7 +147,9 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
                              const std::vector<Eigen::Vector3f>& viewpoints,
                              const M3c2Options& options) {
   validate(options);
-  if (!clouds.reference || !clouds.compared || !clouds.reference_voxels || !clouds.compared_voxels)
+  const bool grids = clouds.reference_grid && clouds.compared_grid;
+  if (!(grids || (clouds.reference && clouds.compared)) || !clouds.reference_voxels ||
+      !clouds.compared_voxels)
     throw std::invalid_argument("m3c2: both clouds and their voxel moments are needed");
   const NearestIndex reference_voxels(clouds.reference_voxels->means);
   const NearestIndex compared_voxels(clouds.compared_voxels->means);
@@ -130,6 +167,7 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
   std::vector<CoreChange> out(cores.size());
   mapping::parallel_for(cores.size(), options.threads, [&](size_t begin, size_t end) {
     std::vector<uint32_t> scratch;
+    Cylinders cylinders{clouds, {}, {}};
     for (size_t i = begin; i < end; ++i) {
       if (options.check_canceled && (i - begin) % 4096 == 0) options.check_canceled();
       CoreChange& c = out[i];
@@ -146,13 +184,10 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
       c.normal = n.cast<float>();
       c.area_m2 = float(s2 / n.lpNorm<1>());
       // Step 2: the cylinders.
-      Projection a = project(*clouds.reference, core, n, radius, short_depth, &scratch);
-      Projection b = project(*clouds.compared, core, n, radius, short_depth, &scratch);
+      auto [a, b] = cylinders.project_both(core, n, radius, short_depth);
       if ((a.count < uint32_t(options.min_points) || b.count < uint32_t(options.min_points)) &&
-          options.max_depth_m > short_depth) {
-        a = project(*clouds.reference, core, n, radius, options.max_depth_m, &scratch);
-        b = project(*clouds.compared, core, n, radius, options.max_depth_m, &scratch);
-      }
+          options.max_depth_m > short_depth)
+        std::tie(a, b) = cylinders.project_both(core, n, radius, options.max_depth_m);
       c.count_a = a.count;
       c.count_b = b.count;
       if (a.count < uint32_t(options.min_points) || b.count < uint32_t(options.min_points))

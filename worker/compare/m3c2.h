@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "worker/compare/nearest_index.h"
+#include "worker/compare/point_grid.h"
 #include "worker/compare/voxel_moments.h"
 
 namespace keel::compare {
@@ -69,6 +70,10 @@ struct M3c2Clouds {
   // A's voxel moments (any voxel side <= D / 4), for the normals.
   const VoxelMoments* reference_voxels = nullptr;
   const VoxelMoments* compared_voxels = nullptr;  // B's, the fallback for normals
+  // When both are given they gather the cylinders' points instead of the kd-trees (which may
+  // then be null): on dense maps they read only the cells along a cylinder's axis.
+  const PointGrid* reference_grid = nullptr;
+  const PointGrid* compared_grid = nullptr;
 };
 
 // Recomputes every defined core's LoD95 and significance for another registration error.

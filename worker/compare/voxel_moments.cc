@@ -8,6 +8,9 @@
 #include <string>
 #include <utility>
 
+#include "worker/compare/cell_sort.h"
+#include "worker/mapping/parallel_for.h"
+
 namespace keel::compare {
 
 void Moments::add(const Moments& other) {
@@ -37,52 +40,36 @@ LocalPlane fit_plane(const Moments& moments) {
 }
 
 VoxelMoments voxelize(const std::vector<Eigen::Vector3f>& points, double voxel_m,
-                      bool keep_voxel_of) {
-  if (!(voxel_m > 0.0) || !std::isfinite(voxel_m))
-    throw std::invalid_argument("voxel size must be a positive number of metres");
+                      bool keep_voxel_of, int threads) {
+  const CellSort sorted = sort_into_cells(points, voxel_m, "voxelize", threads);
   VoxelMoments out;
   out.voxel_m = voxel_m;
-  // Keys: 21 bits per axis around the first point's voxel; a cloud wider than 2^21 voxels is
-  // refused (at 1 cm that is 20 km).
-  std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());
-  if (points.empty()) return out;
-  const double inv = 1.0 / voxel_m;
-  Eigen::Vector3d lo = points.front().cast<double>();
-  for (const auto& p : points) {
-    if (!p.allFinite()) throw std::invalid_argument("voxelize: a point is not finite");
-    lo = lo.cwiseMin(p.cast<double>());
-  }
-  constexpr int64_t kMax = (int64_t(1) << 21) - 1;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d c = (points[i].cast<double>() - lo) * inv;
-    const int64_t x = int64_t(std::floor(c.x())), y = int64_t(std::floor(c.y())),
-                  z = int64_t(std::floor(c.z()));
-    if (x > kMax || y > kMax || z > kMax)
-      throw std::invalid_argument("voxelize: the cloud spans more than 2^21 voxels of " +
-                                  std::to_string(voxel_m) + " m");
-    keyed[i] = {uint64_t(x) << 42 | uint64_t(y) << 21 | uint64_t(z), uint32_t(i)};
-  }
-  std::sort(keyed.begin(), keyed.end());
+  const auto& keyed = sorted.keyed;
+  std::vector<size_t> begins;  // each voxel's first entry in `keyed`, then keyed.size()
+  for (size_t k = 0; k < keyed.size(); ++k)
+    if (k == 0 || keyed[k].first != keyed[k - 1].first) begins.push_back(k);
+  begins.push_back(keyed.size());
+  const size_t voxels = begins.size() - 1;
+  out.voxels.resize(voxels);
+  out.means.resize(voxels);
   if (keep_voxel_of) out.voxel_of.resize(points.size());
-  for (size_t begin = 0; begin < keyed.size();) {
-    size_t end = begin;
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    while (end < keyed.size() && keyed[end].first == keyed[begin].first) {
-      sum += points[keyed[end].second].cast<double>();
-      ++end;
+  // Voxels are independent, and each sums its points in index order whatever the thread.
+  mapping::parallel_for(voxels, threads, [&](size_t first, size_t last) {
+    for (size_t v = first; v < last; ++v) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (size_t k = begins[v]; k < begins[v + 1]; ++k)
+        sum += points[keyed[k].second].cast<double>();
+      Moments& m = out.voxels[v];
+      m.count = double(begins[v + 1] - begins[v]);
+      m.mean = sum / m.count;
+      for (size_t k = begins[v]; k < begins[v + 1]; ++k) {
+        const Eigen::Vector3d d = points[keyed[k].second].cast<double>() - m.mean;
+        m.scatter += d * d.transpose();
+        if (keep_voxel_of) out.voxel_of[keyed[k].second] = uint32_t(v);
+      }
+      out.means[v] = m.mean.cast<float>();
     }
-    Moments m;
-    m.count = double(end - begin);
-    m.mean = sum / m.count;
-    for (size_t k = begin; k < end; ++k) {
-      const Eigen::Vector3d d = points[keyed[k].second].cast<double>() - m.mean;
-      m.scatter += d * d.transpose();
-      if (keep_voxel_of) out.voxel_of[keyed[k].second] = uint32_t(out.voxels.size());
-    }
-    out.voxels.push_back(m);
-    out.means.push_back(m.mean.cast<float>());
-    begin = end;
-  }
+  });
   return out;
 }
 

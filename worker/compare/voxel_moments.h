@@ -35,8 +35,9 @@ struct VoxelMoments {
   std::vector<Eigen::Vector3f> means;  // voxels[v].mean as float, for a kd-tree
 };
 
-// Throws std::invalid_argument for a non-positive voxel size or a non-finite point.
+// Throws std::invalid_argument for a non-positive voxel size or a non-finite point. The result
+// does not depend on `threads`.
 VoxelMoments voxelize(const std::vector<Eigen::Vector3f>& points, double voxel_m,
-                      bool keep_voxel_of = false);
+                      bool keep_voxel_of = false, int threads = 1);
 
 }  // namespace keel::compare

@@ -12,6 +12,7 @@
 #include "worker/compare/c2c_distance.h"
 #include "worker/compare/local_registration.h"
 #include "worker/compare/nearest_index.h"
+#include "worker/compare/point_grid.h"
 #include "worker/compare/voxel_moments.h"
 #include "worker/core/robust_spread.h"
 #include "worker/io/draco_codec.h"
@@ -231,17 +232,23 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     progress(0.2);
 
     t = std::chrono::steady_clock::now();
-    const compare::NearestIndex index_a(a), index_b(b);
+    // Grids of cells half the cylinders' diameter: a cylinder at the short depth reads ~10
+    // cells of each map, and C2C a point's own cell and the few its distance reaches.
+    const double cell = 0.5 * options.m3c2.projection_scale_m;
+    const compare::PointGrid grid_a(a, cell, options.threads), grid_b(b, cell, options.threads);
     const double normal_voxel = options.m3c2.normal_scale_m / 4.0;
-    const compare::VoxelMoments normals_a = compare::voxelize(a, normal_voxel);
-    const compare::VoxelMoments normals_b = compare::voxelize(b, normal_voxel);
-    const compare::VoxelMoments cores = compare::voxelize(b, options.m3c2.core_spacing_m, true);
+    const compare::VoxelMoments normals_a =
+        compare::voxelize(a, normal_voxel, false, options.threads);
+    const compare::VoxelMoments normals_b =
+        compare::voxelize(b, normal_voxel, false, options.threads);
+    const compare::VoxelMoments cores =
+        compare::voxelize(b, options.m3c2.core_spacing_m, true, options.threads);
     seconds["index"] = seconds_since(t);
     context.check_canceled();
     progress(0.35);
 
     t = std::chrono::steady_clock::now();
-    const std::vector<float> c2c = compare::c2c_distances(index_a, b, options.threads);
+    const std::vector<float> c2c = compare::c2c_distances(grid_a, grid_b, options.threads);
     seconds["c2c"] = seconds_since(t);
     context.check_canceled();
     progress(0.5);
@@ -251,8 +258,8 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     mo.registration_error_m = reg;
     mo.threads = options.threads;
     mo.check_canceled = [&] { context.check_canceled(); };
-    std::vector<compare::CoreChange> changes =
-        compare::m3c2({&index_a, &index_b, &normals_a, &normals_b}, cores.means, views, mo);
+    std::vector<compare::CoreChange> changes = compare::m3c2(
+        {nullptr, nullptr, &normals_a, &normals_b, &grid_a, &grid_b}, cores.means, views, mo);
     if (options.registration_error_m < 0) {
       // reg from the spread of the change itself (see CompareStageOptions).
       std::vector<double> d;

@@ -1,0 +1,40 @@
+// Points sorted by the cubic cell they fall in: the first step of voxelize() and of PointGrid.
+// A cell's key packs its (x, y, z) indices from the cloud's lowest corner, x most significant,
+// with only as many bits per axis as the cloud spans (about 28 for a 170 m bridge map in 10 cm
+// cells), so a stable radix sort of 11-bit digits orders ten million points in three passes,
+// where std::sort of (key, index) pairs compared 64-bit keys ~23 times a point. Stable from
+// index order, it gives that sort's exact order: keys ascending, each cell's points by index.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace keel::compare {
+
+// Cells are indexed up to 2^21 along each axis (at 1 cm that is 20 km).
+inline constexpr int kCellAxisBits = 21;
+
+struct CellSort {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the points' minimum: cell (0, 0, 0)'s corner
+  double cell_m = 0.0;
+  std::array<int, 3> bits = {0, 0, 0};       // key bits of x, y, z
+  std::array<int64_t, 3> cells = {0, 0, 0};  // the cells' indices lie in [0, cells) per axis
+  // (cell key, point index), keys ascending, each cell's points in increasing index order.
+  std::vector<std::pair<uint64_t, uint32_t>> keyed;
+
+  // The cell's (x, y, z) indices.
+  std::array<int64_t, 3> cell_of_key(uint64_t key) const;
+};
+
+// `what` prefixes the messages: throws std::invalid_argument for a non-positive cell size, a
+// non-finite point, or a cloud spanning more than 2^21 cells along an axis. Keys are computed
+// on `threads` threads.
+CellSort sort_into_cells(const std::vector<Eigen::Vector3f>& points, double cell_m,
+                         const std::string& what, int threads = 1);
+
+}  // namespace keel::compare
