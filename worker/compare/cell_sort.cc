@@ -15,8 +15,9 @@ int bits_for(int64_t largest) {
   return bits;
 }
 
-// Stable LSD radix sort on the low `bits` bits of the keys, 11 bits a pass.
-void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>* keyed, int bits) {
+}  // namespace
+
+void radix_sort_by_key(std::vector<std::pair<uint64_t, uint32_t>>* keyed, int bits) {
   constexpr int kDigit = 11;
   constexpr size_t kBuckets = size_t{1} << kDigit;
   if (bits <= 0 || keyed->size() < 2) return;
@@ -31,8 +32,6 @@ void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>* keyed, int bits) {
     keyed->swap(other);
   }
 }
-
-}  // namespace
 
 std::array<int64_t, 3> CellSort::cell_of_key(uint64_t key) const {
   const uint64_t y_mask = (uint64_t(1) << bits[1]) - 1, z_mask = (uint64_t(1) << bits[2]) - 1;
@@ -75,7 +74,7 @@ CellSort sort_into_cells(const std::vector<Eigen::Vector3f>& points, double cell
       out.keyed[i] = {x << shift_x | y << shift_y | z, uint32_t(i)};
     }
   });
-  radix_sort(&out.keyed, out.bits[0] + out.bits[1] + out.bits[2]);
+  radix_sort_by_key(&out.keyed, out.bits[0] + out.bits[1] + out.bits[2]);
   return out;
 }
 

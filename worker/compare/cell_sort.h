@@ -31,6 +31,10 @@ struct CellSort {
   std::array<int64_t, 3> cell_of_key(uint64_t key) const;
 };
 
+// Sorts by the low `bits` bits of the keys, keeping the order of equal keys (stable LSD radix
+// sort, 11 bits a pass).
+void radix_sort_by_key(std::vector<std::pair<uint64_t, uint32_t>>* keyed, int bits);
+
 // `what` prefixes the messages: throws std::invalid_argument for a non-positive cell size, a
 // non-finite point, or a cloud spanning more than 2^21 cells along an axis. Keys are computed
 // on `threads` threads.

@@ -32,7 +32,8 @@ struct LocalRegistration {
   std::vector<double> correction_m;  // per adjusted tile, the translation at its centre
 };
 
-// Moves `moving` (B, already registered globally) in place, tile by tile.
+// Moves `moving` (B, already registered globally) in place, tile by tile; the tiles are
+// registered side by side on registration.threads threads (the result does not depend on it).
 LocalRegistration register_tiles(const std::vector<Eigen::Vector3f>& reference,
                                  std::vector<Eigen::Vector3f>* moving,
                                  const LocalRegistrationOptions& options);

@@ -30,7 +30,7 @@ struct Plane {
 std::vector<Plane> reference_planes(const std::vector<Eigen::Vector3f>& reference,
                                     const StableRegistrationOptions& o,
                                     std::vector<Eigen::Vector3f>* anchors) {
-  const VoxelMoments voxels = voxelize(reference, 0.5 * o.plane_radius_m);
+  const VoxelMoments voxels = voxelize(reference, 0.5 * o.plane_radius_m, false, o.threads);
   const NearestIndex index(voxels.means);
   std::vector<Plane> planes(voxels.voxels.size());
   std::vector<char> keep(voxels.voxels.size(), 0);
@@ -90,7 +90,7 @@ StableRegistration register_stable(const std::vector<Eigen::Vector3f>& reference
   const std::vector<Plane> planes = reference_planes(reference, o, &anchors);
   if (planes.size() < 6) throw std::runtime_error("registration: the reference has no surfaces");
   const NearestIndex plane_index(anchors);
-  const VoxelMoments samples = voxelize(moving, o.sample_spacing_m);
+  const VoxelMoments samples = voxelize(moving, o.sample_spacing_m, false, o.threads);
 
   StableRegistration out;
   out.samples = samples.voxels.size();

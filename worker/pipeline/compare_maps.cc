@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <set>
 #include <stdexcept>
 
@@ -19,6 +20,7 @@
 #include "worker/io/ply_cloud_writer.h"
 #include "worker/io/tum.h"
 #include "worker/mapping/map_metrics.h"
+#include "worker/mapping/parallel_for.h"
 #include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/map_stage.h"
 
@@ -116,6 +118,71 @@ float no_data_below(const std::vector<compare::CoreChange>& cores,
   return lo - span / 1024.0f;
 }
 
+// B's points with their change (change_<map>.drc / .ply): each point its core point's change;
+// where that is undefined the attribute's no_data (docs/artifacts.md), so a viewer tells
+// "unmeasured" from "unchanged".
+struct ChangeCloud {
+  PointCloud cloud;
+  io::PartsAttributes attributes;
+};
+
+ChangeCloud change_cloud(const std::vector<compare::CoreChange>& changes,
+                         const std::vector<uint32_t>& core_of, const std::vector<float>& c2c,
+                         std::vector<Eigen::Vector3f> points) {
+  const float m3c2_no_data = no_data_below(changes, &compare::CoreChange::distance_m);
+  const float lod_no_data = no_data_below(changes, &compare::CoreChange::lod95_m);
+  std::vector<float> m3c2(points.size()), lod(points.size()), significant(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const compare::CoreChange& c = changes[core_of[i]];
+    m3c2[i] = c.defined() ? c.distance_m : m3c2_no_data;
+    lod[i] = c.defined() ? c.lod95_m : lod_no_data;
+    significant[i] = c.defined() ? (c.significant ? 1.0f : 0.0f) : -1.0f;
+  }
+  ChangeCloud out;
+  out.cloud.xyz = std::move(points);
+  out.cloud.frame = "world";
+  out.attributes.fields = {{"m3c2_m", std::move(m3c2)},
+                           {"lod95_m", std::move(lod)},
+                           {"significant", std::move(significant)},
+                           {"c2c_m", c2c}};
+  out.attributes.fields_no_data = {m3c2_no_data, lod_no_data, std::nanf(""), std::nanf("")};
+  return out;
+}
+
+// The report's figures of the change: counts, areas, distributions, the change histogram.
+json change_figures(const std::vector<compare::CoreChange>& changes, const std::vector<float>& c2c,
+                    const CompareStageOptions& options) {
+  double defined_area = 0, significant_area = 0, added = 0, removed = 0;
+  size_t defined = 0, significant_cores = 0;
+  std::vector<float> distances, lods;
+  for (const auto& c : changes) {
+    if (!c.defined()) continue;
+    ++defined;
+    defined_area += c.area_m2;
+    distances.push_back(c.distance_m);
+    lods.push_back(c.lod95_m);
+    if (!c.significant) continue;
+    ++significant_cores;
+    significant_area += c.area_m2;
+    (c.distance_m > 0 ? added : removed) += c.area_m2;
+  }
+  json r;
+  r["core_points"] = changes.size();
+  r["defined_core_points"] = defined;
+  r["significant_core_points"] = significant_cores;
+  r["compared_area_m2"] = defined_area;
+  r["significant_area_m2"] = significant_area;
+  r["significant_fraction"] = defined_area > 0 ? significant_area / defined_area : 0.0;
+  r["significant_added_area_m2"] = added;  // change > 0: material towards the sensor
+  r["significant_removed_area_m2"] = removed;
+  r["m3c2_m"] = mapping::to_json(mapping::summarize(distances, options.histogram_bins));
+  r["lod95_m"] = mapping::to_json(mapping::summarize(lods, options.histogram_bins));
+  r["c2c_m"] = mapping::to_json(mapping::summarize(c2c, options.histogram_bins));
+  r["change_histogram"] =
+      change_histogram(changes, options.histogram_bins, options.histogram_range_m);
+  return r;
+}
+
 }  // namespace
 
 std::vector<std::string> map_names(const fs::path& dir) {
@@ -178,8 +245,12 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     json r = json::object();
     json seconds = json::object();
     auto t = std::chrono::steady_clock::now();
-    const std::vector<Eigen::Vector3f> a = load_map(job_a.dir, map, id_a);
-    std::vector<Eigen::Vector3f> b = load_map(job_b.dir, map, id_b);
+    // Two Draco decodes, each single-threaded: side by side.
+    std::vector<Eigen::Vector3f> a, b;
+    mapping::parallel_for_each(2, options.threads, [&](size_t k) {
+      if (k == 0) a = load_map(job_a.dir, map, id_a);
+      if (k == 1) b = load_map(job_b.dir, map, id_b);
+    });
     seconds["load"] = seconds_since(t);
     context.check_canceled();
 
@@ -235,20 +306,23 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     // Grids of cells half the cylinders' diameter: a cylinder at the short depth reads ~10
     // cells of each map, and C2C a point's own cell and the few its distance reaches.
     const double cell = 0.5 * options.m3c2.projection_scale_m;
-    const compare::PointGrid grid_a(a, cell, options.threads), grid_b(b, cell, options.threads);
     const double normal_voxel = options.m3c2.normal_scale_m / 4.0;
-    const compare::VoxelMoments normals_a =
-        compare::voxelize(a, normal_voxel, false, options.threads);
-    const compare::VoxelMoments normals_b =
-        compare::voxelize(b, normal_voxel, false, options.threads);
-    const compare::VoxelMoments cores =
-        compare::voxelize(b, options.m3c2.core_spacing_m, true, options.threads);
+    std::unique_ptr<compare::PointGrid> grid_a, grid_b;
+    compare::VoxelMoments normals_a, normals_b, cores;
+    // Five indexes, each mostly one radix sort (single-threaded): side by side, largest first.
+    mapping::parallel_for_each(5, options.threads, [&](size_t k) {
+      if (k == 0) grid_a = std::make_unique<compare::PointGrid>(a, cell);
+      if (k == 1) grid_b = std::make_unique<compare::PointGrid>(b, cell);
+      if (k == 2) cores = compare::voxelize(b, options.m3c2.core_spacing_m, true);
+      if (k == 3) normals_a = compare::voxelize(a, normal_voxel);
+      if (k == 4) normals_b = compare::voxelize(b, normal_voxel);
+    });
     seconds["index"] = seconds_since(t);
     context.check_canceled();
     progress(0.35);
 
     t = std::chrono::steady_clock::now();
-    const std::vector<float> c2c = compare::c2c_distances(grid_a, grid_b, options.threads);
+    const std::vector<float> c2c = compare::c2c_distances(*grid_a, *grid_b, options.threads);
     seconds["c2c"] = seconds_since(t);
     context.check_canceled();
     progress(0.5);
@@ -258,8 +332,9 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     mo.registration_error_m = reg;
     mo.threads = options.threads;
     mo.check_canceled = [&] { context.check_canceled(); };
-    std::vector<compare::CoreChange> changes = compare::m3c2(
-        {nullptr, nullptr, &normals_a, &normals_b, &grid_a, &grid_b}, cores.means, views, mo);
+    std::vector<compare::CoreChange> changes =
+        compare::m3c2({nullptr, nullptr, &normals_a, &normals_b, grid_a.get(), grid_b.get()},
+                      cores.means, views, mo);
     if (options.registration_error_m < 0) {
       // reg from the spread of the change itself (see CompareStageOptions).
       std::vector<double> d;
@@ -273,79 +348,40 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     seconds["m3c2"] = seconds_since(t);
     progress(0.8);
 
-    // Per point of B: its core point's change; where it is undefined the attribute's no_data
-    // (docs/artifacts.md), so a viewer tells "unmeasured" from "unchanged".
     t = std::chrono::steady_clock::now();
-    const float m3c2_no_data = no_data_below(changes, &compare::CoreChange::distance_m);
-    const float lod_no_data = no_data_below(changes, &compare::CoreChange::lod95_m);
-    std::vector<float> m3c2(b.size()), lod(b.size()), significant(b.size());
-    for (size_t i = 0; i < b.size(); ++i) {
-      const compare::CoreChange& c = changes[cores.voxel_of[i]];
-      m3c2[i] = c.defined() ? c.distance_m : m3c2_no_data;
-      lod[i] = c.defined() ? c.lod95_m : lod_no_data;
-      significant[i] = c.defined() ? (c.significant ? 1.0f : 0.0f) : -1.0f;
-    }
-    const std::vector<io::ScalarField> fields = {
-        {"m3c2_m", m3c2}, {"lod95_m", lod}, {"significant", significant}, {"c2c_m", c2c}};
+    const size_t points_b = b.size();
+    ChangeCloud change = change_cloud(changes, cores.voxel_of, c2c, std::move(b));
     io::DracoOptions draco;
     draco.position_bits = options.draco_position_bits;
     draco.field_bits = options.draco_field_bits;
-    PointCloud cloud_b;
-    cloud_b.xyz = b;
-    io::PartsAttributes attributes;
-    attributes.fields = fields;
-    attributes.fields_no_data = {m3c2_no_data, lod_no_data, std::nanf(""), std::nanf("")};
-    const io::DracoEncoded encoded = io::encode_draco_point_cloud({&cloud_b}, draco, attributes);
+    io::DracoEncoded encoded;
+    // The Draco encoding is single-threaded and the longest: the PLY file and the figures are
+    // made beside it.
+    mapping::parallel_for_each(3, options.threads, [&](size_t k) {
+      if (k == 0) encoded = io::encode_draco_point_cloud({&change.cloud}, draco, change.attributes);
+      if (k == 1 && options.write_ply)
+        io::write_ply_cloud(context.work_dir / change_ply_file(map), change.cloud,
+                            change.attributes.fields);
+      if (k == 2) r.update(change_figures(changes, c2c, options));
+    });
     io::write_draco_file(context.work_dir / change_draco_file(map), encoded.bytes);
     artifacts->push_back(change_draco_file(map));
     // The viewer finds the attributes and their ranges here (A's world frame).
     artifacts->push_back(
         write_draco_sidecar(context.work_dir, change_draco_file(map), encoded.summary, "world"));
-    if (options.write_ply) {
-      cloud_b.frame = "world";
-      io::write_ply_cloud(context.work_dir / change_ply_file(map), cloud_b, fields);
-      artifacts->push_back(change_ply_file(map));
-    }
+    if (options.write_ply) artifacts->push_back(change_ply_file(map));
     seconds["write"] = seconds_since(t);
 
-    // Figures.
-    double defined_area = 0, significant_area = 0, added = 0, removed = 0;
-    size_t defined = 0, significant_cores = 0;
-    std::vector<float> distances, lods;
-    for (const auto& c : changes) {
-      if (!c.defined()) continue;
-      ++defined;
-      defined_area += c.area_m2;
-      distances.push_back(c.distance_m);
-      lods.push_back(c.lod95_m);
-      if (!c.significant) continue;
-      ++significant_cores;
-      significant_area += c.area_m2;
-      (c.distance_m > 0 ? added : removed) += c.area_m2;
-    }
     r["points_a"] = a.size();
-    r["points_b"] = b.size();
-    r["core_points"] = changes.size();
-    r["defined_core_points"] = defined;
-    r["significant_core_points"] = significant_cores;
-    r["compared_area_m2"] = defined_area;
-    r["significant_area_m2"] = significant_area;
-    r["significant_fraction"] = defined_area > 0 ? significant_area / defined_area : 0.0;
-    r["significant_added_area_m2"] = added;  // change > 0: material towards the sensor
-    r["significant_removed_area_m2"] = removed;
+    r["points_b"] = points_b;
     r["registration_error_m"] = reg;
-    r["m3c2_m"] = mapping::to_json(mapping::summarize(distances, options.histogram_bins));
-    r["lod95_m"] = mapping::to_json(mapping::summarize(lods, options.histogram_bins));
-    r["c2c_m"] = mapping::to_json(mapping::summarize(c2c, options.histogram_bins));
-    r["change_histogram"] =
-        change_histogram(changes, options.histogram_bins, options.histogram_range_m);
     r["draco"] = {{"file", change_draco_file(map)},
                   {"bytes", encoded.bytes.size()},
                   {"max_position_error_m", encoded.max_position_error_m}};
     r["seconds"] = seconds;
     double total = 0;
     for (const auto& [k, v] : seconds.items()) total += v.get<double>();
-    r["points_per_second"] = total > 0 ? double(a.size() + b.size()) / total : 0.0;
+    r["points_per_second"] = total > 0 ? double(a.size() + points_b) / total : 0.0;
     report["maps"][map] = r;
     progress(1.0);
   }
