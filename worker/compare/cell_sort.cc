@@ -15,22 +15,38 @@ int bits_for(int64_t largest) {
   return bits;
 }
 
-}  // namespace
-
-void radix_sort_by_key(std::vector<std::pair<uint64_t, uint32_t>>* keyed, int bits) {
+// Stable LSD radix sort on the low `bits` bits of key_of(entry), 11 bits a pass.
+template <typename Entry, typename KeyOf>
+void radix_sort(std::vector<Entry>* entries, int bits, const KeyOf& key_of) {
   constexpr int kDigit = 11;
   constexpr size_t kBuckets = size_t{1} << kDigit;
-  if (bits <= 0 || keyed->size() < 2) return;
-  std::vector<std::pair<uint64_t, uint32_t>> other(keyed->size());
+  if (bits <= 0 || entries->size() < 2) return;
+  std::vector<Entry> other(entries->size());
   std::vector<size_t> offsets(kBuckets);
   for (int shift = 0; shift < bits; shift += kDigit) {
     std::fill(offsets.begin(), offsets.end(), 0);
-    for (const auto& e : *keyed) ++offsets[(e.first >> shift) & (kBuckets - 1)];
+    for (const Entry& e : *entries) ++offsets[(key_of(e) >> shift) & (kBuckets - 1)];
     size_t total = 0;
     for (size_t& offset : offsets) total += std::exchange(offset, total);
-    for (const auto& e : *keyed) other[offsets[(e.first >> shift) & (kBuckets - 1)]++] = e;
-    keyed->swap(other);
+    for (const Entry& e : *entries) other[offsets[(key_of(e) >> shift) & (kBuckets - 1)]++] = e;
+    entries->swap(other);
   }
+}
+
+}  // namespace
+
+KeyedIndices::KeyedIndices(size_t n, int key_bits) : key_bits_(key_bits) {
+  if (packed())
+    words_.resize(n);
+  else
+    pairs_.resize(n);
+}
+
+void KeyedIndices::sort() {
+  if (packed())
+    radix_sort(&words_, key_bits_, [](uint64_t w) { return w >> 32; });
+  else
+    radix_sort(&pairs_, key_bits_, [](const std::pair<uint64_t, uint32_t>& e) { return e.first; });
 }
 
 std::array<int64_t, 3> CellSort::cell_of_key(uint64_t key) const {
@@ -65,16 +81,16 @@ CellSort sort_into_cells(const std::vector<Eigen::Vector3f>& points, double cell
     out.cells[axis] = int64_t(top) + 1;
   }
   const int shift_x = out.bits[1] + out.bits[2], shift_y = out.bits[2];
-  out.keyed.resize(points.size());
+  out.keyed = KeyedIndices(points.size(), out.bits[0] + out.bits[1] + out.bits[2]);
   mapping::parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const Eigen::Vector3d c = (points[i].cast<double>() - lo) * inv;
       const uint64_t x = uint64_t(std::floor(c.x())), y = uint64_t(std::floor(c.y())),
                      z = uint64_t(std::floor(c.z()));
-      out.keyed[i] = {x << shift_x | y << shift_y | z, uint32_t(i)};
+      out.keyed.set(i, x << shift_x | y << shift_y | z, uint32_t(i));
     }
   });
-  radix_sort_by_key(&out.keyed, out.bits[0] + out.bits[1] + out.bits[2]);
+  out.keyed.sort();
   return out;
 }
 

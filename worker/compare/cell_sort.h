@@ -19,21 +19,44 @@ namespace keel::compare {
 // Cells are indexed up to 2^21 along each axis (at 1 cm that is 20 km).
 inline constexpr int kCellAxisBits = 21;
 
+// (key, point index) entries, sorted by key keeping the order of equal keys (stable LSD radix
+// sort, 11 bits a pass). Keys of up to 32 bits (a map of a few hundred metres in 10 cm cells)
+// share one 64-bit word with the index: half the memory of a pair, and half the bytes each
+// pass moves and each fresh page the kernel clears.
+class KeyedIndices {
+ public:
+  KeyedIndices() = default;
+  KeyedIndices(size_t n, int key_bits);
+  void set(size_t k, uint64_t key, uint32_t index) {
+    if (packed()) {
+      words_[k] = key << 32 | index;
+    } else {
+      pairs_[k] = {key, index};
+    }
+  }
+  uint64_t key(size_t k) const { return packed() ? words_[k] >> 32 : pairs_[k].first; }
+  uint32_t index(size_t k) const { return packed() ? uint32_t(words_[k]) : pairs_[k].second; }
+  size_t size() const { return packed() ? words_.size() : pairs_.size(); }
+  void sort();
+
+ private:
+  bool packed() const { return key_bits_ <= 32; }
+  int key_bits_ = 0;
+  std::vector<uint64_t> words_;
+  std::vector<std::pair<uint64_t, uint32_t>> pairs_;
+};
+
 struct CellSort {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the points' minimum: cell (0, 0, 0)'s corner
   double cell_m = 0.0;
   std::array<int, 3> bits = {0, 0, 0};       // key bits of x, y, z
   std::array<int64_t, 3> cells = {0, 0, 0};  // the cells' indices lie in [0, cells) per axis
   // (cell key, point index), keys ascending, each cell's points in increasing index order.
-  std::vector<std::pair<uint64_t, uint32_t>> keyed;
+  KeyedIndices keyed;
 
   // The cell's (x, y, z) indices.
   std::array<int64_t, 3> cell_of_key(uint64_t key) const;
 };
-
-// Sorts by the low `bits` bits of the keys, keeping the order of equal keys (stable LSD radix
-// sort, 11 bits a pass).
-void radix_sort_by_key(std::vector<std::pair<uint64_t, uint32_t>>* keyed, int bits);
 
 // `what` prefixes the messages: throws std::invalid_argument for a non-positive cell size, a
 // non-finite point, or a cloud spanning more than 2^21 cells along an axis. Keys are computed

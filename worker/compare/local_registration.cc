@@ -49,18 +49,19 @@ Tiles bucket(const std::vector<Eigen::Vector3f>& points, double side, int thread
     for (size_t i = 0; i < points.size(); ++i) tiles[keys[i]].push_back(uint32_t(i));
     return tiles;
   }
-  std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());
+  KeyedIndices keyed(points.size(), bits[0] + bits[1] + bits[2]);
   for (size_t i = 0; i < points.size(); ++i)
-    keyed[i] = {uint64_t(keys[i][0] - lo[0]) << (bits[1] + bits[2]) |
-                    uint64_t(keys[i][1] - lo[1]) << bits[2] | uint64_t(keys[i][2] - lo[2]),
-                uint32_t(i)};
-  radix_sort_by_key(&keyed, bits[0] + bits[1] + bits[2]);
+    keyed.set(i,
+              uint64_t(keys[i][0] - lo[0]) << (bits[1] + bits[2]) |
+                  uint64_t(keys[i][1] - lo[1]) << bits[2] | uint64_t(keys[i][2] - lo[2]),
+              uint32_t(i));
+  keyed.sort();
   for (size_t begin = 0; begin < keyed.size();) {
     size_t end = begin;
-    while (end < keyed.size() && keyed[end].first == keyed[begin].first) ++end;
-    std::vector<uint32_t>& members = tiles[keys[keyed[begin].second]];
+    while (end < keyed.size() && keyed.key(end) == keyed.key(begin)) ++end;
+    std::vector<uint32_t>& members = tiles[keys[keyed.index(begin)]];
     members.reserve(end - begin);
-    for (size_t k = begin; k < end; ++k) members.push_back(keyed[k].second);
+    for (size_t k = begin; k < end; ++k) members.push_back(keyed.index(k));
     begin = end;
   }
   return tiles;

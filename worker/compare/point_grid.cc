@@ -43,8 +43,9 @@ PointGrid::PointGrid(const std::vector<Eigen::Vector3f>& points, double cell_m, 
   input_index_.resize(points.size());
   std::vector<uint64_t> cell_key;
   for (size_t k = 0; k < sorted.keyed.size(); ++k) {
-    const auto& [key, index] = sorted.keyed[k];
-    if (k == 0 || key != sorted.keyed[k - 1].first) {
+    const uint64_t key = sorted.keyed.key(k);
+    const uint32_t index = sorted.keyed.index(k);
+    if (k == 0 || key != sorted.keyed.key(k - 1)) {
       cell_key.push_back(key);
       cell_begin_.push_back(uint32_t(k));
     }
@@ -190,24 +191,46 @@ void PointGrid::near_segment(const Eigen::Vector3d& from, const Eigen::Vector3d&
   const Eigen::Array<int64_t, 3, 1> first = cell_of(lo).max(0);
   const Eigen::Array<int64_t, 3, 1> last =
       cell_of(hi).min(Eigen::Array<int64_t, 3, 1>(extent_[0], extent_[1], extent_[2]) - 1);
+  if ((first > last).any()) return;
   // A point within r of the segment lies in a cell whose centre is within r + half a cell's
   // diagonal of it (distance to a segment changes no faster than the point moves).
   const double reach = radius_m + 0.5 * std::sqrt(3.0) * cell_m_ + kSlack;
   const Eigen::Vector3d axis = to - from;
   const double length_squared = axis.squaredNorm();
+  auto add_if_near = [&](int64_t x, int64_t y, int64_t z, uint32_t cell) {
+    const Eigen::Vector3d centre =
+        origin_ +
+        (Eigen::Vector3d(double(x), double(y), double(z)).array() + 0.5).matrix() * cell_m_;
+    const Eigen::Vector3d v = centre - from;
+    const double t =
+        length_squared > 0.0 ? std::clamp(v.dot(axis) / length_squared, 0.0, 1.0) : 0.0;
+    if ((v - t * axis).squaredNorm() <= reach * reach)
+      runs->push_back({cell_begin_[cell], cell_begin_[cell + 1]});
+  };
   for (int64_t x = first.x(); x <= last.x(); ++x)
-    for (int64_t y = first.y(); y <= last.y(); ++y)
-      for (int64_t z = first.z(); z <= last.z(); ++z) {
-        const Eigen::Vector3d centre =
-            origin_ +
-            (Eigen::Vector3d(double(x), double(y), double(z)).array() + 0.5).matrix() * cell_m_;
-        const Eigen::Vector3d v = centre - from;
-        const double t =
-            length_squared > 0.0 ? std::clamp(v.dot(axis) / length_squared, 0.0, 1.0) : 0.0;
-        if ((v - t * axis).squaredNorm() > reach * reach) continue;
-        const int64_t cell = find(x, y, z);
-        if (cell >= 0) runs->push_back({cell_begin_[cell], cell_begin_[cell + 1]});
+    for (int64_t y = first.y(); y <= last.y(); ++y) {
+      if (occupied_.empty()) {
+        for (int64_t z = first.z(); z <= last.z(); ++z)
+          if (const int64_t cell = find(x, y, z); cell >= 0) add_if_near(x, y, z, uint32_t(cell));
+        continue;
       }
+      // Only the occupied cells of the column: the set bits between its first and last z
+      // (most cells around a cylinder are empty, the surface crossing it is thin).
+      const uint64_t base = uint64_t((x * extent_[1] + y) * extent_[2]);
+      const uint64_t begin = base + uint64_t(first.z()), end = base + uint64_t(last.z()) + 1;
+      for (uint64_t w = begin >> 6; w <= (end - 1) >> 6; ++w) {
+        uint64_t bits = occupied_[w];
+        if (w == begin >> 6) bits &= ~uint64_t(0) << (begin & 63);
+        if (w == (end - 1) >> 6 && (end & 63) != 0) bits &= (uint64_t(1) << (end & 63)) - 1;
+        for (; bits != 0; bits &= bits - 1) {
+          const uint64_t bit = (w << 6) + uint64_t(__builtin_ctzll(bits));
+          const uint32_t cell =
+              occupied_before_[w] +
+              uint32_t(__builtin_popcountll(occupied_[w] & ((uint64_t(1) << (bit & 63)) - 1)));
+          add_if_near(x, y, int64_t(bit - base), cell);
+        }
+      }
+    }
 }
 
 }  // namespace keel::compare

@@ -47,7 +47,7 @@ VoxelMoments voxelize(const std::vector<Eigen::Vector3f>& points, double voxel_m
   const auto& keyed = sorted.keyed;
   std::vector<size_t> begins;  // each voxel's first entry in `keyed`, then keyed.size()
   for (size_t k = 0; k < keyed.size(); ++k)
-    if (k == 0 || keyed[k].first != keyed[k - 1].first) begins.push_back(k);
+    if (k == 0 || keyed.key(k) != keyed.key(k - 1)) begins.push_back(k);
   begins.push_back(keyed.size());
   const size_t voxels = begins.size() - 1;
   out.voxels.resize(voxels);
@@ -58,14 +58,14 @@ VoxelMoments voxelize(const std::vector<Eigen::Vector3f>& points, double voxel_m
     for (size_t v = first; v < last; ++v) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       for (size_t k = begins[v]; k < begins[v + 1]; ++k)
-        sum += points[keyed[k].second].cast<double>();
+        sum += points[keyed.index(k)].cast<double>();
       Moments& m = out.voxels[v];
       m.count = double(begins[v + 1] - begins[v]);
       m.mean = sum / m.count;
       for (size_t k = begins[v]; k < begins[v + 1]; ++k) {
-        const Eigen::Vector3d d = points[keyed[k].second].cast<double>() - m.mean;
+        const Eigen::Vector3d d = points[keyed.index(k)].cast<double>() - m.mean;
         m.scatter += d * d.transpose();
-        if (keep_voxel_of) out.voxel_of[keyed[k].second] = uint32_t(v);
+        if (keep_voxel_of) out.voxel_of[keyed.index(k)] = uint32_t(v);
       }
       out.means[v] = m.mean.cast<float>();
     }

@@ -89,30 +89,44 @@ TEST(PointGrid, NearestIsExactOnClustersFarApart) {
   expect_nearest_exact(points, 0.05, queries);
 }
 
+// Random segments from `start` (up to 1 m long): every point within the radius must be in the
+// runs near_segment returns.
+void expect_segments_complete(const std::vector<Eigen::Vector3f>& points, double cell_m,
+                              const Eigen::Vector3d& start, const Eigen::Vector3d& spread,
+                              std::mt19937& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const PointGrid grid(points, cell_m);
+  std::vector<PointGrid::Run> runs;
+  for (int s = 0; s < 300; ++s) {
+    const Eigen::Vector3d from =
+        start + spread.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+    const Eigen::Vector3d to = from + unit(rng) * Eigen::Vector3d::Random().normalized();
+    const double radius = s % 2 ? 0.1 : 0.03;
+    grid.near_segment(from, to, radius, &runs);
+    std::set<uint32_t> found;
+    for (const auto& run : runs)
+      for (uint32_t e = run.begin; e < run.end; ++e) found.insert(grid.input_index()[e]);
+    const Eigen::Vector3d axis = to - from;
+    for (uint32_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d v = points[i].cast<double>() - from;
+      const double t = std::clamp(v.dot(axis) / std::max(axis.squaredNorm(), 1e-300), 0.0, 1.0);
+      if ((v - t * axis).norm() <= radius)
+        ASSERT_TRUE(found.count(i)) << "segment " << s << " misses point " << i;
+    }
+  }
+}
+
 TEST(PointGrid, CellsAlongASegmentHoldEveryPointWithinTheRadius) {
   std::mt19937 rng(13);
   const std::vector<Eigen::Vector3f> points = dense_surfaces(rng);
-  std::uniform_real_distribution<double> coordinate(-1.0, 4.0), length(0.0, 1.0);
-  for (double cell : {0.1, 0.06}) {
-    const PointGrid grid(points, cell);
-    std::vector<PointGrid::Run> runs;
-    for (int s = 0; s < 300; ++s) {
-      const Eigen::Vector3d from(coordinate(rng), coordinate(rng) * 0.5, coordinate(rng) * 0.3);
-      const Eigen::Vector3d to = from + length(rng) * Eigen::Vector3d::Random().normalized();
-      const double radius = s % 2 ? 0.1 : 0.03;
-      grid.near_segment(from, to, radius, &runs);
-      std::set<uint32_t> found;
-      for (const auto& run : runs)
-        for (uint32_t e = run.begin; e < run.end; ++e) found.insert(grid.input_index()[e]);
-      const Eigen::Vector3d axis = to - from;
-      for (uint32_t i = 0; i < points.size(); ++i) {
-        const Eigen::Vector3d v = points[i].cast<double>() - from;
-        const double t = std::clamp(v.dot(axis) / std::max(axis.squaredNorm(), 1e-300), 0.0, 1.0);
-        if ((v - t * axis).norm() <= radius)
-          ASSERT_TRUE(found.count(i)) << "segment " << s << " misses point " << i;
-      }
-    }
-  }
+  for (double cell : {0.1, 0.06})
+    expect_segments_complete(points, cell, {-1, -1, -0.5}, {5, 3, 2}, rng);
+  // Far-apart clusters: the hash index.
+  std::vector<Eigen::Vector3f> clusters;
+  sample_sphere({0, 0, 0}, 0.5, 3000, 0.002, rng, &clusters);
+  sample_sphere({2000, 1500, 30}, 0.5, 3000, 0.002, rng, &clusters);
+  expect_segments_complete(clusters, 0.05, {-0.7, -0.7, -0.7}, {1.4, 1.4, 1.4}, rng);
+  expect_segments_complete(clusters, 0.05, {1999.3, 1499.3, 29.3}, {1.4, 1.4, 1.4}, rng);
 }
 
 TEST(PointGrid, C2cFromGridsEqualsBruteForce) {
