@@ -168,6 +168,7 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
   io::DracoOptions draco;
   draco.position_bits = std::min(options.draco_position_bits, 16);
   draco.field_bits = options.draco_field_bits;
+  draco.compression_level = options.draco_compression_level;
   const io::DracoEncoded encoded = io::encode_draco_mesh(b.mesh.mesh, fields, draco);
   io::write_draco_file(context.work_dir / change_draco_file(kHullChangeName), encoded.bytes);
   artifacts->push_back(change_draco_file(kHullChangeName));

@@ -354,6 +354,7 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     io::DracoOptions draco;
     draco.position_bits = options.draco_position_bits;
     draco.field_bits = options.draco_field_bits;
+    draco.compression_level = options.draco_compression_level;
     io::DracoEncoded encoded;
     // The Draco encoding is single-threaded and the longest: the PLY file and the figures are
     // made beside it.

@@ -146,6 +146,8 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   o.histogram_range_m = r.optional<double>("histogram_range_m", o.histogram_range_m);
   o.draco_position_bits = r.optional<int>("draco_position_bits", o.draco_position_bits);
   o.draco_field_bits = r.optional<int>("draco_field_bits", o.draco_field_bits);
+  o.draco_compression_level =
+      r.optional<int>("draco_compression_level", o.draco_compression_level);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);
   o.growth_sigmas = r.optional<double>("growth_sigmas", o.growth_sigmas);
   o.threads = r.optional<int>("threads", o.threads);
@@ -166,6 +168,8 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
           "> 0");
   require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
           "an integer in [1, 30]");
+  require(o.draco_compression_level >= 0 && o.draco_compression_level <= 10,
+          "draco_compression_level", "an integer in [0, 10]");
   require(o.draco_field_bits >= 0 && o.draco_field_bits <= 30, "draco_field_bits",
           "an integer in [0, 30]");
   require(std::isfinite(o.growth_sigmas) && o.growth_sigmas > 0, "growth_sigmas", "> 0");

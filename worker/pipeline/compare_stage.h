@@ -52,6 +52,10 @@ struct CompareStageOptions {
   double histogram_range_m = 0.2;  // the change histogram spans +-this
   int draco_position_bits = 18;
   int draco_field_bits = 14;
+  // 5, as the map stage: on the 220 s bridge's change map (10.9 M points, 4 fields) the
+  // single-threaded encode, the stage's critical path, takes 5.4 CPU s instead of 12.6 s at 7,
+  // for a file 38 % larger (63.9 vs 46.2 MB); the decoded values are the same.
+  int draco_compression_level = 5;
   bool write_ply = true;
   // Hulls: a shape is significant growth when |growth| exceeds this many sigmas (1.96: 95 %).
   double growth_sigmas = 1.96;

@@ -300,6 +300,7 @@ TEST_F(CompareStageTest, RefusesMapAgainstHullOtherProjectsAndUnfinishedJobs) {
   EXPECT_NE(why.find("two finished jobs"), std::string::npos) << why;
   EXPECT_THROW(run({a, a}, {{"projection_scale_m", -1}}), proto::ContractError);
   EXPECT_THROW(run({a, a}, {{"no_such_option", 1}}), proto::ContractError);
+  EXPECT_THROW(run({a, a}, {{"draco_compression_level", 11}}), proto::ContractError);
 }
 
 TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
