@@ -1,9 +1,9 @@
 // bench_compare: the compare stage on two job folders of keel-sim surveys of one scene (A the
 // first survey, B a later one, each the --out of `keel-worker run`), timed, and its result
 // checked against B's truth.yaml `changes` (issue 16's targets):
-//   maps (usv-bridge): every change >= 3 cm detected as significant (>= half of the points on
-//   it significant), and the fraction of significant points on unchanged structure (<= 1 %);
-//   map comparison throughput (points of A + B per second of the stage, >= 1 M/s on 2 cores);
+//   maps (usv-bridge): every change >= 3 cm detected as significant, with its sign (>= half of the
+//   points on it significant), and the fraction of significant points on unchanged structure (<= 1
+//   %); map comparison throughput (points of A + B per second of the stage, >= 1 M/s on 2 cores);
 //   hulls (hauv-hull): each grown patch's height growth against the truth (within 1.5 cm),
 //   the new and the removed object found.
 // Usage: bench_compare --a DIR --b DIR --truth B/ground_truth/truth.yaml --out DIR
@@ -97,11 +97,15 @@ int evaluate_maps(const fs::path& out, const std::vector<Change>& changes, const
     const double size = c.kind == "spall" ? -c.depth : c.height;
     const double median = values.empty() ? std::nan("") : values[values.size() / 2];
     const double fraction = on ? double(hits) / on : 0.0;
+    // Significant, and with the change's sign: material removed (a spall) reads as a loss.
     const bool detected = fraction >= 0.5;
-    if (std::abs(size) >= 0.03 && !detected) ++missed;
+    const bool signed_right = median * size > 0.0;
+    if (std::abs(size) >= 0.03 && (!detected || !signed_right)) ++missed;
     std::printf("  %-10s %+.3f m: %6zu points, %5.1f %% significant, median M3C2 %+.4f m  %s\n",
                 c.kind.c_str(), size, on, 100.0 * fraction, median,
-                detected ? "detected" : "MISSED");
+                !detected      ? "MISSED"
+                : signed_right ? "detected"
+                               : "detected, WRONG SIGN");
   }
   size_t unchanged = 0, false_significant = 0, undefined = 0;
   for (size_t i = 0; i < cloud.positions.size(); ++i) {

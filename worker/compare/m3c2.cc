@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <unordered_set>
 #include <utility>
 
 #include "worker/mapping/parallel_for.h"
@@ -90,23 +91,69 @@ double sample_sigma(const Projection& p) {
   return std::sqrt(std::max(0.0, (p.sum_squares - p.count * mean * mean) / (p.count - 1)));
 }
 
+// The voxels of A that hold points (its normals' voxel grid): a line of sight from a core
+// point to a viewpoint that crosses one passes through structure, as a view from one side of
+// a pier to the other face does.
+class Occupancy {
+ public:
+  explicit Occupancy(const VoxelMoments& voxels) : cell_m_(voxels.voxel_m) {
+    keys_.reserve(voxels.means.size());
+    for (const Eigen::Vector3f& mean : voxels.means) keys_.insert(key(mean.cast<double>()));
+  }
+  // Whether [from + start u, from + end u] (u a unit vector) meets an occupied voxel, sampled
+  // every 0.8 voxel so a surface's layer of voxels, at least one voxel thick, is not stepped over.
+  bool blocked(const Eigen::Vector3d& from, const Eigen::Vector3d& u, double start,
+               double end) const {
+    for (double t = start; t < end; t += 0.8 * cell_m_)
+      if (keys_.count(key(from + t * u))) return true;
+    return false;
+  }
+
+ private:
+  uint64_t key(const Eigen::Vector3d& p) const {
+    auto axis = [&](double v) {
+      return uint64_t(int64_t(std::floor(v / cell_m_)) + (1 << 20)) & 0x1fffff;
+    };
+    return axis(p.x()) << 42 | axis(p.y()) << 21 | axis(p.z());
+  }
+  double cell_m_;
+  std::unordered_set<uint64_t> keys_;
+};
+
 // Faces n towards the sensor that saw the surface: the nearest viewpoint within kViewRadiusM
 // that looks at it within 60 degrees of its normal (|n . u| >= 0.5), as a range sensor sees a
-// surface; a grazing view through a gap between piers, nearer but sideways, does not decide.
-// Failing that the nearest viewpoint decides.
+// surface, and whose line of sight does not cross A's structure within kOcclusionDepthM (a
+// viewpoint beyond a pier, nearer than the one that saw this face, would otherwise turn the
+// normal into the pier and a spall into a gain); a grazing view through a gap between piers,
+// nearer but sideways, does not decide. Failing that the nearest of those viewpoints decides,
+// then the nearest viewpoint.
 constexpr double kViewRadiusM = 30.0;
+constexpr double kOcclusionDepthM = 6.0;  // thicker than a pier or a hull's frames
+constexpr double kOwnSurfaceM = 0.5;      // the line of sight leaves the core's own voxels first
+constexpr int kViewsTried = 4;
 
 Eigen::Vector3d oriented(Eigen::Vector3d n, const Eigen::Vector3d& core,
-                         const NearestIndex* viewpoints, std::vector<uint32_t>* scratch) {
+                         const NearestIndex* viewpoints, const Occupancy* occupancy,
+                         std::vector<uint32_t>* scratch) {
   if (viewpoints) {
     viewpoints->within(core.cast<float>(), kViewRadiusM, scratch);
-    double best = std::numeric_limits<double>::infinity(), side = 0.0;
+    std::vector<std::pair<double, uint32_t>> facing;  // (distance, viewpoint) within 60 degrees
     for (const uint32_t v : *scratch) {
       const Eigen::Vector3d to = viewpoints->point(v).cast<double>() - core;
       const double d = to.norm();
-      if (d <= 0.0 || std::abs(n.dot(to)) < 0.5 * d || d >= best) continue;
-      best = d;
-      side = n.dot(to);
+      if (d > 0.0 && std::abs(n.dot(to)) >= 0.5 * d) facing.emplace_back(d, v);
+    }
+    const size_t tried = std::min<size_t>(facing.size(), kViewsTried);
+    std::partial_sort(facing.begin(), facing.begin() + tried, facing.end());
+    auto side_of = [&](uint32_t v) { return n.dot(viewpoints->point(v).cast<double>() - core); };
+    double side = tried > 0 ? side_of(facing[0].second) : 0.0;  // the nearest, if all are hidden
+    for (size_t k = 0; k < tried && occupancy; ++k) {
+      const auto [d, v] = facing[k];
+      const Eigen::Vector3d u = (viewpoints->point(v).cast<double>() - core) / d;
+      if (!occupancy->blocked(core, u, kOwnSurfaceM, std::min(d, kOcclusionDepthM))) {
+        side = side_of(v);
+        break;
+      }
     }
     if (side == 0.0) {
       const Neighbour v = viewpoints->nearest(core.cast<float>());
@@ -155,7 +202,11 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
   const NearestIndex compared_voxels(clouds.compared_voxels->means);
   // Viewpoints thinned to one per metre: a trajectory's thousands of poses vote as places.
   std::unique_ptr<NearestIndex> views;
-  if (!viewpoints.empty()) views = std::make_unique<NearestIndex>(voxelize(viewpoints, 1.0).means);
+  std::unique_ptr<Occupancy> occupancy;
+  if (!viewpoints.empty()) {
+    views = std::make_unique<NearestIndex>(voxelize(viewpoints, 1.0).means);
+    occupancy = std::make_unique<Occupancy>(*clouds.reference_voxels);
+  }
 
   const double normal_radius = 0.5 * options.normal_scale_m;
   const double radius = 0.5 * options.projection_scale_m;
@@ -180,7 +231,8 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
         plane = fit_plane(
             gather(*clouds.compared_voxels, compared_voxels, cores[i], normal_radius, &scratch));
       if (!plane.valid) continue;
-      const Eigen::Vector3d n = oriented(plane.normal, core, views.get(), &scratch);
+      const Eigen::Vector3d n =
+          oriented(plane.normal, core, views.get(), occupancy.get(), &scratch);
       c.normal = n.cast<float>();
       c.area_m2 = float(s2 / n.lpNorm<1>());
       // Step 2: the cylinders.

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -127,6 +128,46 @@ TEST(M3c2, SameCloudGivesZeroChange) {
     EXPECT_FALSE(c.significant);
     EXPECT_LT(c.normal.y(), -0.99f);  // towards the viewpoint at y = -5
   }
+}
+
+// A pier (a 2.4 m thick box) surveyed from both sides, the nearer pass on the far side: a core
+// point on the +x face must take its normal from the viewpoint that sees
+// that face, not the nearer one beyond the pier, so a 5 cm spall on it measures -5 cm (material
+// removed) and the -x face's normals face the -x viewpoint.
+TEST(M3c2, NormalsFaceTheViewpointThatSeesTheFaceNotOneBeyondThePier) {
+  std::mt19937 rng(12);
+  const Eigen::Vector3d Y = Eigen::Vector3d::UnitY(), Z = Eigen::Vector3d::UnitZ();
+  const double density = 2500, sigma = 0.003;
+  std::vector<Eigen::Vector3f> a, b;
+  testing::sample_box({-1.2, -2, 0}, {1.2, 2, 4}, density, sigma, rng, &a);
+  // B: the same pier, its +x face recessed 5 cm over y in [-0.4, 0.4], z in [1.6, 2.4].
+  testing::sample_box({-1.2, -2, 0}, {1.2, 2, 4}, density, sigma, rng, &b);
+  b.erase(std::remove_if(b.begin(), b.end(),
+                         [](const Eigen::Vector3f& p) {
+                           return p.x() > 1.1f && std::abs(p.y()) < 0.4f &&
+                                  std::abs(p.z() - 2.0f) < 0.4f;
+                         }),
+          b.end());
+  sample_rectangle({1.15, -0.4, 1.6}, Y, 0.8, Z, 0.8, density, sigma, rng, &b);
+  // The vessel's passes: 4.8 m off the -x face, 7.8 m off the +x face.
+  const std::vector<Eigen::Vector3f> views = {{-6, 0, 0}, {9, 0, 0}};
+  const M3c2Run run = run_m3c2(a, b, views, M3c2Options{}, 0.0);
+  size_t spall = 0, far_face = 0;
+  for (const CoreChange& c : run.cores) {
+    if (!c.defined()) continue;
+    const Eigen::Vector3f& p = c.position;
+    if (p.x() > 1.1f && std::abs(p.y()) < 0.3f && std::abs(p.z() - 2.0f) < 0.3f) {
+      ++spall;
+      EXPECT_GT(c.normal.x(), 0.99f) << "towards (9, 0, 0), not through the pier";
+      EXPECT_NEAR(c.distance_m, -0.05f, 0.01f);
+    }
+    if (p.x() < -1.1f && std::abs(p.y()) < 1.5f && p.z() > 0.5f && p.z() < 3.5f) {
+      ++far_face;
+      EXPECT_LT(c.normal.x(), -0.99f);
+    }
+  }
+  EXPECT_GT(spall, 20u);
+  EXPECT_GT(far_face, 100u);
 }
 
 TEST(M3c2, NewStructureMeasuredAlongTheReferenceNormal) {
