@@ -31,7 +31,8 @@ if [ "${KEEL_CI_HARDENING:-0}" = 1 ]; then
   cmake -G Ninja -S "$here" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKEEL_SANITIZE=ON >/dev/null
   targets=$(ninja -C "$asan" -t targets all | grep -oE '^test_(server|storage|proto|client)_[a-z0-9_]+' | sort -u)
   ninja -C "$asan" -j "$(nproc)" keel keel-server $targets
-  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+  ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS="suppressions=$here/tests/lsan.supp" \
+    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     ctest --test-dir "$asan" --output-on-failure -j "$(nproc)" -R '^(server|storage|proto|client)/' -LE heavy
   fuzz_seconds="${KEEL_CI_FUZZ_SECONDS:-20}"
   if [ "$fuzz_seconds" -gt 0 ]; then

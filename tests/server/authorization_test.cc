@@ -453,7 +453,9 @@ TEST_F(AuthorizationTest, AnAdminOfOneProjectManagesOnlyItsTokens) {
   EXPECT_EQ(star.status, 404) << star.body;
   const Response list = send(admin, {"GET", "/v1/tokens", "", {}});
   ASSERT_EQ(list.status, 200);
-  for (const auto& token : json_of(list)["tokens"]) EXPECT_EQ(token["project"], "alpha") << token;
+  // Held here: a range-for over a member of json_of()'s temporary would read freed memory.
+  const nlohmann::json listed = json_of(list);
+  for (const auto& token : listed["tokens"]) EXPECT_EQ(token["project"], "alpha") << token;
   // A token it made works with the role it asked for.
   const Response made =
       send(admin, json_call("POST", "/v1/tokens", {{"role", "submitter"}, {"project", "alpha"}}));
