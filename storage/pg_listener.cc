@@ -106,11 +106,20 @@ PgListener::~PgListener() {
   if (thread_.joinable()) thread_.join();
 }
 
+bool PgListener::wait_listening(std::chrono::milliseconds timeout) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return listening_.wait_for(lock, timeout, [this] { return connected_.load(); });
+}
+
 void PgListener::listen_once() {
   pqxx::connection connection(options_.database_url);
   Receiver receiver(connection, options_);
   connection.get_notifs();  // sends the LISTEN now, so nothing after this point is missed
-  connected_ = true;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    connected_ = true;
+  }
+  listening_.notify_all();
   if (connects_++ > 0) {
     spdlog::info("change feed: listening again on {}", redact_database_url(options_.database_url));
     if (options_.on_reconnect) options_.on_reconnect();

@@ -7,7 +7,10 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -46,6 +49,10 @@ class PgListener {
 
   bool connected() const { return connected_.load(); }
   int connects() const { return connects_.load(); }  // successful connects so far
+  // Waits until the first LISTEN is in place (true) or `timeout` passes (false). A store
+  // waits for it before it is used, so a change another replica makes after this store
+  // opened is never missed for want of a listener not yet listening.
+  bool wait_listening(std::chrono::milliseconds timeout);
 
  private:
   void run();
@@ -55,6 +62,8 @@ class PgListener {
   std::atomic<bool> stop_{false};
   std::atomic<bool> connected_{false};
   std::atomic<int> connects_{0};
+  std::mutex mutex_;
+  std::condition_variable listening_;
   std::thread thread_;
 };
 

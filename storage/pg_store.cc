@@ -5,6 +5,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <system_error>
@@ -87,6 +88,14 @@ PgStore::PgStore(const PgStoreOptions& options, Clock clock)
       }
     };
     listener_ = std::make_unique<PgListener>(std::move(listen));
+    // The pool just connected, so the listener's connection normally follows within
+    // milliseconds; if it does not, the store still works (the long poll's fallback tick).
+    const auto wait = std::chrono::milliseconds(1000 * std::max(1, options_.connect_timeout_s));
+    if (!listener_->wait_listening(wait))
+      spdlog::warn(
+          "change feed: not listening yet after {} ms; changes of other replicas "
+          "reach this one by the fallback poll until it is",
+          wait.count());
   }
 }
 
