@@ -71,6 +71,17 @@ ShapeSummary summarize(const std::vector<int>& landmark_ids, const std::vector<i
     s.mean_deviation_m += l.h_m;
     if (std::abs(l.h_m) > std::abs(s.max_deviation_m)) s.max_deviation_m = l.h_m;
   }
+  // The second largest |h| (Robson-Whitlock's gap, see the header): the largest skipped once.
+  double second = 0.0;
+  bool skipped_max = false;
+  for (const int id : landmark_ids) {
+    const double h = landmarks[id].h_m;
+    if (!skipped_max && h == s.max_deviation_m)
+      skipped_max = true;
+    else
+      second = std::max(second, std::abs(h));
+  }
+  s.height_sampling_sigma_m = landmark_ids.size() > 1 ? std::abs(s.max_deviation_m) - second : 0.0;
   const double n = static_cast<double>(landmark_ids.size());
   s.centroid_world /= n;
   s.mean_deviation_m /= n;
@@ -90,6 +101,7 @@ nlohmann::json ShapeSummary::to_json() const {
           {"extent_m", vector_json(extent_m())},
           {"mean_deviation_m", mean_deviation_m},
           {"max_deviation_m", max_deviation_m},
+          {"height_sampling_sigma_m", height_sampling_sigma_m},
           {"num_landmarks", num_landmarks},
           {"num_detections", num_detections},
           {"views", views}};

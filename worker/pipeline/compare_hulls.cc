@@ -88,6 +88,7 @@ Survey load_survey(const InputJob& input, const std::string& fallback_id) {
     shape.centroid_model =
         T_model_world * json_vector(j.at("centroid_world_m"), at + ".centroid_world_m");
     shape.height_m = j.value("max_deviation_m", 0.0);
+    shape.height_sampling_sigma_m = j.value("height_sampling_sigma_m", 0.0);
     // The footprint from the world bounding box: a disc of radius R tilted anywhere spans
     // 2R sqrt(1 - n_i^2) along axis i, so the two largest spans average 1.6R-2R.
     Eigen::Vector3d extent = json_vector(j.at("extent_m"), at + ".extent_m");
@@ -180,8 +181,10 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
   }
   context.progress(0.7);
 
-  // Shapes.
-  const double height_sigma = std::hypot(a.height_sigma_m, b.height_sigma_m);
+  // Shapes. A height's error: inspect's deviation noise, and how far the shape's top may lie
+  // beyond its highest feature (shapes.json's height_sampling_sigma_m), independent between
+  // the surveys.
+  const double noise_sigma = std::hypot(a.height_sigma_m, b.height_sigma_m);
   json table = json::array();
   int kept = 0, added = 0, gone = 0, grown = 0;
   for (const ShapeMatch& m : match_shapes(a.shapes, b.shapes)) {
@@ -194,6 +197,8 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
       const double area_sigma = std::hypot(2 * M_PI * sa.radius_m * a.radius_sigma_m,
                                            2 * M_PI * sb.radius_m * b.radius_sigma_m);
       const double growth = sb.height_m - sa.height_m;
+      const double height_sigma = std::hypot(
+          noise_sigma, std::hypot(sa.height_sampling_sigma_m, sb.height_sampling_sigma_m));
       const bool significant = std::abs(growth) > options.growth_sigmas * height_sigma;
       row = {{"status", "kept"},
              {"shape_a", sa.id},

@@ -23,7 +23,8 @@ struct SurveyShape {
   int id = 0;
   Eigen::Vector3d centroid_model = Eigen::Vector3d::Zero();
   double height_m = 0.0;
-  double radius_m = 0.0;  // footprint: a disc of this radius
+  double height_sampling_sigma_m = 0.0;  // shapes.json's: how far the top may lie beyond it
+  double radius_m = 0.0;                 // footprint: a disc of this radius
 };
 
 struct ShapeMatch {

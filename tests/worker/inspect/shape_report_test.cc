@@ -45,12 +45,14 @@ TEST(ShapeReport, MergesDetectionsThatShareFeatures) {
   for (int i = 0; i < 8; ++i) sum += i == 6 ? 0.0 : 0.1 + 0.01 * i;
   EXPECT_NEAR(a.mean_deviation_m, sum / 8, 1e-12);
   EXPECT_EQ(a.max_deviation_m, -0.3);
+  EXPECT_NEAR(a.height_sampling_sigma_m, 0.3 - 0.17, 1e-12);  // |h| 0.3, then 0.17
 
   const ShapeSummary& b = shapes[1];
   EXPECT_EQ(b.id, 1);
   EXPECT_EQ(b.views, (std::vector<int>{5}));
   EXPECT_TRUE(b.centroid_world.isApprox(Eigen::Vector3d(10, 1, 0.2)));
   EXPECT_NEAR(b.mean_deviation_m, 0.2, 1e-12);
+  EXPECT_EQ(b.height_sampling_sigma_m, 0.0);  // three features at the same height
 }
 
 TEST(ShapeReport, MergesDetectionsWhoseFeaturesAreClose) {
@@ -77,6 +79,7 @@ TEST(ShapeReport, JsonCarriesEveryFieldAndTheOptions) {
   s.max_world = {1.5, 2.5, 3.1};
   s.mean_deviation_m = 0.1;
   s.max_deviation_m = 0.18;
+  s.height_sampling_sigma_m = 0.02;
   s.num_landmarks = 12;
   s.num_detections = 4;
   s.views = {1, 5};
@@ -95,6 +98,7 @@ TEST(ShapeReport, JsonCarriesEveryFieldAndTheOptions) {
   EXPECT_NEAR(j.at("extent_m")[2].get<double>(), 0.2, 1e-12);
   EXPECT_EQ(j.at("mean_deviation_m"), 0.1);
   EXPECT_EQ(j.at("max_deviation_m"), 0.18);
+  EXPECT_EQ(j.at("height_sampling_sigma_m"), 0.02);
   EXPECT_EQ(j.at("num_landmarks"), 12);
   EXPECT_EQ(j.at("num_detections"), 4);
   EXPECT_EQ(j.at("views"), nlohmann::json({1, 5}));

@@ -7,11 +7,11 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <cmath>
-#include <cstdlib>
 #include <random>
 
 #include "proto/contract_error.h"
@@ -207,7 +207,10 @@ TEST_F(CompareStageTest, AReprocessJobComparesTheJobItReprocessesWithItself) {
   io::write_draco_file(context.work_dir / map_draco_file(kCombinedMapName),
                        io::encode_draco_point_cloud(b, {}, {18, 12, 5}).bytes);
   context.reports = {{"map", {{"points", b.size()}, {"radius_m", 0.3}}}};
-  context.job = {{"id", "j_new"}, {"state", "running"}, {"project", "p1"}, {"mission_id", "m_a"},
+  context.job = {{"id", "j_new"},
+                 {"state", "running"},
+                 {"project", "p1"},
+                 {"mission_id", "m_a"},
                  {"options", {{"map", {{"radius_m", 0.3}}}, {"compare", {{"job_a", "a"}}}}}};
   context.options = {{"job_a", "a"}};
   context.input_jobs = {a};
@@ -235,8 +238,9 @@ TEST_F(CompareStageTest, AReprocessJobComparesTheJobItReprocessesWithItself) {
 // passes report_html_check.py: every figure shown equals report.json's, nothing to fetch or run.
 TEST_F(CompareStageTest, TheReportPageShowsTheComparison) {
   if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3 for the page check";
-  const StageResult result = run({map_job("a", scene(1, false), {{"options", {{"map", {{"x", 1}}}}}}),
-                                  map_job("b", scene(2, true), {{"options", {{"map", {{"x", 2}}}}}})});
+  const StageResult result =
+      run({map_job("a", scene(1, false), {{"options", {{"map", {{"x", 1}}}}}}),
+           map_job("b", scene(2, true), {{"options", {{"map", {{"x", 2}}}}}})});
   ReportInput in;
   in.job = {{"id", "j_compare"}, {"stages", {"compare"}}};
   in.stage_order = {"compare"};
@@ -306,7 +310,7 @@ TEST_F(CompareStageTest, RefusesMapAgainstHullOtherProjectsAndUnfinishedJobs) {
 TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
   // The same CAD triangle strip in two surveys whose x_gM differ; vertex 4 rose 5 cm more.
   auto hull_job = [&](const std::string& name, const Pose3& T_world_model, float deviation4,
-                      double shape_height) {
+                      double shape_height, double sampling_sigma) {
     InputJob job;
     job.dir = root_ / name;
     fs::create_directories(job.dir);
@@ -325,7 +329,8 @@ TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
                     {{{"id", 0},
                       {"centroid_world_m", {c.x(), c.y(), c.z()}},
                       {"extent_m", {0.3, 0.3, shape_height}},
-                      {"max_deviation_m", shape_height}}}}};
+                      {"max_deviation_m", shape_height},
+                      {"height_sampling_sigma_m", sampling_sigma}}}}};
     std::ofstream(job.dir / kShapesFile) << shapes.dump();
     BaSolution solution;
     solution.T_world_model = T_world_model;
@@ -337,8 +342,8 @@ TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
   };
   Pose3 T_b = Pose3::Identity();
   T_b.translation() = Eigen::Vector3d(0.4, -0.2, 0.1);
-  const StageResult result =
-      run({hull_job("a", Pose3::Identity(), 0.10f, 0.10), hull_job("b", T_b, 0.15f, 0.15)});
+  const StageResult result = run({hull_job("a", Pose3::Identity(), 0.10f, 0.10, 0.004),
+                                  hull_job("b", T_b, 0.15f, 0.15, 0.012)});
   const json& h = result.report["hull"];
   EXPECT_NEAR(h["x_gM_difference"]["translation_norm_m"].get<double>(), T_b.translation().norm(),
               1e-9);
@@ -347,7 +352,8 @@ TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
   EXPECT_EQ(h["new"], 0);
   const json& row = h["shapes"][0];
   EXPECT_NEAR(row["height_growth_m"].get<double>(), 0.05, 1e-9);
-  EXPECT_NEAR(row["height_growth_sigma_m"].get<double>(), std::hypot(0.003, 0.003), 1e-12);
+  // Both surveys' deviation noise and both shapes' sampling gaps: sqrt(9 + 9 + 16 + 144) mm.
+  EXPECT_NEAR(row["height_growth_sigma_m"].get<double>(), std::sqrt(178.0) * 1e-3, 1e-12);
   EXPECT_TRUE(row["significant_growth"].get<bool>());
   const io::DracoMesh change = io::decode_draco_mesh(
       io::read_draco_file(root_ / "out" / change_draco_file(kHullChangeName)));
