@@ -141,6 +141,41 @@ std::vector<ShapeMatch> match_shapes(const std::vector<SurveyShape>& a,
   return out;
 }
 
+namespace {
+
+// A's shapes moved by `t`.
+std::vector<SurveyShape> shifted(std::vector<SurveyShape> shapes, const Eigen::Vector3d& t) {
+  for (SurveyShape& shape : shapes) shape.centroid_model += t;
+  return shapes;
+}
+
+}  // namespace
+
+ShapeRegistration register_shapes(const std::vector<SurveyShape>& a,
+                                  const std::vector<SurveyShape>& b, double max_offset_m,
+                                  int min_pairs) {
+  ShapeRegistration best;
+  double best_norm = 0.0;
+  for (const SurveyShape& sa : a)
+    for (const SurveyShape& sb : b) {
+      const Eigen::Vector3d candidate = sb.centroid_model - sa.centroid_model;
+      if (candidate.norm() > max_offset_m) continue;
+      std::vector<ShapeMatch> agreeing;
+      for (const ShapeMatch& m : match_shapes(shifted(a, candidate), b))
+        if (m.a >= 0 && m.b >= 0) agreeing.push_back(m);
+      const int pairs = static_cast<int>(agreeing.size());
+      // The most pairs; among equals the smaller offset (no evidence for moving further).
+      if (pairs < best.pairs || (pairs == best.pairs && candidate.norm() >= best_norm)) continue;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const ShapeMatch& m : agreeing) mean += b[m.b].centroid_model - a[m.a].centroid_model;
+      best.pairs = pairs;
+      best.translation_model = mean / pairs;
+      best_norm = candidate.norm();
+    }
+  if (best.pairs < min_pairs || best.translation_model.norm() > max_offset_m) return {};
+  return best;
+}
+
 json compare_hulls(StageContext& context, const CompareStageOptions& options,
                    std::vector<std::string>* artifacts) {
   const Survey a = load_survey(context.input_jobs.at(0), "A");
@@ -187,10 +222,13 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
   const double noise_sigma = std::hypot(a.height_sigma_m, b.height_sigma_m);
   json table = json::array();
   int kept = 0, added = 0, gone = 0, grown = 0;
-  for (const ShapeMatch& m : match_shapes(a.shapes, b.shapes)) {
+  const ShapeRegistration registration =
+      register_shapes(a.shapes, b.shapes, options.shape_max_offset_m);
+  const std::vector<SurveyShape> a_shapes = shifted(a.shapes, registration.translation_model);
+  for (const ShapeMatch& m : match_shapes(a_shapes, b.shapes)) {
     json row;
     if (m.a >= 0 && m.b >= 0) {
-      const SurveyShape &sa = a.shapes[m.a], &sb = b.shapes[m.b];
+      const SurveyShape &sa = a_shapes[m.a], &sb = b.shapes[m.b];
       const double area_a = M_PI * sa.radius_m * sa.radius_m,
                    area_b = M_PI * sb.radius_m * sb.radius_m;
       // d(pi r^2) = 2 pi r dr, the two surveys' radius errors independent.
@@ -225,7 +263,7 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
              {"footprint_b_m2", M_PI * sb.radius_m * sb.radius_m}};
       ++added;
     } else {
-      const SurveyShape& sa = a.shapes[m.a];
+      const SurveyShape& sa = a_shapes[m.a];
       row = {{"status", "gone"},
              {"shape_a", sa.id},
              {"centroid_model_m", vector_json(sa.centroid_model)},
@@ -254,6 +292,13 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
       {"new", added},
       {"gone", gone},
       {"significantly_grown", grown},
+      {"shape_registration",
+       {{"translation_m", vector_json(registration.translation_model)},
+        {"pairs", registration.pairs},
+        {"note",
+         "A's shapes moved by this translation (model frame) before matching: the offset most "
+         "persisting shapes agree on, each survey's x_gM being loose along the hull; zero "
+         "with fewer than two agreeing shapes. A's centroids in `shapes` are moved"}}},
       {"height_sigma_a_m", a.height_sigma_m},
       {"height_sigma_b_m", b.height_sigma_m},
       {"footprint_note",

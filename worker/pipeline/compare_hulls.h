@@ -37,6 +37,22 @@ struct ShapeMatch {
 std::vector<ShapeMatch> match_shapes(const std::vector<SurveyShape>& a,
                                      const std::vector<SurveyShape>& b);
 
+// The translation (model frame) that brings A's shapes onto B's. Each survey's x_gM is
+// poorly constrained along a hull whose middle body is prismatic (keel-sim's BA: 0.2-0.5 m
+// off along the hull, its own sigma ~0.09 m), so the same object may sit 0.3 m apart in
+// the two model frames, beyond its footprint. Objects that persist move together: each
+// pair's offset b - a is a candidate, and the candidate that the most other pairs agree
+// with (within their footprint radii, one-to-one) wins; the result is the mean offset of
+// those agreeing pairs. Fewer than `min_pairs` agreeing pairs (one persisting object cannot
+// tell a frame offset from a moved object) or an offset beyond max_offset_m: zero.
+struct ShapeRegistration {
+  Eigen::Vector3d translation_model = Eigen::Vector3d::Zero();
+  int pairs = 0;  // agreeing pairs (0 when not applied)
+};
+ShapeRegistration register_shapes(const std::vector<SurveyShape>& a,
+                                  const std::vector<SurveyShape>& b, double max_offset_m,
+                                  int min_pairs = 2);
+
 // Writes change_hull.drc / .ply and returns the report section (the changes.json document).
 nlohmann::json compare_hulls(StageContext& context, const CompareStageOptions& options,
                              std::vector<std::string>* artifacts);

@@ -146,10 +146,10 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   o.histogram_range_m = r.optional<double>("histogram_range_m", o.histogram_range_m);
   o.draco_position_bits = r.optional<int>("draco_position_bits", o.draco_position_bits);
   o.draco_field_bits = r.optional<int>("draco_field_bits", o.draco_field_bits);
-  o.draco_compression_level =
-      r.optional<int>("draco_compression_level", o.draco_compression_level);
+  o.draco_compression_level = r.optional<int>("draco_compression_level", o.draco_compression_level);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);
   o.growth_sigmas = r.optional<double>("growth_sigmas", o.growth_sigmas);
+  o.shape_max_offset_m = r.optional<double>("shape_max_offset_m", o.shape_max_offset_m);
   o.threads = r.optional<int>("threads", o.threads);
   r.finish();
   try {
@@ -173,6 +173,9 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   require(o.draco_field_bits >= 0 && o.draco_field_bits <= 30, "draco_field_bits",
           "an integer in [0, 30]");
   require(std::isfinite(o.growth_sigmas) && o.growth_sigmas > 0, "growth_sigmas", "> 0");
+  require(std::isfinite(o.shape_max_offset_m) && o.shape_max_offset_m >= 0 &&
+              o.shape_max_offset_m <= 10,
+          "shape_max_offset_m", "a length in [0, 10] m");
   require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
   return o;
 }

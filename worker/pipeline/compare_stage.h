@@ -59,6 +59,9 @@ struct CompareStageOptions {
   bool write_ply = true;
   // Hulls: a shape is significant growth when |growth| exceeds this many sigmas (1.96: 95 %).
   double growth_sigmas = 1.96;
+  // Hulls: the largest frame offset between the surveys' shapes that matching corrects
+  // (register_shapes); 0 = match the shapes where each survey's x_gM put them.
+  double shape_max_offset_m = 1.0;
   int threads = 2;
 
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
