@@ -12,18 +12,26 @@ cmake -G Ninja -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 ninja -C "$build" -j "$(nproc)"
 ctest --test-dir "$build" --output-on-failure -j "$(nproc)" "$@"
 
-# The ROS 2 bag parsers under libFuzzer (clang, ASan + UBSan), KEEL_FUZZ_SECONDS (30) each,
-# in a build of their own (tests/fuzz/CMakeLists.txt). KEEL_SKIP_FUZZ=1 leaves them out.
+# Every parser that reads outside data under libFuzzer (clang, ASan + UBSan), in a build of
+# its own (tests/fuzz/CMakeLists.txt): the ROS 2 bag parsers KEEL_FUZZ_SECONDS (30) each with
+# their regression inputs, then the other ten harnesses (HTTP ranges, JSON contracts, tar
+# bundles, mission.yaml, TUM/KITTI, CSV, PCD/PLY scans, ROS1 bags, meshes, Draco)
+# KEEL_CI_FUZZ_SECONDS (20) each on seeds from keel-sim and ../shared/data. KEEL_SKIP_FUZZ=1
+# leaves them out.
 if [ "${KEEL_SKIP_FUZZ:-0}" != 1 ]; then
   cmake -G Ninja -S "$here" -B "$build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DKEEL_FUZZ=ON \
     -DKEEL_FUZZ_SECONDS="${KEEL_FUZZ_SECONDS:-30}" >/dev/null
-  ninja -C "$build-fuzz" -j "$(nproc)" keel_fuzzers
+  ninja -C "$build-fuzz" -j "$(nproc)" keel_fuzzers fuzzers
   ctest --test-dir "$build-fuzz" -L fuzz --output-on-failure
+  fuzz_seconds="${KEEL_CI_FUZZ_SECONDS:-20}"
+  if [ "$fuzz_seconds" -gt 0 ]; then
+    KEEL_FUZZ_BUILD_DIR="$build-fuzz" KEEL_SIM="$build/bin/keel-sim" \
+      bash "$here/tests/fuzz/run_fuzzers.sh" "$fuzz_seconds"
+  fi
 fi
 # Issue 15: the network-facing tests again under ASan + UBSan (a second tree holding only
-# what they need: 26 tests, all passing on 2026-11-27), then every fuzz harness for a bounded
-# time (KEEL_CI_FUZZ_SECONDS each; 0 skips). Opt in with KEEL_CI_HARDENING=1: that tree's
+# what they need: 26 tests, all passing on 2026-11-27). Opt in with KEEL_CI_HARDENING=1: that tree's
 # build from a cold cache took 82 CPU-minutes (~41 min on 2 cores; Beast with ASan, -O2 -g),
 # more than CI's whole 40-minute budget, so CI leaves it out.
 if [ "${KEEL_CI_HARDENING:-0}" = 1 ]; then
@@ -34,9 +42,4 @@ if [ "${KEEL_CI_HARDENING:-0}" = 1 ]; then
   ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS="suppressions=$here/tests/lsan.supp" \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     ctest --test-dir "$asan" --output-on-failure -j "$(nproc)" -R '^(server|storage|proto|client)/' -LE heavy
-  fuzz_seconds="${KEEL_CI_FUZZ_SECONDS:-20}"
-  if [ "$fuzz_seconds" -gt 0 ]; then
-    KEEL_FUZZ_BUILD_DIR="$build-fuzz" KEEL_SIM="$build/bin/keel-sim" \
-      bash "$here/tests/fuzz/run_fuzzers.sh" "$fuzz_seconds"
-  fi
 fi
