@@ -49,9 +49,13 @@ seed_files() {  # name -> files for it (prefixing the selector byte where the ha
   local i=0
   for pattern in "${patterns[@]}"; do
     while IFS= read -r -d '' f; do
-      [ "$(stat -c %s "$f")" -le 1048576 ] || continue
+      # A bag is a header and a stream of records: its first 256 KiB is a valid start (a
+      # keel-sim bag is several MB, too large for a seed); other files larger than 1 MiB wait.
+      if [ "$name" != bag ]; then [ "$(stat -c %s "$f")" -le 1048576 ] || continue; fi
       i=$((i + 1))
-      if [ "$name" = mission_yaml ] || [ "$name" = bag ] || [ "$name" = bundle_check ]; then
+      if [ "$name" = bag ]; then
+        head -c 262144 "$f" >"$dir/seed-$i"
+      elif [ "$name" = mission_yaml ] || [ "$name" = bundle_check ]; then
         cp "$f" "$dir/seed-$i"
       else  # every selector value would be a different reader: seed each
         for s in 0 1 2 3 4 5; do { printf "\\x$s"; cat "$f"; } >"$dir/seed-$i-$s"; done

@@ -574,6 +574,7 @@ test('a hull compare job\'s report: x_gM difference, deviation change and the pe
   assert.ok(hull, `the hull surveys were compared as ${expected.stages.compare.kind}, not hulls`);
   const b = 'stages.compare.hull';
   const required = [`${b}.x_gM_difference.translation_norm_m`, `${b}.x_gM_difference.rotation_deg`, `${b}.vertices`,
+                    `${b}.shape_registration.translation_norm_m`, `${b}.shape_registration.pairs`,
                     `${b}.shapes_a`, `${b}.shapes_b`, `${b}.kept`, `${b}.new`, `${b}.gone`, `${b}.significantly_grown`,
                     `${b}.deviation_change_m.count`];
   hull.shapes.forEach((shape, i) => {

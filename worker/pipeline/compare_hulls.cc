@@ -294,6 +294,7 @@ json compare_hulls(StageContext& context, const CompareStageOptions& options,
       {"significantly_grown", grown},
       {"shape_registration",
        {{"translation_m", vector_json(registration.translation_model)},
+        {"translation_norm_m", registration.translation_model.norm()},
         {"pairs", registration.pairs},
         {"note",
          "A's shapes moved by this translation (model frame) before matching: the offset most "

@@ -35,12 +35,12 @@ std::string maps_part(const Ref& maps) {
   std::string out = heading("Maps: change along the local normal (M3C2)", "compare-maps");
   out += paragraph("Normals face " + maps["normals_face"].text() + ".");
   if (!maps["registration"].missing()) out += registration_table(maps["registration"]);
-  Table t{"compare-maps-table",
-          "Per map: B's change against A",
-          {"map", "points A", "points B", "core points", "defined", "compared area",
-           "significant area", "significant fraction", "added", "removed", "reg. error",
-           "points/s"},
-          {}};
+  Table t{
+      "compare-maps-table",
+      "Per map: B's change against A",
+      {"map", "points A", "points B", "core points", "defined", "compared area", "significant area",
+       "significant fraction", "added", "removed", "reg. error", "points/s"},
+      {}};
   const Ref per_map = maps["maps"];
   for (const auto& item : per_map.json().items()) {
     const Ref m = per_map[item.key()];
@@ -54,13 +54,12 @@ std::string maps_part(const Ref& maps) {
   out += render(t);
   for (const auto& item : per_map.json().items()) {
     const Ref h = per_map[item.key()]["change_histogram"];
-    out += figure(svg::histogram_chart({"Change histogram, " + item.key(),
-                                        {"M3C2 change of B against A (m)"},
-                                        {"area (m^2)"}},
-                                       {{item.key(), h["edges_m"].numbers(), h["area_m2"].numbers()}},
-                                       false),
-                  "Area of the core points per change bin; " + h["below"].text() + " below and " +
-                      h["above"].text() + " above the range.");
+    out += figure(
+        svg::histogram_chart(
+            {"Change histogram, " + item.key(), {"M3C2 change of B against A (m)"}, {"area (m^2)"}},
+            {{item.key(), h["edges_m"].numbers(), h["area_m2"].numbers()}}, false),
+        "Area of the core points per change bin; " + h["below"].text() + " below and " +
+            h["above"].text() + " above the range.");
     Table d{"compare-distribution-" + item.key(),
             "Distributions, " + item.key(),
             {"", "count", "mean", "std", "min", "p05", "median", "p95", "max"},
@@ -78,16 +77,21 @@ std::string maps_part(const Ref& maps) {
 }
 
 std::string hull_part(const Ref& hull) {
-  std::string out = heading("Hulls: deviation change and shape growth (model frame)", "compare-hull");
+  std::string out =
+      heading("Hulls: deviation change and shape growth (model frame)", "compare-hull");
   Table s{"compare-hull-summary", "", {"", ""}, {}};
   s.rows.push_back({"x_gM difference", hull["x_gM_difference"]["translation_norm_m"].cell("m")});
-  s.rows.push_back({"x_gM rotation difference", hull["x_gM_difference"]["rotation_deg"].cell("deg")});
+  s.rows.push_back(
+      {"x_gM rotation difference", hull["x_gM_difference"]["rotation_deg"].cell("deg")});
+  s.rows.push_back(
+      {"shapes registered by", hull["shape_registration"]["translation_norm_m"].cell("m") + " (" +
+                                   hull["shape_registration"]["pairs"].cell() + " shapes agree)"});
   s.rows.push_back({"vertices", hull["vertices"].cell()});
   s.rows.push_back({"deviation change, mean", hull["deviation_change_m"]["mean"].cell("m")});
   s.rows.push_back({"deviation change, max", hull["deviation_change_m"]["max"].cell("m")});
   s.rows.push_back({"shapes A / B", hull["shapes_a"].cell() + " / " + hull["shapes_b"].cell()});
-  s.rows.push_back({"kept / new / gone",
-                    hull["kept"].cell() + " / " + hull["new"].cell() + " / " + hull["gone"].cell()});
+  s.rows.push_back({"kept / new / gone", hull["kept"].cell() + " / " + hull["new"].cell() + " / " +
+                                             hull["gone"].cell()});
   s.rows.push_back({"significantly grown", hull["significantly_grown"].cell()});
   out += render(s);
   Table t{"compare-shapes",
@@ -140,8 +144,10 @@ std::string runs_part(const Ref& runs) {
   out += render(f);
 
   const Ref ate = runs["relative_ate"];
-  Table a{"compare-relative-ate", "B's trajectory against A's (relative ATE)",
-          {"trajectory", "alignment", "rmse", "mean", "max", "poses"}, {}};
+  Table a{"compare-relative-ate",
+          "B's trajectory against A's (relative ATE)",
+          {"trajectory", "alignment", "rmse", "mean", "max", "poses"},
+          {}};
   for (const auto& item : ate.json().items()) {
     const Ref t = ate[item.key()];
     if (!t["error"].missing()) {

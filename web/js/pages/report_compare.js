@@ -107,6 +107,8 @@ function hullFacts(report) {
   return factsTable('compare-hull', report, [
     ['x_gM difference, translation ‖t‖ (m)', [...b, 'x_gM_difference', 'translation_norm_m']],
     ['x_gM difference, rotation (°)', [...b, 'x_gM_difference', 'rotation_deg']],
+    ['shapes registered by ‖t‖ (m)', [...b, 'shape_registration', 'translation_norm_m']],
+    ['shapes agreeing on it', [...b, 'shape_registration', 'pairs']],
     ['x_gM of A, ‖t‖ (m)', [...b, 'x_gM_a', 'translation_norm_m']],
     ['x_gM of B, ‖t‖ (m)', [...b, 'x_gM_b', 'translation_norm_m']],
     ['vertices', [...b, 'vertices']],
