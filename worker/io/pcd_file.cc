@@ -110,10 +110,19 @@ PcdHeader read_header(const fs::path& path) {
   Eigen::Quaternionf orientation;
   int version = 0;
   pcl::PCDReader reader;
-  if (reader.readHeader(file, h.cloud, origin, orientation, version, h.data_type, h.data_idx) < 0)
+  int status = -1;
+  try {
+    status =
+        reader.readHeader(file, h.cloud, origin, orientation, version, h.data_type, h.data_idx);
+  } catch (const std::exception&) {
+    // PCL indexes a header line's words with vector::at: a keyword alone on its line (a
+    // "DATA" with no encoding, found by fuzz_scan_file) throws std::out_of_range.
+    status = -1;
+  }
+  if (status < 0)
     throw IoError(name +
                   ": malformed PCD header (expected VERSION, FIELDS, SIZE, TYPE, COUNT, "
-                  "WIDTH, HEIGHT, POINTS, DATA)");
+                  "WIDTH, HEIGHT, POINTS, DATA, each with its values)");
   if (h.data_type < 0 || h.data_type > 2) throw IoError(name + ": unknown PCD DATA encoding");
   return h;
 }
@@ -212,7 +221,13 @@ PointCloud read_pcd(const fs::path& path, TimeNs t_ns, const ScanReadOptions& op
   if (h.data_type == 0) check_ascii_body(path, h);
   pcl::PCLPointCloud2 cloud;
   pcl::PCDReader reader;
-  if (reader.read(file, cloud) < 0)
+  int status = -1;
+  try {
+    status = reader.read(file, cloud);
+  } catch (const std::exception&) {
+    status = -1;  // PCL's vector::at on a malformed line, as in read_header
+  }
+  if (status < 0)
     throw IoError(name + ": malformed or truncated PCD " + kEncodings[h.data_type] + " body (" +
                   std::to_string(static_cast<uint64_t>(h.cloud.width) * h.cloud.height) +
                   " points expected)");

@@ -196,6 +196,12 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
   expect_error([&] { read_scan_file(dir / "a.pcd", 0); }, {"a.pcd"});
   write_text(dir / "h.pcd", "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\n");
   expect_error([&] { read_scan_file(dir / "h.pcd", 0); }, {"h.pcd", "PCD header", "no DATA line"});
+  // A keyword alone on its line (found by fuzz_scan_file): PCL threw std::out_of_range.
+  write_text(dir / "k.pcd",
+             "VERSION 0.7\nFIELDS x\nSIZE 4\nTYPE F\nCOUNT 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
+             "DATA\nDATA binary\n0000");
+  expect_error([&] { read_scan_info(dir / "k.pcd"); }, {"k.pcd", "malformed PCD header"});
+  expect_error([&] { read_scan_file(dir / "k.pcd", 0); }, {"k.pcd", "malformed PCD header"});
 }
 
 TEST(ScanFile, TruncatedPlyIsNamed) {
