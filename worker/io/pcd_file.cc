@@ -124,6 +124,10 @@ PcdHeader read_header(const fs::path& path) {
                   ": malformed PCD header (expected VERSION, FIELDS, SIZE, TYPE, COUNT, "
                   "WIDTH, HEIGHT, POINTS, DATA, each with its values)");
   if (h.data_type < 0 || h.data_type > 2) throw IoError(name + ": unknown PCD DATA encoding");
+  // PCL accepts a header without FIELDS and then dereferences null reading the body (a SEGV
+  // found by fuzz_scan_file).
+  if (h.cloud.fields.empty() || h.cloud.point_step == 0)
+    throw IoError(name + ": malformed PCD header: no FIELDS (or fields of no size)");
   return h;
 }
 

@@ -202,6 +202,9 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
              "DATA\nDATA binary\n0000");
   expect_error([&] { read_scan_info(dir / "k.pcd"); }, {"k.pcd", "malformed PCD header"});
   expect_error([&] { read_scan_file(dir / "k.pcd", 0); }, {"k.pcd", "malformed PCD header"});
+  // No FIELDS line: PCL read the body through a null pointer (SEGV, fuzz_scan_file).
+  write_text(dir / "f.pcd", "VERSION 0.7\nDATA binary\n0123");
+  expect_error([&] { read_scan_file(dir / "f.pcd", 0); }, {"f.pcd", "no FIELDS"});
 }
 
 TEST(ScanFile, TruncatedPlyIsNamed) {
