@@ -14,6 +14,7 @@
 
 #include <map>
 
+#include "worker/io/bag_record_check.h"
 #include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/ros_messages.h"
@@ -230,6 +231,7 @@ BagReader::BagReader(const fs::path& path) : impl_(std::make_shared<Impl>()) {
   impl_->path = path;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw IoError(impl_->name() + ": bag not found");
+  check_bag_records(path);  // rosbag trusts the lengths in record headers
   try {
     impl_->bag.open(path.string(), rosbag::bagmode::Read);
     rosbag::View all(impl_->bag);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <cmath>
 #include <cstdlib>
 
@@ -157,6 +159,23 @@ TEST(Bag, TruncatedBagIsNamed) {
   MAKE_BAG_OR_SKIP(dir, bag);
   std::filesystem::resize_file(bag, std::filesystem::file_size(bag) / 2);
   expect_error([&] { BagReader reader(bag); }, {"mission.bag", "truncated or corrupt"});
+}
+
+// A header field longer than its header: rosbag's ros::Header::parse read past its buffer
+// (heap-buffer-overflow, found by fuzz_bag); refused before rosbag reads the file.
+TEST(Bag, HeaderFieldLongerThanItsHeaderIsRefused) {
+  TempDir dir;
+  auto le32 = [](uint32_t v) {
+    return std::string{char(v & 0xff), char(v >> 8 & 0xff), char(v >> 16 & 0xff), char(v >> 24)};
+  };
+  const std::string op = std::string("op=") + char(0x03);
+  std::ofstream(dir / "long.bag", std::ios::binary) << "#ROSBAG V2.0\n"
+                                                    << le32(4 + 4) << le32(200) << op << le32(0);
+  expect_error([&] { BagReader reader(dir / "long.bag"); },
+               {"long.bag", "truncated or corrupt", "record at byte 13", "runs past its header"});
+  std::ofstream(dir / "noeq.bag", std::ios::binary) << "#ROSBAG V2.0\n"
+                                                    << le32(4 + 4) << le32(4) << "op:x" << le32(0);
+  expect_error([&] { BagReader reader(dir / "noeq.bag"); }, {"noeq.bag", "no '='"});
 }
 
 std::string bag_mission_yaml(const std::string& imu_topic) {
