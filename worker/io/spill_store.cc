@@ -138,7 +138,8 @@ std::string SpillStore::read(const StreamKey& key) const {
     blocks = found->second.blocks;
     out.resize(found->second.bytes);
     const std::vector<char>& buffer = found->second.buffer;
-    std::memcpy(out.data() + (out.size() - buffer.size()), buffer.data(), buffer.size());
+    if (!buffer.empty())  // memcpy's pointers must not be null, even for 0 bytes
+      std::memcpy(out.data() + (out.size() - buffer.size()), buffer.data(), buffer.size());
   }
   // Spilled blocks are immutable once listed: read them without the lock.
   size_t at = 0;
