@@ -3,11 +3,14 @@
 #include <ceres/ceres.h>
 #include <ceres/covariance.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -292,9 +295,19 @@ class BaGraph {
     const std::vector<double> h = model_free_
                                       ? std::vector<double>(in_model.size(), 0.0)
                                       : mesh_.signed_distances(in_model, options_.num_threads);
+    const VisionLandmarks vision_result = vision_only_landmarks();
+    const std::vector<std::array<double, 3>>& vision = vision_result.points;
+    std::vector<Eigen::Vector3d> vision_in_model;
+    for (const auto& l : vision)
+      vision_in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
+    const std::vector<double> vision_h =
+        vision == landmarks_ ? h : mesh_.signed_distances(vision_in_model, options_.num_threads);
     const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
     for (size_t k = 0; k < landmarks_.size(); ++k) {
       BaLandmark l;
+      l.vision_position_world = Eigen::Vector3d(vision[k][0], vision[k][1], vision[k][2]);
+      l.vision_signed_distance_m = vision_h[k];
+      l.vision_sigma_m = vision_result.sigma_m[k];
       l.id = initial_.tracks[k].landmark_id;
       l.position_world = Eigen::Vector3d(landmarks_[k][0], landmarks_[k][1], landmarks_[k][2]);
       l.signed_distance_m = h[k];
@@ -302,6 +315,81 @@ class BaGraph {
       for (const auto& obs : initial_.tracks[k].observations) l.keyframes.push_back(obs.keyframe);
       result.landmarks.push_back(std::move(l));
     }
+  }
+
+  // The landmarks placed by their reprojections alone, everything else held at the current
+  // state (BaLandmark::vision_position_world), in a problem of their own starting from the
+  // solution (naive's positions already are), and each one's sigma (vision_sigma_m).
+  struct VisionLandmarks {
+    std::vector<std::array<double, 3>> points;
+    std::vector<double> sigma_m;
+  };
+  VisionLandmarks vision_only_landmarks() const {
+    VisionLandmarks out{landmarks_, std::vector<double>(landmarks_.size(), 0.0)};
+    if (model_free_ || out.points.empty()) return out;
+    std::vector<PoseBlock> poses = poses_;  // copies: the solution stays as it is
+    std::vector<double> servo = servo_;
+    PoseBlock extrinsic = extrinsic_;
+    ceres::Problem problem(problem_options());
+    std::vector<std::vector<ceres::ResidualBlockId>> blocks(out.points.size());
+    const BaRig& rig = problem_.rig;
+    for (size_t k = 0; k < initial_.tracks.size(); ++k) {
+      for (const FeatureObservation& obs : initial_.tracks[k].observations) {
+        ceres::CostFunction* factor =
+            obs.pixel_bottom && rig.camera_bottom
+                ? make_stereo_factor(rig.camera_top, *rig.camera_bottom, rig.T_top_bottom, mount_,
+                                     obs.pixel, *obs.pixel_bottom, options_.pixel_sigma)
+                : make_monocular_factor(rig.camera_top, mount_, obs.pixel, options_.pixel_sigma);
+        blocks[k].push_back(
+            problem.AddResidualBlock(factor, reprojection_loss_.get(), poses[obs.keyframe].data(),
+                                     &servo[obs.keyframe], extrinsic.data(), out.points[k].data()));
+      }
+    }
+    for (size_t i = 0; i < poses.size(); ++i) {
+      if (problem.HasParameterBlock(poses[i].data()))
+        problem.SetParameterBlockConstant(poses[i].data());
+      if (problem.HasParameterBlock(&servo[i])) problem.SetParameterBlockConstant(&servo[i]);
+    }
+    if (problem.HasParameterBlock(extrinsic.data()))
+      problem.SetParameterBlockConstant(extrinsic.data());
+    if (mode_ != BaMode::kNaive) {
+      ceres::Solver::Options s;
+      s.max_num_iterations = options_.max_iterations;
+      s.num_threads = options_.num_threads;
+      // The landmarks are independent problems summed: a relative tolerance on the sum would
+      // stop while a feature whose depth few views constrain (each adds little cost) is still
+      // far from its own minimum. Iterate until no landmark moves.
+      s.function_tolerance = 1e-14;
+      s.gradient_tolerance = 1e-14;
+      s.parameter_tolerance = 1e-12;
+      s.logging_type = ceres::SILENT;
+      // Only landmarks vary: the normal equations are 3x3 blocks on the diagonal.
+      s.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+      ceres::Solver::Summary summary;
+      ceres::Solve(s, &problem, &summary);
+    }
+    for (size_t k = 0; k < out.points.size(); ++k)
+      out.sigma_m[k] = position_sigma(problem, blocks[k]);
+    return out;
+  }
+
+  // sqrt of the largest eigenvalue of (sum J^T J)^-1 over a landmark's whitened reprojections
+  // (Gauss-Newton covariance at the minimum; the robust loss left out, as for inliers).
+  static double position_sigma(const ceres::Problem& problem,
+                               const std::vector<ceres::ResidualBlockId>& blocks) {
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+    for (const ceres::ResidualBlockId id : blocks) {
+      const int m = problem.GetCostFunctionForResidualBlock(id)->num_residuals();
+      Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> J(m, 3);
+      std::vector<double> residuals(m);
+      double* jacobians[4] = {nullptr, nullptr, nullptr, J.data()};
+      double cost = 0;
+      if (!problem.EvaluateResidualBlock(id, false, &cost, residuals.data(), jacobians)) continue;
+      information += J.transpose() * J;
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(information);
+    const double smallest = eigen.eigenvalues()(0);
+    return smallest > 0 ? 1.0 / std::sqrt(smallest) : std::numeric_limits<double>::infinity();
   }
 
   const BaProblem& problem_;

@@ -1,6 +1,7 @@
 #include "worker/ba/ba_result.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace keel::ba {
 
@@ -15,6 +16,13 @@ const BaModeResult* BaResult::find(BaMode mode) const {
   const auto it = std::find_if(modes.begin(), modes.end(),
                                [mode](const BaModeResult& r) { return r.mode == mode; });
   return it == modes.end() ? nullptr : &*it;
+}
+
+InspectionPoint inspection_point(const BaLandmark& l, double sigmas) {
+  const bool rays_disagree = l.lambda == 1 && std::isfinite(l.vision_sigma_m) &&
+                             std::abs(l.vision_signed_distance_m) > sigmas * l.vision_sigma_m;
+  if (rays_disagree) return {l.vision_position_world, l.vision_signed_distance_m};
+  return {l.position_world, l.signed_distance_m};
 }
 
 std::vector<CameraFramePoint> landmarks_in_camera(const BaModeResult& result, int keyframe) {

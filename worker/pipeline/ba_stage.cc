@@ -415,8 +415,10 @@ BaSolution solution_of(const ba::BaModeResult& m, const std::vector<ba::BaKeyfra
   s.T_world_model = m.T_world_model;
   for (const auto& k : keyframes) s.t_ns.push_back(k.t_ns);
   s.T_world_camera = m.T_world_camera;
-  for (const auto& l : m.landmarks)
-    s.landmarks.push_back({l.id, l.position_world, l.signed_distance_m, l.lambda, l.keyframes});
+  for (const auto& l : m.landmarks) {
+    const ba::InspectionPoint at = ba::inspection_point(l);
+    s.landmarks.push_back({l.id, at.position_world, at.signed_distance_m, l.lambda, l.keyframes});
+  }
   return s;
 }
 

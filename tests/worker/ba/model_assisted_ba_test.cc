@@ -8,11 +8,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <map>
 #include <numeric>
 
 #include "tests/worker/ba/ba_synthetic.h"
 #include "worker/ba/mesh_query.h"
 #include "worker/ba/surface_factor.h"
+#include "worker/ba/triangulation.h"
 
 namespace keel::ba {
 namespace {
@@ -64,6 +67,38 @@ ModeMetrics metrics(const testing::SyntheticHull& sim, const BaModeResult& r) {
     m.on_model_lambda1_fraction = double(on_lambda1) / m.on_model_count;
   }
   return m;
+}
+
+// Mean (h - h_true) over the bump's top of the features as placed again by their reprojections
+// alone (BaLandmark::vision_signed_distance_m, what inspect measures with).
+double vision_bump_mean_signed_error(const testing::SyntheticHull& sim, const BaModeResult& r) {
+  double sum = 0;
+  int n = 0;
+  for (const BaLandmark& l : r.landmarks) {
+    const double h_true = sim.landmark_height_m[l.id];
+    if (h_true > 0.08) sum += l.vision_signed_distance_m - h_true, ++n;
+  }
+  return n > 0 ? sum / n : 0.0;
+}
+
+// Per landmark: the sum of squared reprojection errors (px^2, observations still in front of
+// their camera) at the BA's position minus at the vision-only one.
+std::vector<double> reprojection_gain(const testing::SyntheticHull& sim, const BaModeResult& r) {
+  std::map<int64_t, const FeatureTrack*> tracks;
+  for (const FeatureTrack& t : sim.problem.tracks) tracks[t.landmark_id] = &t;
+  auto squared = [&](const Eigen::Vector3d& p, const FeatureTrack& track) {
+    double sum = 0;
+    for (const double e :
+         observation_reprojection_errors_px(p, track, r.T_world_camera, sim.problem.rig))
+      if (std::isfinite(e)) sum += e * e;
+    return sum;
+  };
+  std::vector<double> gain;
+  for (const BaLandmark& l : r.landmarks) {
+    const FeatureTrack& track = *tracks.at(l.id);
+    gain.push_back(squared(l.position_world, track) - squared(l.vision_position_world, track));
+  }
+  return gain;
 }
 
 void print(const char* name, const BaModeResult& r, const ModeMetrics& m) {
@@ -130,6 +165,24 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
   // geva pulls the bump toward the CAD: a clear negative height bias, worse than proposed.
   EXPECT_LT(mg.bump_mean_signed_error_m, -0.02);
   EXPECT_GT(mg.bump_mean_height_error_m, 2.0 * mp.bump_mean_height_error_m);
+  // Placed again by their reprojections alone, poses and x_gM held (what inspect measures
+  // with): no feature reprojects worse than where the BA left it (the surface factor only
+  // adds cost), the bump's heights stay within 1.5 cm, and naive's positions are their own.
+  const std::vector<double> vision_gain = reprojection_gain(sim, proposed);
+  ASSERT_EQ(vision_gain.size(), proposed.landmarks.size());
+  // (Monocular only: for a stereo pair observation_reprojection_errors_px gives the larger of
+  // the two cameras' errors, not the sum the factor minimises.)
+  if (!sim_options.stereo)
+    for (const double gain : vision_gain) EXPECT_GE(gain, -1e-6);
+  std::printf("vision alone: bump signed error %.4f, reprojection gain max %.4f px^2\n",
+              vision_bump_mean_signed_error(sim, proposed),
+              *std::max_element(vision_gain.begin(), vision_gain.end()));
+  EXPECT_GT(*std::max_element(vision_gain.begin(), vision_gain.end()), 0.1);  // it moved some
+  EXPECT_LT(std::abs(vision_bump_mean_signed_error(sim, proposed)), 0.015);
+  for (const BaLandmark& l : naive.landmarks) {
+    EXPECT_EQ(l.vision_position_world, l.position_world);
+    EXPECT_EQ(l.vision_signed_distance_m, l.signed_distance_m);
+  }
   // naive: no surface help, worse on-model landmarks than proposed.
   EXPECT_GT(mn.on_model_rms_error_m, mp.on_model_rms_error_m);
   // Fig. 16 curve: initial state plus one entry per iteration, fractions in [0, 1].
@@ -162,6 +215,30 @@ void run_and_check(const testing::SyntheticHullOptions& sim_options) {
             0.5 * median_abs(residual_values(proposed.dvl_residuals_initial)));
   EXPECT_LT(median_abs(residual_values(proposed.dvl_residuals_final)), 0.004);
   EXPECT_LT(servo_rms, 0.5 * servo_rms_measured);
+}
+
+TEST(InspectionPoint, RaysTakeOverOnlyWhereTheyPutAnOnModelFeatureSignificantlyOff) {
+  BaLandmark l;
+  l.position_world = Eigen::Vector3d(1, 2, 3);
+  l.signed_distance_m = 0.01;  // pulled in by the surface factor
+  l.vision_position_world = Eigen::Vector3d(1, 2, 3.04);
+  l.vision_signed_distance_m = 0.05;
+  l.lambda = 1;
+  l.vision_sigma_m = 0.01;  // 5 sigma off the model by its rays: theirs
+  EXPECT_EQ(inspection_point(l).position_world, l.vision_position_world);
+  EXPECT_EQ(inspection_point(l).signed_distance_m, 0.05);
+  l.vision_sigma_m = 0.02;  // 2.5 sigma: the BA's
+  EXPECT_EQ(inspection_point(l).position_world, l.position_world);
+  EXPECT_EQ(inspection_point(l).signed_distance_m, 0.01);
+  EXPECT_EQ(inspection_point(l, 2.0).signed_distance_m, 0.05);  // at 2 sigmas, theirs again
+  l.vision_signed_distance_m = -0.05;                           // behind the model counts the same
+  l.vision_sigma_m = 0.01;
+  EXPECT_EQ(inspection_point(l).signed_distance_m, -0.05);
+  l.vision_sigma_m = std::numeric_limits<double>::infinity();  // rays that do not fix it
+  EXPECT_EQ(inspection_point(l).signed_distance_m, 0.01);
+  l.vision_sigma_m = 0.01;
+  l.lambda = 0;  // already off the model in the BA: the BA's
+  EXPECT_EQ(inspection_point(l).signed_distance_m, 0.01);
 }
 
 TEST(ModelAssistedBa, MonocularProposedKeepsTheBumpGevaFlattensIt) {
