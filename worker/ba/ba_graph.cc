@@ -175,17 +175,19 @@ class BaGraph {
     }
   }
 
-  void add_camera_factors() {
+  // Eq. (12) for a stereo observation, Eq. (13) for a monocular one.
+  ceres::CostFunction* reprojection_factor(const FeatureObservation& obs) const {
     const BaRig& rig = problem_.rig;
+    return obs.pixel_bottom && rig.camera_bottom
+               ? make_stereo_factor(rig.camera_top, *rig.camera_bottom, rig.T_top_bottom, mount_,
+                                    obs.pixel, *obs.pixel_bottom, options_.pixel_sigma)
+               : make_monocular_factor(rig.camera_top, mount_, obs.pixel, options_.pixel_sigma);
+  }
+
+  void add_camera_factors() {
     for (size_t k = 0; k < initial_.tracks.size(); ++k) {
       for (const FeatureObservation& obs : initial_.tracks[k].observations) {
-        ceres::CostFunction* factor =
-            obs.pixel_bottom && rig.camera_bottom
-                ? make_stereo_factor(rig.camera_top, *rig.camera_bottom, rig.T_top_bottom, mount_,
-                                     obs.pixel, *obs.pixel_bottom, options_.pixel_sigma)  // Eq. 12
-                : make_monocular_factor(rig.camera_top, mount_, obs.pixel,
-                                        options_.pixel_sigma);  // Eq. 13
-        ceres_problem_.AddResidualBlock(factor, reprojection_loss_.get(),
+        ceres_problem_.AddResidualBlock(reprojection_factor(obs), reprojection_loss_.get(),
                                         poses_[obs.keyframe].data(), &servo_[obs.keyframe],
                                         extrinsic_.data(), landmarks_[k].data());
       }
@@ -332,17 +334,11 @@ class BaGraph {
     PoseBlock extrinsic = extrinsic_;
     ceres::Problem problem(problem_options());
     std::vector<std::vector<ceres::ResidualBlockId>> blocks(out.points.size());
-    const BaRig& rig = problem_.rig;
     for (size_t k = 0; k < initial_.tracks.size(); ++k) {
       for (const FeatureObservation& obs : initial_.tracks[k].observations) {
-        ceres::CostFunction* factor =
-            obs.pixel_bottom && rig.camera_bottom
-                ? make_stereo_factor(rig.camera_top, *rig.camera_bottom, rig.T_top_bottom, mount_,
-                                     obs.pixel, *obs.pixel_bottom, options_.pixel_sigma)
-                : make_monocular_factor(rig.camera_top, mount_, obs.pixel, options_.pixel_sigma);
-        blocks[k].push_back(
-            problem.AddResidualBlock(factor, reprojection_loss_.get(), poses[obs.keyframe].data(),
-                                     &servo[obs.keyframe], extrinsic.data(), out.points[k].data()));
+        blocks[k].push_back(problem.AddResidualBlock(
+            reprojection_factor(obs), reprojection_loss_.get(), poses[obs.keyframe].data(),
+            &servo[obs.keyframe], extrinsic.data(), out.points[k].data()));
       }
     }
     for (size_t i = 0; i < poses.size(); ++i) {
