@@ -15,6 +15,44 @@ struct Knots {
   std::vector<Eigen::Vector3d> t_ref_body;
 };
 
+// The slerp of one knot segment, q(s) = q0 * Exp(s * angle * axis), in the form a point's
+// rotation needs: R0 and the segment's rotation as axis and angle (the shorter arc, as
+// Eigen's slerp takes). Eigen's slerp spends an acos and two sines on every call; here the
+// acos is paid once per segment and each point needs the sine and cosine of a small angle.
+struct SegmentSlerp {
+  Eigen::Matrix3d R0;
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  double angle_rad = 0.0;
+
+  SegmentSlerp(const Eigen::Quaterniond& q0, const Eigen::Quaterniond& q1) : R0(q0) {
+    Eigen::Quaterniond d = q0.conjugate() * q1;
+    if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+    const double sin_half = d.vec().norm();
+    angle_rad = 2.0 * std::atan2(sin_half, d.w());
+    if (sin_half > 0.0) axis = d.vec() / sin_half;
+  }
+
+  // R(s) * p.
+  Eigen::Vector3d rotate(double s, const Eigen::Vector3d& p) const {
+    const double half = 0.5 * s * angle_rad;
+    double sin_half, cos_half;
+    if (std::abs(half) < 0.1) {
+      // Taylor series to the term below double precision at |x| < 0.1 (x^9/9! ~ 3e-15 x):
+      // knots are trajectory stamps, a few milliseconds apart, so this is the usual case.
+      const double x2 = half * half;
+      sin_half = half * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+      cos_half = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+    } else {
+      sin_half = std::sin(half);
+      cos_half = std::cos(half);
+    }
+    // Unit quaternion (cos_half, v) applied to p: p + 2 cos_half (v x p) + 2 v x (v x p).
+    const Eigen::Vector3d v = sin_half * axis;
+    const Eigen::Vector3d vxp = v.cross(p);
+    return R0 * (p + 2.0 * cos_half * vxp + 2.0 * v.cross(vxp));
+  }
+};
+
 std::string describe_scan(const std::string& sensor, const PointCloud& scan) {
   return "scan of sensor '" + sensor + "' at t=" + format_seconds(scan.t_ns) + " s";
 }
@@ -82,7 +120,15 @@ Pose3 deskew_scan(const TransformTree& tree, const std::string& sensor, PointClo
       make_knots(tree, T_world_sensor_ref.inverse(), scan.t_ns, t_first_ns, t_last_ns);
 
   const Pose3 T_body_sensor = tree.T_body_sensor(sensor);
-  const size_t last_segment = knots.t_s.size() >= 2 ? knots.t_s.size() - 2 : 0;
+  if (knots.t_s.size() == 1) {
+    const Pose3 T_ref_sensor = make_pose(knots.q_ref_body[0], knots.t_ref_body[0]) * T_body_sensor;
+    for (auto& p : scan.xyz) p = (T_ref_sensor * p.cast<double>()).cast<float>();
+    return T_world_sensor_ref;
+  }
+  std::vector<SegmentSlerp> slerps;
+  for (size_t i = 0; i + 1 < knots.t_s.size(); ++i)
+    slerps.emplace_back(knots.q_ref_body[i], knots.q_ref_body[i + 1]);
+  const size_t last_segment = slerps.size() - 1;
   size_t segment = 0;
   for (size_t k = 0; k < scan.xyz.size(); ++k) {
     const double t = scan.time_s[k];
@@ -90,19 +136,11 @@ Pose3 deskew_scan(const TransformTree& tree, const std::string& sensor, PointClo
     while (segment < last_segment && t > knots.t_s[segment + 1]) ++segment;
     while (segment > 0 && t < knots.t_s[segment]) --segment;
     const Eigen::Vector3d p_body = T_body_sensor * scan.xyz[k].cast<double>();
-    Eigen::Vector3d p_ref;
-    if (knots.t_s.size() == 1) {
-      p_ref = knots.q_ref_body[0] * p_body + knots.t_ref_body[0];
-    } else {
-      const double dt = knots.t_s[segment + 1] - knots.t_s[segment];
-      const double s = std::clamp((t - knots.t_s[segment]) / dt, 0.0, 1.0);
-      const Eigen::Quaterniond q =
-          knots.q_ref_body[segment].slerp(s, knots.q_ref_body[segment + 1]);
-      const Eigen::Vector3d translation =
-          (1.0 - s) * knots.t_ref_body[segment] + s * knots.t_ref_body[segment + 1];
-      p_ref = q * p_body + translation;
-    }
-    scan.xyz[k] = p_ref.cast<float>();
+    const double dt = knots.t_s[segment + 1] - knots.t_s[segment];
+    const double s = std::clamp((t - knots.t_s[segment]) / dt, 0.0, 1.0);
+    const Eigen::Vector3d translation =
+        (1.0 - s) * knots.t_ref_body[segment] + s * knots.t_ref_body[segment + 1];
+    scan.xyz[k] = (slerps[segment].rotate(s, p_body) + translation).cast<float>();
   }
   return T_world_sensor_ref;
 }
