@@ -108,35 +108,51 @@ TileKey TileGrid::child(const TileKey& tile, int index) const {
                  2 * tile.z + ((index >> 2) & 1), static_cast<uint8_t>(tile.level + 1)};
 }
 
-void TileGrid::for_each_halo_tile(const Eigen::Vector3f& p, const TileKey& home,
-                                  const std::function<double(const Box&)>& halo_m,
-                                  const std::function<void(const TileKey&)>& visit) const {
+TileGrid::HaloReach TileGrid::halo_reach(const TileKey& home,
+                                         const std::function<double(const Box&)>& halo_m) const {
+  HaloReach out;
+  out.home = home;
+  out.home_box = box(home);
   const double edge = edge_m(home.level);
-  const Box home_box = box(home);
   // The halos of the tiles within `reach` tiles are at most that of the home box grown by
   // reach tiles (halos grow with the distance from the origin only): widen until it covers.
   int reach = 1;
-  double widest = halo_m(home_box.expanded(edge));
-  while (widest > reach * edge) {
-    reach = static_cast<int>(std::ceil(widest / edge));
+  out.widest_m = halo_m(out.home_box.expanded(edge));
+  while (out.widest_m > reach * edge) {
+    reach = static_cast<int>(std::ceil(out.widest_m / edge));
     if (reach > kMaxReachTiles)
-      throw std::invalid_argument("tile grid: the filters' halo (" + std::to_string(widest) +
+      throw std::invalid_argument("tile grid: the filters' halo (" + std::to_string(out.widest_m) +
                                   " m) spans more than " + std::to_string(kMaxReachTiles) +
                                   " tiles of " + std::to_string(edge) + " m");
-    widest = halo_m(home_box.expanded(reach * edge));
+    out.widest_m = halo_m(out.home_box.expanded(reach * edge));
   }
-  const Eigen::Vector3d q = p.cast<double>();
-  // Most points lie deeper inside their tile than any halo reaches.
-  if (((q - home_box.min).array() > widest).all() && ((home_box.max - q).array() > widest).all())
-    return;
   for (int dz = -reach; dz <= reach; ++dz)
     for (int dy = -reach; dy <= reach; ++dy)
       for (int dx = -reach; dx <= reach; ++dx) {
         if (dx == 0 && dy == 0 && dz == 0) continue;
         const TileKey other{home.x + dx, home.y + dy, home.z + dz, home.level};
         const Box other_box = box(other);
-        if (other_box.expanded(halo_m(other_box)).contains(q)) visit(other);
+        out.neighbours.emplace_back(other, other_box.expanded(halo_m(other_box)));
       }
+  return out;
+}
+
+void TileGrid::for_each_halo_tile(const Eigen::Vector3f& p, const HaloReach& reach,
+                                  const std::function<void(const TileKey&)>& visit) const {
+  const Eigen::Vector3d q = p.cast<double>();
+  // Most points lie deeper inside their tile than any halo reaches.
+  const Box& home = reach.home_box;
+  if (((q - home.min).array() > reach.widest_m).all() &&
+      ((home.max - q).array() > reach.widest_m).all())
+    return;
+  for (const auto& [tile, grown] : reach.neighbours)
+    if (grown.contains(q)) visit(tile);
+}
+
+void TileGrid::for_each_halo_tile(const Eigen::Vector3f& p, const TileKey& home,
+                                  const std::function<double(const Box&)>& halo_m,
+                                  const std::function<void(const TileKey&)>& visit) const {
+  for_each_halo_tile(p, halo_reach(home, halo_m), visit);
 }
 
 }  // namespace keel::mapping

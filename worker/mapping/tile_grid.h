@@ -12,6 +12,8 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "worker/mapping/voxel_accumulator.h"
 
@@ -67,9 +69,22 @@ class TileGrid {
   Box box(const TileKey& tile) const;
   // Child 0..7 (bit 0: upper half in x, bit 1: y, bit 2: z) and the parent.
   TileKey child(const TileKey& tile, int index) const;
+  // The tiles around `home` whose halos may reach into it, each with its box grown by its halo,
+  // and how deep inside home a point must lie to be in none of them: what for_each_halo_tile
+  // needs, computed once for the many points of one tile. halo_m must grow with nothing but
+  // the box's distance from the origin (as the filters' halos do), so a bounded neighbourhood
+  // is searched. Throws std::invalid_argument when the halo spans too many tiles.
+  struct HaloReach {
+    TileKey home;
+    Box home_box;
+    double widest_m = 0.0;  // no neighbour's halo reaches deeper into home than this
+    std::vector<std::pair<TileKey, Box>> neighbours;  // tile, its box grown by its halo
+  };
+  HaloReach halo_reach(const TileKey& home, const std::function<double(const Box&)>& halo_m) const;
   // Calls visit(tile) for every tile of p's level other than `home` whose box grown by
-  // halo_m(tile's box) contains p. halo_m must grow with nothing but the box's distance from the
-  // origin (as the filters' halos do), so a bounded neighbourhood is searched.
+  // halo_m(tile's box) contains p (p in home).
+  void for_each_halo_tile(const Eigen::Vector3f& p, const HaloReach& reach,
+                          const std::function<void(const TileKey&)>& visit) const;
   void for_each_halo_tile(const Eigen::Vector3f& p, const TileKey& home,
                           const std::function<double(const Box&)>& halo_m,
                           const std::function<void(const TileKey&)>& visit) const;

@@ -13,6 +13,9 @@ constexpr size_t kBatchRecords = 4096;
 // All batches together before every one is flushed (4 MiB).
 constexpr size_t kMaxBatchedRecords = 1 << 18;
 
+// Home tiles whose halo reach a binner keeps.
+constexpr size_t kMaxReaches = 1024;
+
 constexpr float kNoIntensity = std::numeric_limits<float>::quiet_NaN();
 
 }  // namespace
@@ -60,13 +63,20 @@ TileBinner::~TileBinner() {
 }
 
 void TileBinner::push(TileStream kind, const mapping::TileKey& tile, const PointRecord& record) {
-  std::vector<PointRecord>& batch = batches_[stream_key(cloud_, kind, tile)];
-  batch.push_back(record);
+  std::vector<PointRecord>* batch;
+  if (kind == TileStream::kCore && core_batch_ != nullptr && tile == core_tile_) {
+    batch = core_batch_;
+  } else {
+    batch = &batches_[stream_key(cloud_, kind, tile)];  // a node: stays put until erased
+    if (kind == TileStream::kCore) core_tile_ = tile, core_batch_ = batch;
+  }
+  batch->push_back(record);
   ++batched_;
-  if (batch.size() >= kBatchRecords) {
-    store_.append(stream_key(cloud_, kind, tile), batch.data(), batch.size() * sizeof(PointRecord));
-    batched_ -= batch.size();
-    batch.clear();
+  if (batch->size() >= kBatchRecords) {
+    store_.append(stream_key(cloud_, kind, tile), batch->data(),
+                  batch->size() * sizeof(PointRecord));
+    batched_ -= batch->size();
+    batch->clear();
   }
   if (batched_ >= kMaxBatchedRecords) flush();
 }
@@ -76,7 +86,12 @@ void TileBinner::add(const PointRecord& record) {
   const mapping::TileKey home = grid_.tile_of(p, level_);
   push(TileStream::kCore, home, record);
   if (!has_halo_) return;
-  grid_.for_each_halo_tile(p, home, halo_, [&](const mapping::TileKey& other) {
+  auto reach = reaches_.find(home);
+  if (reach == reaches_.end()) {
+    if (reaches_.size() >= kMaxReaches) reaches_.clear();  // ~1.5 KiB each with a 1-tile reach
+    reach = reaches_.emplace(home, grid_.halo_reach(home, halo_)).first;
+  }
+  grid_.for_each_halo_tile(p, reach->second, [&](const mapping::TileKey& other) {
     push(TileStream::kHalo, other, record);
   });
 }
@@ -96,6 +111,7 @@ void TileBinner::flush() {
     batch.clear();
   }
   batches_.clear();
+  core_batch_ = nullptr;
   batched_ = 0;
 }
 

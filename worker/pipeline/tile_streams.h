@@ -57,6 +57,12 @@ class TileBinner {
   int level_;
   std::unordered_map<io::StreamKey, std::vector<PointRecord>, io::StreamKeyHash> batches_;
   size_t batched_ = 0;
+  // The binner runs on the map's serial commit path, so per-point lookups are kept few: each
+  // home tile's halo reach is computed once (up to kMaxReaches tiles, then again), and the core
+  // batch of the last point's tile is at hand for the next (consecutive points mostly share it).
+  std::unordered_map<mapping::TileKey, mapping::TileGrid::HaloReach, mapping::TileKeyHash> reaches_;
+  mapping::TileKey core_tile_;
+  std::vector<PointRecord>* core_batch_ = nullptr;  // batches_[core_tile_'s core key]
 };
 
 // Makes the core and halo streams of tile `tile`'s children (level + 1) for each cloud in
