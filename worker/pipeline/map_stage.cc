@@ -271,17 +271,22 @@ std::string emptied_by(const mapping::SensorMapStats& s) {
   return "";
 }
 
-// Estimates per map point, measured on the keel-sim bridge (14.4 M points in the combined map):
-// Draco encode and round trip ~0.34 us and, at its peak, ~48 bytes (Draco's copy of the input,
-// its quantized attributes and the kd-tree's copy of them, the output); the metrics (20000
-// query points) ~0.15 us and ~29 bytes (the cell grid); a PLY ~0.05 us (mostly the kernel's
-// copy) and a buffer of fixed size.
-constexpr double kDracoSecondsPerPoint = 0.34e-6;
+// Estimates per map point, measured on the keel-sim bridge (14.4 M points in the combined map;
+// the times again on the 220 s bridge, 10.7 M, from the job log's task lines): a sensor's Draco
+// file (gathering its tiles, the encoding, the round trip and the preview) ~0.5 us and, at its
+// peak, ~48 bytes (Draco's copy of the input, its quantized attributes and the kd-tree's copy
+// of them, the output); the metrics (20000 query points) ~0.15 us and ~29 bytes (the cell
+// grid); a PLY ~0.05 us (mostly the kernel's copy) and a buffer of fixed size. The costs order
+// the tasks, costliest first: the round trip of the combined map, which can only start once
+// its encoding ends, was estimated at half its cost (0.1 us) and so waited 1.3 s behind
+// shorter tasks at the end of the stage.
+constexpr double kDracoSecondsPerPoint = 0.5e-6;
 constexpr double kDracoBytesPerPoint = 48.0;
-// The two steps of a Draco file on their own: the encoding (same peak), and the round trip
-// (~0.1 us; the decoder's quantized and float copies, ~32 bytes, and the file's ~3.6).
-constexpr double kDracoEncodeSecondsPerPoint = 0.24e-6;
-constexpr double kDracoCheckSecondsPerPoint = 0.10e-6;
+// The two steps of a Draco file on their own: the encoding (gathering, encoding, preview; same
+// peak), and the round trip (~0.22 us; the decoder's quantized and float copies, ~32 bytes,
+// and the file's ~3.6).
+constexpr double kDracoEncodeSecondsPerPoint = 0.35e-6;
+constexpr double kDracoCheckSecondsPerPoint = 0.22e-6;
 constexpr double kDracoCheckBytesPerPoint = 35.0;
 constexpr double kMetricsSecondsPerPoint = 0.15e-6;
 constexpr double kMetricsBytesPerPoint = 29.0;
