@@ -210,6 +210,28 @@ TEST_F(HullMission, DvlRangesMatchRaycastsAgainstTheRealHull) {
   EXPECT_GE(close, checked - 1);
 }
 
+// landmarks.csv lists every painted blob of the scene: its centre, whether it is on the CAD
+// hull, and the radius its paint reaches (what bench_texture needs to know what is textured).
+TEST_F(HullMission, LandmarksFileListsEveryBlobWithItsRadius) {
+  const Scenario s = make_scenario("hauv-hull", 4);
+  std::ifstream in(dir_ / "ground_truth" / "landmarks.csv");
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "id,x,y,z,on_cad,radius_m");
+  const auto rows = read_csv(dir_ / "ground_truth" / "landmarks.csv");
+  const auto& landmarks = s.hull_world->landmarks();
+  ASSERT_EQ(rows.size(), landmarks.size());
+  for (size_t k = 0; k < rows.size(); ++k) {
+    ASSERT_EQ(rows[k].size(), 6u);
+    EXPECT_EQ(std::stoll(rows[k][0]), landmarks[k].id);
+    EXPECT_NEAR(std::stod(rows[k][1]), landmarks[k].p_world.x(), 1e-6);
+    EXPECT_EQ(rows[k][4] == "1", landmarks[k].on_cad);
+    EXPECT_NEAR(std::stod(rows[k][5]), landmarks[k].radius_m, 1e-6);
+    EXPECT_GE(landmarks[k].radius_m, 0.015);
+    EXPECT_LE(landmarks[k].radius_m, 0.04);
+  }
+}
+
 TEST_F(HullMission, ImagesAreTexturedPngsAndTracksHitTheBlobs) {
   const auto index = read_csv(dir_ / "cam0" / "index.csv");
   ASSERT_EQ(index.size(), 17u);  // 2 Hz over 8 s

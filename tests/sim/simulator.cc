@@ -687,11 +687,12 @@ SimSummary run_simulation(const SimOptions& options) {
     fs::create_directories(out / "cad");
     write_ply_binary((out / "cad" / "hull.ply").string(), scenario.cad_mesh);
     TextFile lm((out / "ground_truth" / "landmarks.csv").string());
-    lm.line("id,x,y,z,on_cad");
+    lm.line("id,x,y,z,on_cad,radius_m");
     char buffer[160];
     for (const auto& l : scenario.hull_world->landmarks()) {
-      std::snprintf(buffer, sizeof(buffer), "%lld,%.9g,%.9g,%.9g,%d", static_cast<long long>(l.id),
-                    l.p_world.x(), l.p_world.y(), l.p_world.z(), l.on_cad ? 1 : 0);
+      std::snprintf(buffer, sizeof(buffer), "%lld,%.9g,%.9g,%.9g,%d,%.6g",
+                    static_cast<long long>(l.id), l.p_world.x(), l.p_world.y(), l.p_world.z(),
+                    l.on_cad ? 1 : 0, l.radius_m);
       lm.line(buffer);
     }
     lm.close();
