@@ -67,9 +67,13 @@ struct MapStageOptions {
   // Draco: 18 bits keep the quantization error <= sqrt(3)/2 * 200 m / (2^18 - 1) = 0.66 mm
   // on a 200 m map (<= 1 mm up to a 302 m extent).
   int draco_position_bits = 18;
-  // 5 rather than 7: on the keel-sim bridge map (8.4 M points) encoding takes 25 % less CPU
-  // (1.45 s vs 1.93 s) for files 1 % larger (2.37 vs 2.35 bytes per point).
-  int draco_compression_level = 5;
+  // 1 rather than 5 or 7: levels 0-1 code the kd-tree's bits directly, 2 and above through
+  // rANS. On the 220 s bridge the files grow by 0.15 % (combined map 48.56 vs 48.49 MB: its
+  // lossless float intensity is most of the bytes) while the whole stage runs 3 % faster
+  // (13.35 vs 13.79 s, median of 4 paired runs) and draco_decoder reads the combined map 18 %
+  // faster (what the viewer and `keel fetch` users pay); 5 had saved 25 % of 7's CPU for files
+  // 1 % larger. 0 is Draco's sequential encoding: files 18-49 % larger (docs/map-filters.md).
+  int draco_compression_level = 1;
   bool write_ply = true;
   // Density, roughness and planarity (Eqs. (23)-(26)) of every point of every map, stored as
   // the Draco attributes "density", "roughness" and "planarity" for a viewer to colour by (where
