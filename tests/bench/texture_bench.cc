@@ -48,8 +48,10 @@ std::vector<Blob> read_blobs(const std::string& mission) {
   std::string line;
   std::getline(in, line);
   if (line != "id,x,y,z,on_cad,radius_m")
-    throw std::runtime_error(path + ": expected the header id,x,y,z,on_cad,radius_m (a keel-sim "
-                                    "that writes blob radii), got '" + line + "'");
+    throw std::runtime_error(path +
+                             ": expected the header id,x,y,z,on_cad,radius_m (a keel-sim "
+                             "that writes blob radii), got '" +
+                             line + "'");
   std::vector<Blob> blobs;
   while (std::getline(in, line)) {
     std::stringstream fields(line);
@@ -83,8 +85,8 @@ double patch_height(const Object& o, double rho) {
 }
 
 struct Texture {
-  int blobs_on = 0;         // blob centres on the object (within its radius, above its base)
-  double top_m = -1.0;      // highest textured point along the axis; -1: none
+  int blobs_on = 0;     // blob centres on the object (within its radius, above its base)
+  double top_m = -1.0;  // highest textured point along the axis; -1: none
 };
 
 Texture texture_of(const Object& o, const std::vector<Blob>& all) {
@@ -145,10 +147,11 @@ int main(int argc, char** argv) {
                 objects.size());
     for (const Object& o : objects) {
       const Texture t = texture_of(o, blobs);
-      std::printf("  %-8s r %.3f h %.4f: %2d blobs on it, textured to %.4f m (%.0f %% of its "
-                  "height, %.4f m short)\n",
-                  o.kind.c_str(), o.radius_m, o.height_m, t.blobs_on, t.top_m,
-                  100.0 * t.top_m / o.height_m, o.height_m - t.top_m);
+      std::printf(
+          "  %-8s r %.3f h %.4f: %2d blobs on it, textured to %.4f m (%.0f %% of its "
+          "height, %.4f m short)\n",
+          o.kind.c_str(), o.radius_m, o.height_m, t.blobs_on, t.top_m, 100.0 * t.top_m / o.height_m,
+          o.height_m - t.top_m);
     }
     if (before.empty()) return 0;
     const std::vector<Blob> blobs_a = read_blobs(before);
@@ -164,9 +167,10 @@ int main(int argc, char** argv) {
       const double growth = b->height_m - a->height_m, error = (top_b - top_a) - growth;
       ++grown;
       within += std::abs(error) <= 0.015;
-      std::printf("  grown +%.4f m: textured tops %.4f -> %.4f m, growth they show %+.4f m "
-                  "(error %+.4f)\n",
-                  growth, top_a, top_b, top_b - top_a, error);
+      std::printf(
+          "  grown +%.4f m: textured tops %.4f -> %.4f m, growth they show %+.4f m "
+          "(error %+.4f)\n",
+          growth, top_a, top_b, top_b - top_a, error);
     }
     std::printf("  growth within 1.5 cm from texture alone: %d of %d\n", within, grown);
   } catch (const std::exception& e) {

@@ -40,7 +40,8 @@ struct SegmentSlerp {
       // Taylor series to the term below double precision at |x| < 0.1 (x^9/9! ~ 3e-15 x):
       // knots are trajectory stamps, a few milliseconds apart, so this is the usual case.
       const double x2 = half * half;
-      sin_half = half * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+      sin_half =
+          half * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
       cos_half = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
     } else {
       sin_half = std::sin(half);

@@ -13,8 +13,9 @@ constexpr size_t kBatchRecords = 4096;
 // All batches together before every one is flushed (4 MiB).
 constexpr size_t kMaxBatchedRecords = 1 << 18;
 
-// Home tiles whose halo reach a binner keeps.
-constexpr size_t kMaxReaches = 1024;
+// Neighbour boxes a binner keeps in its halo reaches (56 bytes each: 3.5 MiB), however far
+// the halos reach (26 neighbours a tile at a reach of one tile, 124 at two).
+constexpr size_t kMaxReachNeighbours = size_t{1} << 16;
 
 constexpr float kNoIntensity = std::numeric_limits<float>::quiet_NaN();
 
@@ -88,8 +89,13 @@ void TileBinner::add(const PointRecord& record) {
   if (!has_halo_) return;
   auto reach = reaches_.find(home);
   if (reach == reaches_.end()) {
-    if (reaches_.size() >= kMaxReaches) reaches_.clear();  // ~1.5 KiB each with a 1-tile reach
-    reach = reaches_.emplace(home, grid_.halo_reach(home, halo_)).first;
+    mapping::TileGrid::HaloReach made = grid_.halo_reach(home, halo_);
+    if (reach_neighbours_ + made.neighbours.size() > kMaxReachNeighbours) {
+      reaches_.clear();
+      reach_neighbours_ = 0;
+    }
+    reach_neighbours_ += made.neighbours.size();
+    reach = reaches_.emplace(home, std::move(made)).first;
   }
   grid_.for_each_halo_tile(p, reach->second, [&](const mapping::TileKey& other) {
     push(TileStream::kHalo, other, record);

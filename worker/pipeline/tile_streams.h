@@ -58,9 +58,11 @@ class TileBinner {
   std::unordered_map<io::StreamKey, std::vector<PointRecord>, io::StreamKeyHash> batches_;
   size_t batched_ = 0;
   // The binner runs on the map's serial commit path, so per-point lookups are kept few: each
-  // home tile's halo reach is computed once (up to kMaxReaches tiles, then again), and the core
-  // batch of the last point's tile is at hand for the next (consecutive points mostly share it).
+  // home tile's halo reach is computed once (up to 2^16 neighbour boxes in all, 3.5 MiB, then
+  // again), and the core batch of the last point's tile is at hand for the next (consecutive
+  // points mostly share it).
   std::unordered_map<mapping::TileKey, mapping::TileGrid::HaloReach, mapping::TileKeyHash> reaches_;
+  size_t reach_neighbours_ = 0;  // neighbour boxes held in reaches_
   mapping::TileKey core_tile_;
   std::vector<PointRecord>* core_batch_ = nullptr;  // batches_[core_tile_'s core key]
 };
