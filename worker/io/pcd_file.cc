@@ -2,6 +2,7 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
 
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <string_view>
@@ -86,11 +87,42 @@ std::vector<PackedField> fields_of(const pcl::PCLPointCloud2& cloud, const std::
 
 const char* kEncodings[] = {"ascii", "binary", "binary_compressed"};
 
+// Values per field (COUNT) read at most: PCL's own descriptors stop at a few hundred (VFH 308,
+// SHOT 352, ESF 640).
+constexpr uint64_t kMaxPcdFieldCount = 1 << 16;
+
 struct PcdHeader {
   pcl::PCLPointCloud2 cloud;  // fields, width, height, point_step; no data
   int data_type = 0;          // 0 ascii, 1 binary, 2 binary_compressed
   unsigned int data_idx = 0;  // byte offset of the body
 };
+
+// PCL reads COUNT into 32 bits and spends time and memory in proportion to it (a COUNT of
+// 2^32 - 1 took 10 s and gigabytes in readHeader; an overflowing one made its ascii reader ask
+// for 128 GiB, found by fuzz_scan_file): every COUNT value is checked before PCL sees it.
+void check_counts(const std::string& head, const std::string& name) {
+  std::string_view rest(head);
+  std::vector<std::string_view> tokens;
+  while (!rest.empty()) {
+    const size_t end = rest.find('\n');
+    const std::string_view line = rest.substr(0, end);
+    rest = end == std::string_view::npos ? std::string_view() : rest.substr(end + 1);
+    mesh_detail::split_whitespace(line, &tokens);
+    if (tokens.empty()) continue;
+    if (tokens[0] == "DATA") return;
+    if (tokens[0] != "COUNT") continue;
+    for (size_t k = 1; k < tokens.size(); ++k) {
+      uint64_t count = 0;
+      const auto [end_ptr, ec] =
+          std::from_chars(tokens[k].data(), tokens[k].data() + tokens[k].size(), count);
+      if (ec != std::errc() || end_ptr != tokens[k].data() + tokens[k].size() || count == 0 ||
+          count > kMaxPcdFieldCount)
+        throw IoError(name + ": malformed PCD header: COUNT value " + std::to_string(k) + " is '" +
+                      std::string(tokens[k]) + "' (expected 1.." +
+                      std::to_string(kMaxPcdFieldCount) + " values per field)");
+    }
+  }
+}
 
 PcdHeader read_header(const fs::path& path) {
   const std::string file = path.string();
@@ -104,6 +136,7 @@ PcdHeader read_header(const fs::path& path) {
     head.resize(f ? std::fread(head.data(), 1, head.size(), f.get()) : 0);
     if (head.rfind("DATA ", 0) != 0 && head.find("\nDATA ") == std::string::npos)
       throw IoError(name + ": malformed PCD header: no DATA line (truncated header?)");
+    check_counts(head, name);
   }
   PcdHeader h;
   Eigen::Vector4f origin;
@@ -128,6 +161,22 @@ PcdHeader read_header(const fs::path& path) {
   // found by fuzz_scan_file).
   if (h.cloud.fields.empty() || h.cloud.point_step == 0)
     throw IoError(name + ": malformed PCD header: no FIELDS (or fields of no size)");
+  // PCL sums SIZE x COUNT in 32 bits: a COUNT of 2^32 - 1 (what an overflowing number parses
+  // to) wrapped to a small point size, and its ascii reader then asked for 128 GiB
+  // (fuzz_scan_file). Recount in 64 bits and bound COUNT.
+  uint64_t point_bytes = 0;
+  for (const auto& f : h.cloud.fields) {
+    if (f.count > kMaxPcdFieldCount)
+      throw IoError(name + ": malformed PCD header: field '" + f.name + "' has COUNT " +
+                    std::to_string(f.count) + " (at most " + std::to_string(kMaxPcdFieldCount) +
+                    " values per field are read)");
+    const uint64_t size = field_size(from_pcl(f, name));
+    point_bytes += size * std::max<uint64_t>(1, f.count);
+  }
+  if (point_bytes != h.cloud.point_step)
+    throw IoError(name + ": malformed PCD header: SIZE x COUNT over FIELDS is " +
+                  std::to_string(point_bytes) + " bytes a point, PCL computed " +
+                  std::to_string(h.cloud.point_step));
   return h;
 }
 
@@ -156,6 +205,12 @@ void check_body_size(const fs::path& path, const PcdHeader& h) {
     if (sizes[1] != body)
       throw IoError(name + ": malformed PCD: compressed body unpacks to " +
                     std::to_string(sizes[1]) + " bytes, the header needs " + std::to_string(body));
+    // LZF copies at most 264 bytes for a 3-byte back reference: a body claiming more than 88
+    // times its compressed size is not LZF (and PCL would allocate the claim first).
+    if (sizes[1] > 88ull * sizes[0] + 8)
+      throw IoError(name + ": malformed PCD: a compressed body of " + std::to_string(sizes[0]) +
+                    " bytes cannot unpack to " + std::to_string(sizes[1]) +
+                    " (LZF expands at most 88 times)");
   }
 }
 

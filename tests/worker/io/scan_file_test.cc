@@ -205,6 +205,19 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
   // No FIELDS line: PCL read the body through a null pointer (SEGV, fuzz_scan_file).
   write_text(dir / "f.pcd", "VERSION 0.7\nDATA binary\n0123");
   expect_error([&] { read_scan_file(dir / "f.pcd", 0); }, {"f.pcd", "no FIELDS"});
+  // A COUNT past 32 bits: PCL's 32-bit point size wrapped and its ascii reader asked for
+  // 128 GiB (fuzz_scan_file, regressions/scan_file/pcd-count-overflow).
+  write_text(dir / "n.pcd",
+             "VERSION 0.7\nFIELDS x y\nSIZE 4 4\nTYPE F F\nCOUNT 4294967295 1\nWIDTH 1\n"
+             "HEIGHT 1\nPOINTS 1\nDATA ascii\n1 2\n");
+  expect_error([&] { read_scan_info(dir / "n.pcd"); }, {"n.pcd", "malformed PCD header", "COUNT"});
+  expect_error([&] { read_scan_file(dir / "n.pcd", 0); }, {"n.pcd", "COUNT"});
+  // A binary_compressed body claiming more than LZF can unpack from its bytes.
+  write_text(dir / "z.pcd",
+             "VERSION 0.7\nFIELDS x\nSIZE 4\nTYPE F\nCOUNT 1\nWIDTH 100000000\nHEIGHT 1\n"
+             "POINTS 100000000\nDATA binary_compressed\n" +
+                 std::string("\x10\x00\x00\x00\x00\x84\xd7\x17", 8) + std::string(16, 'a'));
+  expect_error([&] { read_scan_file(dir / "z.pcd", 0); }, {"z.pcd", "LZF expands at most"});
 }
 
 TEST(ScanFile, TruncatedPlyIsNamed) {
