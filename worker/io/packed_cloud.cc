@@ -269,8 +269,15 @@ PointCloud unpack_cloud(const PackedCloudView& view, TimeNs t_ns, const ScanRead
     if (intensity)
       cloud.intensity.push_back(
           static_cast<float>(load_double(record + intensity->offset, intensity->type)));
-    if (ring)
-      cloud.ring.push_back(static_cast<uint16_t>(load_double(record + ring->offset, ring->type)));
+    if (ring) {
+      // A ring is a laser's index: converting anything outside 0..65535 (or NaN) to uint16 is
+      // undefined (UBSan, fuzz_scan_file: a float ring of -12208.1).
+      const double value = load_double(record + ring->offset, ring->type);
+      if (!(value >= 0.0 && value <= 65535.0 && value == std::floor(value)))
+        throw IoError(source + ": point " + std::to_string(i) + ": ring " + number_text(value) +
+                      " is not a laser index (an integer in 0..65535)");
+      cloud.ring.push_back(static_cast<uint16_t>(value));
+    }
     if (time) cloud.time_s.push_back(static_cast<float>(offsets[i]));
   }
   return cloud;

@@ -218,6 +218,12 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
              "POINTS 100000000\nDATA binary_compressed\n" +
                  std::string("\x10\x00\x00\x00\x00\x84\xd7\x17", 8) + std::string(16, 'a'));
   expect_error([&] { read_scan_file(dir / "z.pcd", 0); }, {"z.pcd", "LZF expands at most"});
+  // A ring outside 0..65535 (a float ring of -12208.1 was undefined behaviour, UBSan,
+  // fuzz_scan_file): named with its point.
+  write_text(dir / "r.pcd",
+             "VERSION 0.7\nFIELDS x y z ring\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+             "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3 4\n1 2 3 -3.5\n");
+  expect_error([&] { read_scan_file(dir / "r.pcd", 0); }, {"r.pcd", "point 1", "ring -3.5"});
 }
 
 TEST(ScanFile, TruncatedPlyIsNamed) {
