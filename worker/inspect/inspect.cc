@@ -49,6 +49,9 @@ void validate(const InspectOptions& o) {
           "a finite range > 0 m");
   require(std::isfinite(o.max_behind_vertex_m) && o.max_behind_vertex_m >= 0.0,
           "max_behind_vertex_m", o.max_behind_vertex_m, "a finite value >= 0 m");
+  require(std::isfinite(o.top_site_noise_sigmas) && o.top_site_noise_sigmas >= 0.0,
+          "top_site_noise_sigmas", o.top_site_noise_sigmas, "a finite value >= 0");
+  require(o.top_spacings >= 1, "top_spacings", o.top_spacings, "an integer >= 1");
 }
 
 InspectResult run_inspect(const InspectInput& input, const InspectOptions& options) {
@@ -73,7 +76,10 @@ InspectResult run_inspect(const InspectInput& input, const InspectOptions& optio
     for (DetectedShape& shape : shapes) all.push_back(std::move(shape));
   }
   stats.num_detections = static_cast<int>(all.size());
-  std::vector<ShapeSummary> objects = summarize_shapes(all, input.landmarks, options.dbscan_eps_m);
+  const TopSampling top{options.top_site_noise_sigmas * result.threshold.noise_sigma_m,
+                        options.top_spacings};
+  std::vector<ShapeSummary> objects =
+      summarize_shapes(all, input.landmarks, options.dbscan_eps_m, top);
   std::vector<bool> kept(all.size(), false);
   for (const ShapeSummary& object : objects) {
     if (static_cast<int>(object.views.size()) < options.min_shape_views) {

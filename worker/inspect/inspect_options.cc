@@ -10,7 +10,9 @@ nlohmann::json InspectOptions::to_json() const {
           {"min_shape_views", min_shape_views},
           {"alpha_m", alpha_m},
           {"view_range_m", view_range_m},
-          {"max_behind_vertex_m", max_behind_vertex_m}};
+          {"max_behind_vertex_m", max_behind_vertex_m},
+          {"top_site_noise_sigmas", top_site_noise_sigmas},
+          {"top_spacings", top_spacings}};
 }
 
 }  // namespace keel::inspect

@@ -59,7 +59,8 @@ std::vector<int> group_detections(const std::vector<DetectedShape>& detections,
 }
 
 ShapeSummary summarize(const std::vector<int>& landmark_ids, const std::vector<int>& views,
-                       int num_detections, const std::vector<Landmark>& landmarks) {
+                       int num_detections, const std::vector<Landmark>& landmarks,
+                       const TopSampling& top) {
   ShapeSummary s;
   s.min_world.setConstant(std::numeric_limits<double>::infinity());
   s.max_world = -s.min_world;
@@ -71,17 +72,10 @@ ShapeSummary summarize(const std::vector<int>& landmark_ids, const std::vector<i
     s.mean_deviation_m += l.h_m;
     if (std::abs(l.h_m) > std::abs(s.max_deviation_m)) s.max_deviation_m = l.h_m;
   }
-  // The second largest |h| (Robson-Whitlock's gap, see the header): the largest skipped once.
-  double second = 0.0;
-  bool skipped_max = false;
-  for (const int id : landmark_ids) {
-    const double h = landmarks[id].h_m;
-    if (!skipped_max && h == s.max_deviation_m)
-      skipped_max = true;
-    else
-      second = std::max(second, std::abs(h));
-  }
-  s.height_sampling_sigma_m = landmark_ids.size() > 1 ? std::abs(s.max_deviation_m) - second : 0.0;
+  std::vector<double> abs_heights_m;
+  abs_heights_m.reserve(landmark_ids.size());
+  for (const int id : landmark_ids) abs_heights_m.push_back(std::abs(landmarks[id].h_m));
+  s.height_sampling_sigma_m = top_sampling_sigma(std::move(abs_heights_m), top);
   const double n = static_cast<double>(landmark_ids.size());
   s.centroid_world /= n;
   s.mean_deviation_m /= n;
@@ -109,7 +103,7 @@ nlohmann::json ShapeSummary::to_json() const {
 
 std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& detections,
                                            const std::vector<Landmark>& landmarks,
-                                           double link_distance_m) {
+                                           double link_distance_m, const TopSampling& top) {
   const std::vector<int> root = group_detections(detections, landmarks, link_distance_m);
   std::unordered_map<int, int> object_of_root;
   std::vector<std::vector<int>> object_landmarks, object_views;
@@ -135,7 +129,7 @@ std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& det
       list->erase(std::unique(list->begin(), list->end()), list->end());
     }
     shapes.push_back(summarize(object_landmarks[o], object_views[o],
-                               static_cast<int>(object_detection_indices[o].size()), landmarks));
+                               static_cast<int>(object_detection_indices[o].size()), landmarks, top));
     shapes.back().id = static_cast<int>(o);
     shapes.back().detections = std::move(object_detection_indices[o]);
   }

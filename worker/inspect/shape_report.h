@@ -11,6 +11,7 @@
 #include "worker/inspect/inspect_input.h"
 #include "worker/inspect/inspect_options.h"
 #include "worker/inspect/shape_detection.h"
+#include "worker/inspect/top_sampling.h"
 
 namespace keel::inspect {
 
@@ -23,12 +24,9 @@ struct ShapeSummary {
   double mean_deviation_m = 0.0;  // mean of h (Eq. 5), signed
   double max_deviation_m = 0.0;   // the h of largest magnitude, signed
   // How far the object's top may lie beyond max_deviation_m for want of a feature there: the
-  // gap between the two largest |h| (0 with a single feature). The highest
-  // of n features spread over a bump falls short of its top by a gap of the order of the gap
-  // to the second highest: Robson & Whitlock (1964) estimate a distribution's end point from
-  // its two largest order statistics, the end point lying within that gap of the largest at
-  // ~50 % confidence. On keel-sim's patches (~6-15 features) the highest feature was 1-3.4 cm
-  // below the top, against a deviation noise of ~1 mm, so this dominates a height's error.
+  // mean spacing of its highest features' heights (top_sampling.h), 0 when they all share one
+  // height. On keel-sim's patches the highest feature was 0.2-3.7 cm below the top, against a
+  // deviation noise of ~1 mm, so this dominates a height's error.
   double height_sampling_sigma_m = 0.0;
   int num_landmarks = 0;
   int num_detections = 0;       // per-view shapes merged into this object
@@ -42,10 +40,11 @@ struct ShapeSummary {
 // Merges detections (transitively) that share a feature or come within link_distance_m of each
 // other (world frame, feature to feature), and summarises each object. Sharing alone would
 // split an object whose parts two cameras saw without overlap; run_inspect() links at
-// dbscan_eps_m, the spacing DBSCAN itself accepts inside a cluster.
+// dbscan_eps_m, the spacing DBSCAN itself accepts inside a cluster. `top` sets
+// height_sampling_sigma_m.
 std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& detections,
                                            const std::vector<Landmark>& landmarks,
-                                           double link_distance_m);
+                                           double link_distance_m, const TopSampling& top = {});
 
 // The shapes.json document: {"options": ..., "shapes": [...]}.
 nlohmann::json shapes_to_json(const std::vector<ShapeSummary>& shapes,

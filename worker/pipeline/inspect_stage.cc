@@ -238,6 +238,8 @@ InspectStageOptions InspectStageOptions::from_json(const json& options) {
   in.alpha_m = r.optional<double>("alpha_m", in.alpha_m);
   in.view_range_m = r.optional<double>("view_range_m", in.view_range_m);
   in.max_behind_vertex_m = r.optional<double>("max_behind_vertex_m", in.max_behind_vertex_m);
+  in.top_site_noise_sigmas = r.optional<double>("top_site_noise_sigmas", in.top_site_noise_sigmas);
+  in.top_spacings = r.optional<int>("top_spacings", in.top_spacings);
   o.draco_position_bits = r.optional<int>("draco_position_bits", o.draco_position_bits);
   o.draco_field_bits = r.optional<int>("draco_field_bits", o.draco_field_bits);
   o.write_ply = r.optional<bool>("write_ply", o.write_ply);

@@ -296,6 +296,12 @@ TEST(Inspect, BadInputNamesTheField) {
   options = {};
   options.view_range_m = nan;
   expect_invalid(good, options, "view_range_m");
+  options = {};
+  options.top_site_noise_sigmas = -1.0;
+  expect_invalid(good, options, "top_site_noise_sigmas");
+  options = {};
+  options.top_spacings = 0;
+  expect_invalid(good, options, "top_spacings");
 }
 
 }  // namespace
