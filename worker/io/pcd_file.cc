@@ -164,12 +164,20 @@ PcdHeader read_header(const fs::path& path) {
   // PCL sums SIZE x COUNT in 32 bits: a COUNT of 2^32 - 1 (what an overflowing number parses
   // to) wrapped to a small point size, and its ascii reader then asked for 128 GiB
   // (fuzz_scan_file). Recount in 64 bits and bound COUNT.
+  // PCL also adds SIZE values as they come, negative ones too: a SIZE of -4 put a field at
+  // offset 2^32 - 4 and its binary reader read there (a SEGV found by fuzz_scan_file). Every
+  // field must start where the ones before it end, by the size its TYPE and SIZE name.
   uint64_t point_bytes = 0;
   for (const auto& f : h.cloud.fields) {
     if (f.count > kMaxPcdFieldCount)
       throw IoError(name + ": malformed PCD header: field '" + f.name + "' has COUNT " +
                     std::to_string(f.count) + " (at most " + std::to_string(kMaxPcdFieldCount) +
                     " values per field are read)");
+    if (f.offset != point_bytes)
+      throw IoError(name + ": malformed PCD header: field '" + f.name + "' starts at byte " +
+                    std::to_string(f.offset) + " of a point, the SIZE x COUNT of the fields " +
+                    "before it end at byte " + std::to_string(point_bytes) +
+                    " (a SIZE that is not 1, 2, 4 or 8?)");
     const uint64_t size = field_size(from_pcl(f, name));
     point_bytes += size * std::max<uint64_t>(1, f.count);
   }

@@ -224,6 +224,14 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
              "VERSION 0.7\nFIELDS x y z ring\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
              "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3 4\n1 2 3 -3.5\n");
   expect_error([&] { read_scan_file(dir / "r.pcd", 0); }, {"r.pcd", "point 1", "ring -3.5"});
+  // A negative SIZE: PCL put the next field at byte 2^32 - 4 of a point and read there (a SEGV,
+  // fuzz_scan_file). Without TYPE and COUNT lines PCL takes floats; the sizes here add up to
+  // the point's 16 bytes all the same.
+  write_text(dir / "s.pcd",
+             "VERSION 0.7\nFIELDS x y z i\nSIZE -4 8 4 8\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
+             "DATA binary\n" + std::string(16, '\0'));
+  expect_error([&] { read_scan_file(dir / "s.pcd", 0); },
+               {"s.pcd", "malformed PCD header", "field 'y' starts at byte 4294967292"});
 }
 
 TEST(ScanFile, TruncatedPlyIsNamed) {
