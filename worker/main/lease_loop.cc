@@ -91,6 +91,7 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
   job_options.jobs_dir = area / "jobs";
   job_options.uploads_dir = area / "uploads";
   job_options.heartbeat_seconds = options_.heartbeat_seconds;
+  job_options.lease_seconds = options_.lease_seconds;
   job_options.keep_work = options_.keep_work;
 
   proto::LeaseRequest request;

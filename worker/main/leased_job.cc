@@ -3,7 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <system_error>
+#include <thread>
 
 #include "worker/main/job_heartbeat.h"
 #include "worker/pipeline/bundle_unpack.h"
@@ -123,8 +125,11 @@ JobEnd LeasedJob::run() {
                                                          : abandon(a.why);
   } catch (const client::ApiCallError& e) {
     heartbeat.stop();
-    if (is_server_trouble(e) || heartbeat.lease_lost())
+    if (heartbeat.lease_lost())
       end = abandon(std::string("server: ") + e.what());
+    else if (is_server_trouble(e))
+      end = stop_requested_() ? give_back(std::string("server: ") + e.what())
+                              : abandon(std::string("server: ") + e.what());
     else
       end = fail(e.what());
   } catch (const std::exception& e) {
@@ -334,10 +339,28 @@ JobEnd LeasedJob::fail(const std::string& error) {
 
 JobEnd LeasedJob::give_back(const std::string& why) {
   if (heartbeat_) heartbeat_->flush(api_);  // the log lines so far, before the lease goes
-  try {
-    api_.release_job(lease_.job.id, lease_.lease_id);
-  } catch (const std::exception& e) {
-    return abandon(std::string(why) + "; giving the lease back failed: " + e.what());
+  // A stop often comes with the server's own end: a local worker stops when keel-server dies
+  // (PR_SET_PDEATHSIG), and a restarted server is back within seconds. A released job is
+  // queued at once and keeps its retry budget; an expired lease counts toward the "lease
+  // expired 3 times" failure, so a server killed three times during one job failed it (the
+  // crash torture test, on a loaded machine). Until the lease would have run out anyway, an
+  // unreachable or failing server is asked again.
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration<double>(options_.lease_seconds);
+  auto pause = std::chrono::milliseconds(100);
+  for (;;) {
+    try {
+      api_.release_job(lease_.job.id, lease_.lease_id);
+      break;
+    } catch (const client::ApiCallError& e) {
+      const bool server_away = e.status() == 0 || e.status() >= 500;
+      if (!server_away || std::chrono::steady_clock::now() + pause >= deadline)
+        return abandon(std::string(why) + "; giving the lease back failed: " + e.what());
+    } catch (const std::exception& e) {
+      return abandon(std::string(why) + "; giving the lease back failed: " + e.what());
+    }
+    std::this_thread::sleep_for(pause);
+    pause = std::min(2 * pause, std::chrono::milliseconds(1000));
   }
   spdlog::info("job {}: lease given back ({}); the job is queued again", lease_.job.id, why);
   return JobEnd::kReleased;

@@ -33,7 +33,8 @@ struct LeasedJobOptions {
   std::filesystem::path jobs_dir;     // per-job folders live here
   std::filesystem::path uploads_dir;  // resumable-upload state of ApiClient::upload_file
   double heartbeat_seconds = 1.0;
-  bool keep_work = false;  // keep the job's folder afterwards (debugging)
+  double lease_seconds = 30.0;  // the lease asked for: how long giving it back may be retried
+  bool keep_work = false;       // keep the job's folder afterwards (debugging)
 };
 
 enum class JobEnd { kSucceeded, kFailed, kCanceled, kAbandoned, kReleased };
@@ -59,7 +60,8 @@ class LeasedJob {
   JobEnd finish(const pipeline::JobResult& result);
   JobEnd fail(const std::string& error);
   JobEnd abandon(const std::string& why);
-  // The worker is stopping: the lease goes back to the server (abandoned if that fails).
+  // The worker is stopping: the lease goes back to the server, asked again while the server
+  // is unreachable or failing, for up to lease_seconds (abandoned after that, or on a 4xx).
   JobEnd give_back(const std::string& why);
   void log(const std::string& line);
 

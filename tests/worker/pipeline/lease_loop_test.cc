@@ -228,6 +228,36 @@ TEST_F(LeaseLoopTest, SigtermGivesTheLeaseBackAndAnotherWorkerResumesItAtOnce) {
   EXPECT_EQ(done.attempts, 2);
 }
 
+TEST_F(LeaseLoopTest, AStopWhileTheServerIsDownGivesTheLeaseBackWhenItReturns) {
+  // keel-server killed: its local workers stop (PR_SET_PDEATHSIG) while nobody answers. The
+  // worker asks again until the server is back, so the job is queued by its release, not by
+  // its lease expiring (which would count toward "lease expired 3 times").
+  testing::write_long_mission(dir_ / "long", 200000);
+  const proto::Job job = submit(dir_ / "long");
+  auto worker = start_worker("w1", {"--lease-seconds", "600"});
+  const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
+    return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
+  });
+  ASSERT_EQ(running.state, proto::JobState::kRunning);
+  server_->signal(SIGKILL);
+  server_->wait(20s);
+  worker->signal(SIGTERM);
+  std::this_thread::sleep_for(3s);  // the worker meets only refused connections meanwhile
+  EXPECT_EQ(worker->wait(0ms), -1) << "gave up while the lease had 600 s left: "
+                                   << worker_log("w1");
+  const std::string listen = url_.substr(url_.find("://") + 3);
+  server_ = std::make_unique<Child>(
+      KEEL_SERVER_BIN,
+      std::vector<std::string>{"--data-dir", (dir_ / "data").string(), "--listen", listen,
+                               "--workers", "0"},
+      dir_ / "server2.out", dir_ / "server2.err");
+  EXPECT_EQ(worker->wait(60s), 0) << worker_log("w1");
+  EXPECT_NE(worker_log("w1").find("lease given back"), std::string::npos) << worker_log("w1");
+  const proto::Job released = api_->get_job(job.id);
+  EXPECT_EQ(released.state, proto::JobState::kQueued) << "queued by the release, not in 600 s";
+  EXPECT_EQ(released.error, "");
+}
+
 TEST_F(LeaseLoopTest, ExitWhenIdleEndsTheWorkerAfterItsLastJob) {
   testing::write_tiny_mission(dir_ / "tiny");
   const proto::Job job = submit(dir_ / "tiny");

@@ -134,6 +134,7 @@ export function mount(container, {query}) {
 
   function upsert(job) {
     const old = jobs.get(job.id);
+    document.body.dataset.lastJobEvent = `${job.id} ${job.state}`;  // for tests: a change applied
     if (job.state === 'running' && (!old || old.stage !== job.stage || old.state !== 'running'))
       stageSeen.set(job.id, {stage: job.stage, ms: Date.now()});
     if (filters.state && job.state !== filters.state && !old) return;
