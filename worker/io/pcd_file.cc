@@ -11,6 +11,7 @@
 #include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
 #include "worker/io/mesh_parse_util.h"
+#include "worker/io/pcd_header_check.h"
 #include "worker/io/scan_file.h"
 #include "worker/io/text_lines.h"
 
@@ -87,42 +88,11 @@ std::vector<PackedField> fields_of(const pcl::PCLPointCloud2& cloud, const std::
 
 const char* kEncodings[] = {"ascii", "binary", "binary_compressed"};
 
-// Values per field (COUNT) read at most: PCL's own descriptors stop at a few hundred (VFH 308,
-// SHOT 352, ESF 640).
-constexpr uint64_t kMaxPcdFieldCount = 1 << 16;
-
 struct PcdHeader {
   pcl::PCLPointCloud2 cloud;  // fields, width, height, point_step; no data
   int data_type = 0;          // 0 ascii, 1 binary, 2 binary_compressed
   unsigned int data_idx = 0;  // byte offset of the body
 };
-
-// PCL reads COUNT into 32 bits and spends time and memory in proportion to it (a COUNT of
-// 2^32 - 1 took 10 s and gigabytes in readHeader; an overflowing one made its ascii reader ask
-// for 128 GiB, found by fuzz_scan_file): every COUNT value is checked before PCL sees it.
-void check_counts(const std::string& head, const std::string& name) {
-  std::string_view rest(head);
-  std::vector<std::string_view> tokens;
-  while (!rest.empty()) {
-    const size_t end = rest.find('\n');
-    const std::string_view line = rest.substr(0, end);
-    rest = end == std::string_view::npos ? std::string_view() : rest.substr(end + 1);
-    mesh_detail::split_whitespace(line, &tokens);
-    if (tokens.empty()) continue;
-    if (tokens[0] == "DATA") return;
-    if (tokens[0] != "COUNT") continue;
-    for (size_t k = 1; k < tokens.size(); ++k) {
-      uint64_t count = 0;
-      const auto [end_ptr, ec] =
-          std::from_chars(tokens[k].data(), tokens[k].data() + tokens[k].size(), count);
-      if (ec != std::errc() || end_ptr != tokens[k].data() + tokens[k].size() || count == 0 ||
-          count > kMaxPcdFieldCount)
-        throw IoError(name + ": malformed PCD header: COUNT value " + std::to_string(k) + " is '" +
-                      std::string(tokens[k]) + "' (expected 1.." +
-                      std::to_string(kMaxPcdFieldCount) + " values per field)");
-    }
-  }
-}
 
 PcdHeader read_header(const fs::path& path) {
   const std::string file = path.string();
@@ -134,9 +104,7 @@ PcdHeader read_header(const fs::path& path) {
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
     std::string head(1 << 16, '\0');
     head.resize(f ? std::fread(head.data(), 1, head.size(), f.get()) : 0);
-    if (head.rfind("DATA ", 0) != 0 && head.find("\nDATA ") == std::string::npos)
-      throw IoError(name + ": malformed PCD header: no DATA line (truncated header?)");
-    check_counts(head, name);
+    check_pcd_header(head, fs::file_size(path), name);
   }
   PcdHeader h;
   Eigen::Vector4f origin;
@@ -161,12 +129,9 @@ PcdHeader read_header(const fs::path& path) {
   // found by fuzz_scan_file).
   if (h.cloud.fields.empty() || h.cloud.point_step == 0)
     throw IoError(name + ": malformed PCD header: no FIELDS (or fields of no size)");
-  // PCL sums SIZE x COUNT in 32 bits: a COUNT of 2^32 - 1 (what an overflowing number parses
-  // to) wrapped to a small point size, and its ascii reader then asked for 128 GiB
-  // (fuzz_scan_file). Recount in 64 bits and bound COUNT.
-  // PCL also adds SIZE values as they come, negative ones too: a SIZE of -4 put a field at
-  // offset 2^32 - 4 and its binary reader read there (a SEGV found by fuzz_scan_file). Every
-  // field must start where the ones before it end, by the size its TYPE and SIZE name.
+  // check_pcd_header() read the header as PCL should have; where PCL read it otherwise (its
+  // parser is looser), its layout must still be the packed one the header describes: every
+  // field starting where the ones before it end, the sum in 64 bits.
   uint64_t point_bytes = 0;
   for (const auto& f : h.cloud.fields) {
     if (f.count > kMaxPcdFieldCount)
@@ -176,8 +141,7 @@ PcdHeader read_header(const fs::path& path) {
     if (f.offset != point_bytes)
       throw IoError(name + ": malformed PCD header: field '" + f.name + "' starts at byte " +
                     std::to_string(f.offset) + " of a point, the SIZE x COUNT of the fields " +
-                    "before it end at byte " + std::to_string(point_bytes) +
-                    " (a SIZE that is not 1, 2, 4 or 8?)");
+                    "before it end at byte " + std::to_string(point_bytes));
     const uint64_t size = field_size(from_pcl(f, name));
     point_bytes += size * std::max<uint64_t>(1, f.count);
   }

@@ -217,7 +217,7 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
              "VERSION 0.7\nFIELDS x\nSIZE 4\nTYPE F\nCOUNT 1\nWIDTH 100000000\nHEIGHT 1\n"
              "POINTS 100000000\nDATA binary_compressed\n" +
                  std::string("\x10\x00\x00\x00\x00\x84\xd7\x17", 8) + std::string(16, 'a'));
-  expect_error([&] { read_scan_file(dir / "z.pcd", 0); }, {"z.pcd", "LZF expands at most"});
+  expect_error([&] { read_scan_file(dir / "z.pcd", 0); }, {"z.pcd", "expands at most 88 times"});
   // A ring outside 0..65535 (a float ring of -12208.1 was undefined behaviour, UBSan,
   // fuzz_scan_file): named with its point.
   write_text(dir / "r.pcd",
@@ -231,7 +231,7 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
              "VERSION 0.7\nFIELDS x y z i\nSIZE -4 8 4 8\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
              "DATA binary\n" + std::string(16, '\0'));
   expect_error([&] { read_scan_file(dir / "s.pcd", 0); },
-               {"s.pcd", "malformed PCD header", "field 'y' starts at byte 4294967292"});
+               {"s.pcd", "malformed PCD header", "SIZE of field 'x' is '-4'"});
 }
 
 TEST(ScanFile, TruncatedPlyIsNamed) {
