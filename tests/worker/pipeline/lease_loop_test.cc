@@ -112,6 +112,18 @@ class LeaseLoopTest : public ::testing::Test {
   }
   static bool finished(const proto::Job& job) { return proto::is_terminal(job.state); }
 
+  // A job long enough to be still running when the test sees it (idle machines are fast),
+  // leased by a new worker for far longer than the test: only a release queues it again.
+  // Returns the job as seen running (or as it ended).
+  proto::Job run_long_job(const std::string& worker_name, std::unique_ptr<Child>* worker) {
+    testing::write_long_mission(dir_ / "long", 200000);
+    const proto::Job job = submit(dir_ / "long");
+    *worker = start_worker(worker_name, {"--lease-seconds", "600"});
+    return wait_job(job.id, [](const proto::Job& j) {
+      return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
+    });
+  }
+
   fs::path dir_;
   std::string url_;
   std::unique_ptr<Child> server_;
@@ -201,15 +213,9 @@ TEST_F(LeaseLoopTest, CancelStopsTheRunningStage) {
 }
 
 TEST_F(LeaseLoopTest, SigtermGivesTheLeaseBackAndAnotherWorkerResumesItAtOnce) {
-  // Long enough that the job is still running when the test sees it (idle machines are fast).
-  testing::write_long_mission(dir_ / "long", 200000);
-  const proto::Job job = submit(dir_ / "long");
-  // A lease far longer than the test: the job can only be queued again by the release.
-  auto first = start_worker("w1", {"--lease-seconds", "600"});
-  const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
-    return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
-  });
-  ASSERT_EQ(running.state, proto::JobState::kRunning);
+  std::unique_ptr<Child> first;
+  const proto::Job job = run_long_job("w1", &first);
+  ASSERT_EQ(job.state, proto::JobState::kRunning);
   // Twice, as `scancel --signal=TERM --full` delivers it (to the worker, and through the
   // batch shell that forwards it): the same graceful stop, not an "exit now".
   first->signal(SIGTERM);
@@ -232,13 +238,9 @@ TEST_F(LeaseLoopTest, AStopWhileTheServerIsDownGivesTheLeaseBackWhenItReturns) {
   // keel-server killed: its local workers stop (PR_SET_PDEATHSIG) while nobody answers. The
   // worker asks again until the server is back, so the job is queued by its release, not by
   // its lease expiring (which would count toward "lease expired 3 times").
-  testing::write_long_mission(dir_ / "long", 200000);
-  const proto::Job job = submit(dir_ / "long");
-  auto worker = start_worker("w1", {"--lease-seconds", "600"});
-  const proto::Job running = wait_job(job.id, [](const proto::Job& j) {
-    return j.state == proto::JobState::kRunning && j.stage == "ingest" && j.progress > 0.0;
-  });
-  ASSERT_EQ(running.state, proto::JobState::kRunning);
+  std::unique_ptr<Child> worker;
+  const proto::Job job = run_long_job("w1", &worker);
+  ASSERT_EQ(job.state, proto::JobState::kRunning);
   server_->signal(SIGKILL);
   server_->wait(20s);
   worker->signal(SIGTERM);
