@@ -129,7 +129,8 @@ std::vector<ShapeSummary> summarize_shapes(const std::vector<DetectedShape>& det
       list->erase(std::unique(list->begin(), list->end()), list->end());
     }
     shapes.push_back(summarize(object_landmarks[o], object_views[o],
-                               static_cast<int>(object_detection_indices[o].size()), landmarks, top));
+                               static_cast<int>(object_detection_indices[o].size()), landmarks,
+                               top));
     shapes.back().id = static_cast<int>(o);
     shapes.back().detections = std::move(object_detection_indices[o]);
   }

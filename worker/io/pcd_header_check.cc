@@ -136,9 +136,10 @@ void check_pcd_header(std::string_view head, uint64_t file_size, const std::stri
   // WIDTH x HEIGHT and POINTS are below 2^32 each, the point size below 2^36: the products
   // below are exact in 128 bits.
   using Wide = unsigned __int128;
-  const Wide points = std::max<Wide>(d.points.value_or(0),
-                                     Wide(d.width.value_or(0)) * d.height.value_or(1));
-  const std::string declared = std::to_string(static_cast<uint64_t>(std::min<Wide>(points, UINT64_MAX)));
+  const Wide points =
+      std::max<Wide>(d.points.value_or(0), Wide(d.width.value_or(0)) * d.height.value_or(1));
+  const std::string declared =
+      std::to_string(static_cast<uint64_t>(std::min<Wide>(points, UINT64_MAX)));
   if (starts_with(d.encoding, "binary_compressed")) {
     if (points * step > Wide(file_size) * kMaxLzfExpansion)
       malformed(name, declared + " points of " + std::to_string(step) + " bytes cannot be in " +

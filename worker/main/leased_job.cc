@@ -345,8 +345,8 @@ JobEnd LeasedJob::give_back(const std::string& why) {
   // expired 3 times" failure, so a server killed three times during one job failed it (the
   // crash torture test, on a loaded machine). Until the lease would have run out anyway, an
   // unreachable or failing server is asked again.
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::duration<double>(options_.lease_seconds);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(options_.lease_seconds);
   auto pause = std::chrono::milliseconds(100);
   for (;;) {
     try {

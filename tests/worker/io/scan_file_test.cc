@@ -229,7 +229,8 @@ TEST(ScanFile, TruncatedPcdIsNamed) {
   // the point's 16 bytes all the same.
   write_text(dir / "s.pcd",
              "VERSION 0.7\nFIELDS x y z i\nSIZE -4 8 4 8\nWIDTH 1\nHEIGHT 1\nPOINTS 1\n"
-             "DATA binary\n" + std::string(16, '\0'));
+             "DATA binary\n" +
+                 std::string(16, '\0'));
   expect_error([&] { read_scan_file(dir / "s.pcd", 0); },
                {"s.pcd", "malformed PCD header", "SIZE of field 'x' is '-4'"});
 }

@@ -245,14 +245,13 @@ TEST_F(LeaseLoopTest, AStopWhileTheServerIsDownGivesTheLeaseBackWhenItReturns) {
   server_->wait(20s);
   worker->signal(SIGTERM);
   std::this_thread::sleep_for(3s);  // the worker meets only refused connections meanwhile
-  EXPECT_EQ(worker->wait(0ms), -1) << "gave up while the lease had 600 s left: "
-                                   << worker_log("w1");
+  EXPECT_EQ(worker->wait(0ms), -1)
+      << "gave up while the lease had 600 s left: " << worker_log("w1");
   const std::string listen = url_.substr(url_.find("://") + 3);
-  server_ = std::make_unique<Child>(
-      KEEL_SERVER_BIN,
-      std::vector<std::string>{"--data-dir", (dir_ / "data").string(), "--listen", listen,
-                               "--workers", "0"},
-      dir_ / "server2.out", dir_ / "server2.err");
+  server_ = std::make_unique<Child>(KEEL_SERVER_BIN,
+                                    std::vector<std::string>{"--data-dir", (dir_ / "data").string(),
+                                                             "--listen", listen, "--workers", "0"},
+                                    dir_ / "server2.out", dir_ / "server2.err");
   EXPECT_EQ(worker->wait(60s), 0) << worker_log("w1");
   EXPECT_NE(worker_log("w1").find("lease given back"), std::string::npos) << worker_log("w1");
   const proto::Job released = api_->get_job(job.id);
