@@ -102,7 +102,7 @@ PcdHeader read_header(const fs::path& path) {
   // PCL accepts a header cut before its DATA line as an empty cloud: require the line.
   {
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);
-    std::string head(1 << 16, '\0');
+    std::string head(kPcdHeaderBytes, '\0');
     head.resize(f ? std::fread(head.data(), 1, head.size(), f.get()) : 0);
     check_pcd_header(head, fs::file_size(path), name);
   }

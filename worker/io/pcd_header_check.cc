@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "worker/io/io_error.h"
-#include "worker/io/mesh_parse_util.h"
 
 namespace keel::io {
 
@@ -57,36 +56,77 @@ void keep_integer(const std::vector<std::string_view>& tokens, const char* keywo
   *out = value;
 }
 
-Declared read_declared(std::string_view head, const std::string& name) {
+constexpr std::string_view kKeywords[] = {"VERSION",   "FIELDS", "COLUMNS", "SIZE",
+                                          "TYPE",      "COUNT",  "WIDTH",   "HEIGHT",
+                                          "VIEWPOINT", "POINTS", "DATA"};
+
+// A header line's words. PCL trims and splits its lines at spaces, tabs and carriage returns
+// (files written on Windows end their lines in "\r\n"), and reads numbers as streams do,
+// past any whitespace.
+void split_words(std::string_view line, std::vector<std::string_view>* words) {
+  constexpr std::string_view kSpace = " \t\r\v\f";
+  words->clear();
+  size_t i = line.find_first_not_of(kSpace);
+  while (i != std::string_view::npos) {
+    const size_t end = line.find_first_of(kSpace, i);
+    words->push_back(line.substr(i, end == std::string_view::npos ? end : end - i));
+    i = end == std::string_view::npos ? end : line.find_first_not_of(kSpace, end);
+  }
+}
+
+// Whether a line whose first token is `token`, cut at its end, could be a header line.
+bool may_be_header(std::string_view token) {
+  if (token.empty() || starts_with(token, "#")) return true;
+  for (const std::string_view keyword : kKeywords)
+    if (starts_with(token, keyword) || starts_with(keyword, token)) return true;
+  return false;
+}
+
+// The header as PCL's readHeader reads it: line by line, skipping empty lines and comments,
+// until the first line that is not a header keyword. DATA does not end it: PCL goes on reading
+// keywords after DATA (a POINTS line there resized its cloud), so neither does this.
+Declared read_declared(std::string_view head, bool whole_file, const std::string& name) {
   Declared d;
+  bool data_seen = false;
   std::vector<std::string_view> tokens;
   while (!head.empty()) {
     const size_t end = head.find('\n');
     const std::string_view line = head.substr(0, end);
     head = end == std::string_view::npos ? std::string_view() : head.substr(end + 1);
-    mesh_detail::split_whitespace(line, &tokens);
+    split_words(line, &tokens);
+    if (end == std::string_view::npos && !whole_file) {  // cut by the end of what was read
+      if (tokens.empty() || may_be_header(tokens[0]))
+        malformed(name, "the header runs past its first " + std::to_string(kPcdHeaderBytes / 1024) +
+                            " KiB");
+      break;
+    }
     if (tokens.empty() || starts_with(tokens[0], "#")) continue;
     const std::string_view key = tokens[0];
+    if (starts_with(key, "VERSION") || starts_with(key, "VIEWPOINT")) continue;
     if (starts_with(key, "DATA")) {
+      if (data_seen) malformed(name, "DATA is given twice");
+      data_seen = true;
       d.encoding = tokens.size() > 1 ? tokens[1] : std::string_view();
-      return d;
-    }
-    if (starts_with(key, "FIELDS") || starts_with(key, "COLUMNS"))
+    } else if (starts_with(key, "FIELDS") || starts_with(key, "COLUMNS")) {
       keep_values(tokens, "FIELDS", &d.fields, name);
-    else if (starts_with(key, "SIZE"))
+    } else if (starts_with(key, "SIZE")) {
       keep_values(tokens, "SIZE", &d.sizes, name);
-    else if (starts_with(key, "TYPE"))
+    } else if (starts_with(key, "TYPE")) {
       keep_values(tokens, "TYPE", &d.types, name);
-    else if (starts_with(key, "COUNT"))
+    } else if (starts_with(key, "COUNT")) {
       keep_values(tokens, "COUNT", &d.counts, name);
-    else if (starts_with(key, "WIDTH"))
+    } else if (starts_with(key, "WIDTH")) {
       keep_integer(tokens, "WIDTH", &d.width, name);
-    else if (starts_with(key, "HEIGHT"))
+    } else if (starts_with(key, "HEIGHT")) {
       keep_integer(tokens, "HEIGHT", &d.height, name);
-    else if (starts_with(key, "POINTS"))
+    } else if (starts_with(key, "POINTS")) {
       keep_integer(tokens, "POINTS", &d.points, name);
+    } else {
+      break;  // the header ends (the body, or a line PCL stops at)
+    }
   }
-  malformed(name, "no DATA line (truncated header?)");
+  if (!data_seen) malformed(name, "no DATA line (truncated header?)");
+  return d;
 }
 
 // Bytes of one point: the sum of SIZE x COUNT (a field without SIZE is a 4-byte float, as in
@@ -128,7 +168,7 @@ uint64_t point_bytes(const Declared& d, const std::string& name) {
 }  // namespace
 
 void check_pcd_header(std::string_view head, uint64_t file_size, const std::string& name) {
-  const Declared d = read_declared(head, name);
+  const Declared d = read_declared(head, head.size() >= file_size, name);
   const uint64_t step = point_bytes(d, name);
   uint64_t values = 0;  // per point
   for (size_t k = 0; k < d.fields.size(); ++k)

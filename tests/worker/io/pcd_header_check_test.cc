@@ -36,6 +36,10 @@ TEST(PcdHeaderCheck, SpecificationHeadersPass) {
   EXPECT_NO_THROW(check_pcd_header(kXyz + grid + "DATA binary_compressed\n", 14 + 100, "a"));
   // v0.5: no SIZE, TYPE or COUNT (4-byte floats, one value each); an organized 10 x 10 grid.
   EXPECT_NO_THROW(check_pcd_header("FIELDS x y z\nWIDTH 10\nHEIGHT 10\nDATA binary\n", 1300, "a"));
+  // Lines ended in "\r\n".
+  EXPECT_NO_THROW(check_pcd_header(
+      "FIELDS x y z\r\nSIZE 4 4 4\r\nTYPE F F F\r\nCOUNT 1 1 1\r\nPOINTS 100\r\nDATA binary\r\n",
+      1300, "a"));
   // A field of 33 values (a descriptor) of 8 bytes: 264 bytes a point.
   EXPECT_NO_THROW(check_pcd_header(
       "FIELDS d\nSIZE 8\nTYPE F\nCOUNT 33\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n", 600, "a"));
@@ -82,6 +86,25 @@ TEST(PcdHeaderCheck, FieldsSizesTypesAndCountsFollowTheSpecification) {
   expect_refused("FIELDS x\nCOUNTS 4294967295\n" + tail, 100, {"COUNT value 1"});
   // Comment lines are not read.
   EXPECT_NO_THROW(check_pcd_header("# COUNT 0\nFIELDS x\n" + tail, 100, "a"));
+}
+
+TEST(PcdHeaderCheck, TheHeaderEndsAtTheFirstLineThatIsNotAKeywordNotAtData) {
+  // PCL goes on reading keywords after DATA: a POINTS line there (found by fuzz_scan_file,
+  // "POINTS 2222222222222222979" after "DATA binary_comp...") resized its cloud.
+  const std::string head = "FIELDS x\nDATA binary\nPOINTS 99999\n";
+  expect_refused(head, 200, {"truncated PCD", "99999 points"});
+  expect_refused("FIELDS x\nDATA binary\nDATA ascii\n1\n", 200, {"DATA is given twice"});
+  // The body's first line ends the header: what follows is data, whatever it says.
+  EXPECT_NO_THROW(check_pcd_header("FIELDS x\nPOINTS 2\nDATA ascii\n1\nPOINTS 99999\n", 200, "a"));
+  // A header line before DATA that is not a keyword ends the header too: no DATA then.
+  expect_refused("FIELDS x\nPOINTS 2\nhello\nDATA ascii\n1\n2\n", 200, {"no DATA line"});
+  // Only the first 64 KiB are read: a header still going there is refused, a body is not.
+  std::string long_head = "FIELDS x\nDATA binary\n";
+  while (long_head.size() < kPcdHeaderBytes) long_head += "# a comment line\n";
+  expect_refused(long_head.substr(0, kPcdHeaderBytes), 1 << 20, {"runs past its first 64 KiB"});
+  std::string body = "FIELDS x\nPOINTS 20000\nDATA binary\n";
+  body += std::string(kPcdHeaderBytes - body.size(), '\0');  // no newline in the data read
+  EXPECT_NO_THROW(check_pcd_header(body, 80100, "a"));
 }
 
 }  // namespace
