@@ -1,6 +1,10 @@
 // Writes the fuzzers' seed corpora: small ROS 2 bags of every type keel-sim records, in MCAP
 // (zstd, lz4 and uncompressed chunks; one cut short) and SQLite3, and their messages one per
-// file for the CDR fuzzer (first byte: the type's index in fuzz_decode.h).
+// file for the CDR fuzzer (first byte: the type's index in fuzz_decode.h); and valid Draco
+// files for fuzz_draco (first byte: 0 a point cloud, 1 a mesh), written by Keel's encoder at
+// several compression levels and with each kind of attribute its maps and hulls carry. Debian's
+// Draco is not instrumented, so libFuzzer sees only Keel's side of the decoder: without valid
+// files it would never get past Draco's header.
 //   fuzz_seeds OUT_DIR
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +14,7 @@
 #include "tests/fuzz/fuzz_decode.h"
 #include "tests/sim/bag2_writer.h"
 #include "worker/io/byte_source.h"
+#include "worker/io/draco_codec.h"
 #include "worker/io/mcap_reader.h"
 
 namespace fs = std::filesystem;
@@ -39,6 +44,61 @@ void record(sim::BagSink& bag) {
   bag.close();
 }
 
+void write_seed(const fs::path& path, char selector, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary);
+  f.put(selector);
+  f << bytes;
+}
+
+// A few points and a small mesh, each at compression levels 0 (sequential), 5 and 10 (the
+// kd-tree and edgebreaker coders), with the fields, labels and no-data metadata Keel writes.
+int draco_seeds(const fs::path& dir) {
+  PointCloud part_a, part_b;
+  for (int i = 0; i < 12; ++i) {
+    part_a.xyz.emplace_back(0.1f * i, 0.3f * (i % 4), 0.05f * i * i);
+    part_a.intensity.push_back(static_cast<float>(i));
+    part_b.xyz.emplace_back(-0.2f * i, 1.0f, 0.5f * (i % 3));
+    part_b.intensity.push_back(100.0f - i);
+  }
+  io::PartsAttributes attributes;
+  attributes.label_name = "sensor";
+  attributes.part_labels = {"multibeam", "camera"};
+  std::vector<float> height(24);
+  for (size_t i = 0; i < height.size(); ++i) height[i] = i % 5 == 0 ? -1.0f : 0.01f * i;
+  attributes.fields = {{"height_m", height}};
+  attributes.fields_no_data = {-1.0f};
+
+  TriangleMesh mesh;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) mesh.vertices.emplace_back(c, r, 0.1 * r * c);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      const int v = 4 * r + c;
+      mesh.faces.emplace_back(v, v + 1, v + 5);
+      mesh.faces.emplace_back(v, v + 5, v + 4);
+    }
+  std::vector<float> deviation(mesh.vertices.size());
+  for (size_t i = 0; i < deviation.size(); ++i) deviation[i] = 0.001f * i;
+
+  int n = 0;
+  for (int level : {0, 5, 10}) {
+    io::DracoOptions o;
+    o.compression_level = level;
+    const std::string l = std::to_string(level);
+    write_seed(dir / ("cloud_" + l), 0, io::encode_draco_point_cloud(part_a, {}, o).bytes);
+    write_seed(dir / ("parts_" + l), 0,
+               io::encode_draco_point_cloud({&part_a, &part_b}, o, attributes).bytes);
+    write_seed(dir / ("mesh_" + l), 1,
+               io::encode_draco_mesh(mesh, {{"deviation", deviation}}, o).bytes);
+    n += 3;
+  }
+  io::DracoOptions lossless;
+  lossless.field_bits = 0;
+  write_seed(dir / "mesh_lossless_fields", 1,
+             io::encode_draco_mesh(mesh, {{"deviation", deviation}}, lossless).bytes);
+  return n + 1;
+}
+
 std::string read(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
@@ -53,7 +113,7 @@ int main(int argc, char** argv) {
   }
   const fs::path out = argv[1];
   fs::remove_all(out);
-  for (const char* d : {"mcap", "db3", "cdr", "bags"}) fs::create_directories(out / d);
+  for (const char* d : {"mcap", "db3", "cdr", "draco", "bags"}) fs::create_directories(out / d);
   for (const char* compression : {"zstd", "lz4", "none"}) {
     sim::Bag2Options o;
     o.compression = compression;
@@ -87,6 +147,8 @@ int main(int argc, char** argv) {
     }
   }
   fs::remove_all(out / "bags");
-  std::printf("fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3 in %s\n", n, out.c_str());
+  const int drc = draco_seeds(out / "draco");
+  std::printf("fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files in %s\n", n, drc,
+              out.c_str());
   return 0;
 }

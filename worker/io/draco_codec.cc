@@ -12,6 +12,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <new>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -540,12 +541,12 @@ CloudParts cloud_parts(const std::vector<const PointCloud*>& parts,
         "encode_draco_point_cloud: " + std::to_string(attributes.fields_no_data.size()) +
         " no_data values for " + std::to_string(attributes.fields.size()) + " fields");
   for (size_t f = 0; f < attributes.fields.size(); ++f)
-    out.fields.push_back({attributes.fields[f].name,
-                          {&attributes.fields[f].values},
-                          attributes.fields_no_data.empty() ||
-                                  std::isnan(attributes.fields_no_data[f])
-                              ? std::nullopt
-                              : std::optional<float>(attributes.fields_no_data[f])});
+    out.fields.push_back(
+        {attributes.fields[f].name,
+         {&attributes.fields[f].values},
+         attributes.fields_no_data.empty() || std::isnan(attributes.fields_no_data[f])
+             ? std::nullopt
+             : std::optional<float>(attributes.fields_no_data[f])});
   if (!attributes.label_name.empty()) {
     if (attributes.part_labels.size() != parts.size() || parts.size() > 256)
       throw std::invalid_argument("encode_draco_point_cloud: label '" + attributes.label_name +
@@ -665,14 +666,34 @@ DracoEncoded encode_draco_mesh(const TriangleMesh& mesh,
   return result;
 }
 
-DracoPointCloud decode_draco_point_cloud(const std::string& bytes, const std::string& what) {
-  auto decoded = decode_cloud(bytes);
-  check_status(decoded.status(), what + ": not a valid Draco geometry");
-  const draco::PointCloud& cloud = *decoded.value();
-  return {read_positions(cloud, what), read_fields(cloud)};
+namespace {
+// Draco sizes each attribute from the counts and component sizes the file declares: what the
+// limits let through may still ask for more memory than the machine has.
+template <class Decode>
+auto decoding(const std::string& what, Decode&& decode) {
+  try {
+    return decode();
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(what +
+                             ": Draco could not get the memory the file asks for; the "
+                             "file is corrupt or larger than this machine decodes");
+  }
+}
+}  // namespace
+
+DracoPointCloud decode_draco_point_cloud(const std::string& bytes, const std::string& what,
+                                         const DracoLimits& limits) {
+  check_draco_counts(bytes, what, limits);
+  return decoding(what, [&]() -> DracoPointCloud {
+    auto decoded = decode_cloud(bytes);
+    check_status(decoded.status(), what + ": not a valid Draco geometry");
+    const draco::PointCloud& cloud = *decoded.value();
+    return {read_positions(cloud, what), read_fields(cloud)};
+  });
 }
 
-DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what) {
+DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what,
+                            const DracoLimits& limits) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   const auto type = draco::Decoder::GetEncodedGeometryType(&buffer);
@@ -680,22 +701,25 @@ DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what) {
   if (type.value() != draco::TRIANGULAR_MESH) {
     throw std::runtime_error(what + ": Draco geometry is a point cloud, expected a mesh");
   }
-  draco::Decoder decoder;
-  auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-  check_status(decoded.status(), what + ": not a valid Draco mesh");
-  const draco::Mesh& draco_mesh = *decoded.value();
+  check_draco_counts(bytes, what, limits);
+  return decoding(what, [&] {
+    draco::Decoder decoder;
+    auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
+    check_status(decoded.status(), what + ": not a valid Draco mesh");
+    const draco::Mesh& draco_mesh = *decoded.value();
 
-  DracoMesh result;
-  for (const auto& p : read_positions(draco_mesh, what)) {
-    result.mesh.vertices.push_back(p.cast<double>());
-  }
-  result.mesh.faces.reserve(draco_mesh.num_faces());
-  for (draco::FaceIndex f(0); f < draco_mesh.num_faces(); ++f) {
-    const auto& face = draco_mesh.face(f);
-    result.mesh.faces.emplace_back(face[0].value(), face[1].value(), face[2].value());
-  }
-  result.fields = read_fields(draco_mesh);
-  return result;
+    DracoMesh result;
+    for (const auto& p : read_positions(draco_mesh, what)) {
+      result.mesh.vertices.push_back(p.cast<double>());
+    }
+    result.mesh.faces.reserve(draco_mesh.num_faces());
+    for (draco::FaceIndex f(0); f < draco_mesh.num_faces(); ++f) {
+      const auto& face = draco_mesh.face(f);
+      result.mesh.faces.emplace_back(face[0].value(), face[1].value(), face[2].value());
+    }
+    result.fields = read_fields(draco_mesh);
+    return result;
+  });
 }
 
 void write_draco_file(const std::filesystem::path& path, const std::string& bytes) {

@@ -11,6 +11,7 @@
 
 #include "worker/core/point_cloud.h"
 #include "worker/core/triangle_mesh.h"
+#include "worker/io/draco_header_check.h"
 #include "worker/io/draco_summary.h"
 #include "worker/io/mesh_scalar_field.h"
 
@@ -99,10 +100,14 @@ struct DracoMesh {
   std::vector<ScalarField> fields;
 };
 
-// Throw std::runtime_error naming `what` (a file name, say) when the bytes do not decode.
+// Throw std::runtime_error naming `what` (a file name, say) when the bytes do not decode, when
+// their header declares more than `limits` (draco_header_check.h), or when Draco cannot get the
+// memory the file asks for.
 DracoPointCloud decode_draco_point_cloud(const std::string& bytes,
-                                         const std::string& what = "draco buffer");
-DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what = "draco buffer");
+                                         const std::string& what = "draco buffer",
+                                         const DracoLimits& limits = {});
+DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what = "draco buffer",
+                            const DracoLimits& limits = {});
 
 // Writes bytes to a temporary sibling, then renames it into place; throws naming the file.
 void write_draco_file(const std::filesystem::path& path, const std::string& bytes);

@@ -17,6 +17,7 @@ keel_library(keel_mesh_io
     ${CMAKE_CURRENT_LIST_DIR}/mesh_ply_writer.cc
     ${CMAKE_CURRENT_LIST_DIR}/ply_cloud_writer.cc
     ${CMAKE_CURRENT_LIST_DIR}/draco_codec.cc
+    ${CMAKE_CURRENT_LIST_DIR}/draco_header_check.cc
     ${CMAKE_CURRENT_LIST_DIR}/draco_summary.cc
   DEPS keel_core nlohmann_json::nlohmann_json)
 # Draco stays private: its headers are not in any public header of this library.
