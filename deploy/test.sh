@@ -14,9 +14,10 @@ ctest --test-dir "$build" --output-on-failure -j "$(nproc)" "$@"
 
 # The parsers that read outside data under libFuzzer (clang, ASan + UBSan), in a build of
 # its own (tests/fuzz/CMakeLists.txt): the ROS 2 bag parsers KEEL_FUZZ_SECONDS (30) each with
-# their regression inputs, then eight more harnesses (HTTP ranges, JSON contracts, tar
-# bundles, mission.yaml, TUM/KITTI, CSV, meshes, Draco) KEEL_CI_FUZZ_SECONDS (20) each on
-# seeds from keel-sim and ../shared/data; each ran 8 minutes crash-free on 2026-11-27. Left
+# their regression inputs, then nine more harnesses (HTTP ranges, JSON contracts, tar
+# bundles, mission.yaml, TUM/KITTI, CSV, meshes, Draco, PNG/JPEG images) KEEL_CI_FUZZ_SECONDS
+# (20) each on seeds from keel-sim, fuzz_seeds and ../shared/data; each ran crash-free for at
+# least 4 minutes after its last fix (Draco and images on 2026-11-27, with valid seeds). Left
 # out: scan_file and bag, whose parsers are Debian's PCL and rosbag: 8-minute runs found
 # memory errors inside them (now refused before those libraries read: PCD headers checked,
 # PCD regression inputs replayed by CTest, every bag record's lengths checked), but they still
@@ -32,7 +33,7 @@ if [ "${KEEL_SKIP_FUZZ:-0}" != 1 ]; then
   if [ "$fuzz_seconds" -gt 0 ]; then
     KEEL_FUZZ_BUILD_DIR="$build-fuzz" KEEL_SIM="$build/bin/keel-sim" \
       bash "$here/tests/fuzz/run_fuzzers.sh" "$fuzz_seconds" byte_range json_contracts \
-      bundle_check mission_yaml trajectory csv_streams mesh draco
+      bundle_check mission_yaml trajectory csv_streams mesh draco image
   fi
 fi
 # Issue 15: the tests of everything that reads outside data (server, storage, proto, client,

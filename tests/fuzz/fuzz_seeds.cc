@@ -4,12 +4,15 @@
 // files for fuzz_draco (first byte: 0 a point cloud, 1 a mesh), written by Keel's encoder at
 // several compression levels and with each kind of attribute its maps and hulls carry. Debian's
 // Draco is not instrumented, so libFuzzer sees only Keel's side of the decoder: without valid
-// files it would never get past Draco's header.
+// files it would never get past Draco's header. Likewise small PNG and JPEG images (each pixel
+// format Keel reads) for fuzz_image.
 //   fuzz_seeds OUT_DIR
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "tests/fuzz/fuzz_decode.h"
 #include "tests/sim/bag2_writer.h"
@@ -99,6 +102,31 @@ int draco_seeds(const fs::path& dir) {
   return n + 1;
 }
 
+// Gray, RGB, RGBA and 16-bit PNGs; baseline and progressive JPEGs.
+int image_seeds(const fs::path& dir) {
+  cv::Mat gray(6, 8, CV_8UC1), bgr(6, 8, CV_8UC3), bgra(5, 7, CV_8UC4), deep(4, 5, CV_16UC1);
+  cv::randu(gray, 0, 255);
+  cv::randu(bgr, 0, 255);
+  cv::randu(bgra, 0, 255);
+  cv::randu(deep, 0, 65535);
+  const std::vector<std::tuple<std::string, cv::Mat, std::vector<int>>> images = {
+      {"gray.png", gray, {}},
+      {"rgb.png", bgr, {cv::IMWRITE_PNG_COMPRESSION, 9}},
+      {"rgba.png", bgra, {}},
+      {"deep.png", deep, {}},
+      {"gray.jpg", gray, {cv::IMWRITE_JPEG_QUALITY, 90}},
+      {"rgb.jpg", bgr, {}},
+      {"progressive.jpg", bgr, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}},
+  };
+  for (const auto& [name, mat, params] : images) {
+    std::vector<uint8_t> bytes;
+    cv::imencode(fs::path(name).extension().string(), mat, bytes, params);
+    std::ofstream(dir / name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  }
+  return static_cast<int>(images.size());
+}
+
 std::string read(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
@@ -113,7 +141,7 @@ int main(int argc, char** argv) {
   }
   const fs::path out = argv[1];
   fs::remove_all(out);
-  for (const char* d : {"mcap", "db3", "cdr", "draco", "bags"}) fs::create_directories(out / d);
+  for (const char* d : {"mcap", "db3", "cdr", "draco", "image", "bags"}) fs::create_directories(out / d);
   for (const char* compression : {"zstd", "lz4", "none"}) {
     sim::Bag2Options o;
     o.compression = compression;
@@ -148,7 +176,8 @@ int main(int argc, char** argv) {
   }
   fs::remove_all(out / "bags");
   const int drc = draco_seeds(out / "draco");
-  std::printf("fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files in %s\n", n, drc,
-              out.c_str());
+  const int images = image_seeds(out / "image");
+  std::printf("fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files, %d images in %s\n",
+              n, drc, images, out.c_str());
   return 0;
 }

@@ -3,7 +3,7 @@
 #   bash tests/fuzz/run_fuzzers.sh SECONDS [harness...]
 # Seeds: the regressions in tests/fuzz/regressions/<name>/, a mission written by keel-sim
 # (when $KEEL_SIM is an executable; files sorted to the harness by extension) and the files
-# in ../shared/data when present; for draco, the valid files fuzz_seeds writes. Corpora grow in $KEEL_FUZZ_WORK (default build-fuzz/work).
+# in ../shared/data when present; for draco and image, the valid files fuzz_seeds writes. Corpora grow in $KEEL_FUZZ_WORK (default build-fuzz/work).
 # A crash stops with the harness's report and the input saved as crash-*; copy it into the
 # regressions folder once fixed. Exit status: 0 when no harness crashed.
 set -euo pipefail
@@ -12,7 +12,8 @@ seconds="${1:?usage: run_fuzzers.sh SECONDS [harness...]}"
 shift
 build="${KEEL_FUZZ_BUILD_DIR:-$here/build-fuzz}"
 work="${KEEL_FUZZ_WORK:-$build/work}"
-all=(byte_range json_contracts bundle_check mission_yaml trajectory csv_streams scan_file bag mesh draco)
+all=(byte_range json_contracts bundle_check mission_yaml trajectory csv_streams scan_file bag mesh draco
+  image)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
 export CCACHE_BASEDIR="$here"
@@ -34,13 +35,14 @@ seed_files() {  # name -> files for it (prefixing the selector byte where the ha
   local name="$1" dir="$work/corpus/$name"
   mkdir -p "$dir"
   [ -d "$here/tests/fuzz/regressions/$name" ] && cp -n "$here/tests/fuzz/regressions/$name"/* "$dir"/ 2>/dev/null || true
-  # Valid Draco files from fuzz_seeds (CTest's fuzz/seeds writes them; made here otherwise).
-  if [ "$name" = draco ]; then
-    if [ ! -d "$build/fuzz-corpus/draco" ]; then
+  # Valid Draco files and images from fuzz_seeds (CTest's fuzz/seeds writes them; made here
+  # otherwise).
+  if [ "$name" = draco ] || [ "$name" = image ]; then
+    if [ ! -d "$build/fuzz-corpus/$name" ]; then
       ninja -C "$build" fuzz_seeds >/dev/null
       "$build/tests/fuzz/fuzz_seeds" "$build/fuzz-corpus" >/dev/null
     fi
-    cp -n "$build/fuzz-corpus/draco"/* "$dir"/
+    cp -n "$build/fuzz-corpus/$name"/* "$dir"/
   fi
   local patterns=()
   case "$name" in

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
 
 #include "worker/io/display_path.h"
@@ -18,6 +19,19 @@ namespace {
 
 uint32_t big_endian32(const uint8_t* p) {
   return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+const uint8_t kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+
+// Keel reads PNG and JPEG. cv::imdecode tries every codec OpenCV was built with, by signature
+// (Debian's: DICOM through GDCM, TIFF, OpenEXR, JPEG 2000, WebP...): fuzz_image found GDCM
+// aborting the process on bytes with "DICM" at offset 128. With a PNG or JPEG signature first,
+// imdecode picks libpng or libjpeg, which come before GDCM in its list.
+bool has_png_or_jpeg_signature(const std::vector<uint8_t>& bytes) {
+  static const uint8_t kJpeg[3] = {0xff, 0xd8, 0xff};
+  return (bytes.size() >= sizeof(kPngSignature) &&
+          std::memcmp(bytes.data(), kPngSignature, sizeof(kPngSignature)) == 0) ||
+         (bytes.size() >= sizeof(kJpeg) && std::memcmp(bytes.data(), kJpeg, sizeof(kJpeg)) == 0);
 }
 
 ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
@@ -49,8 +63,7 @@ ImageFrame read_png_info(const std::filesystem::path& path) {
   if (!f) throw IoError(file + ": cannot open");
   uint8_t head[33];
   const size_t n = std::fread(head, 1, sizeof(head), f.get());
-  static const uint8_t kMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (n < 8 || std::memcmp(head, kMagic, 8) != 0) throw IoError(file + ": not a PNG file");
+  if (n < 8 || std::memcmp(head, kPngSignature, 8) != 0) throw IoError(file + ": not a PNG file");
   if (n < 33 || std::memcmp(head + 12, "IHDR", 4) != 0)
     throw IoError(file + ": truncated PNG (no IHDR chunk)");
   ImageFrame frame;
@@ -81,9 +94,19 @@ ImageFrame read_png_info(const std::filesystem::path& path) {
 }
 
 ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source) {
+  if (encoded.empty()) throw IoError(source + ": empty image (0 bytes)");
+  if (!has_png_or_jpeg_signature(encoded))
+    throw IoError(source + ": not a PNG or JPEG image (its first bytes are neither signature)");
+  if (encoded.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+    throw IoError(source + ": image of " + std::to_string(encoded.size()) + " bytes, over 2 GiB");
   const cv::Mat buffer(1, static_cast<int>(encoded.size()), CV_8U,
                        const_cast<uint8_t*>(encoded.data()));
-  const cv::Mat mat = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  cv::Mat mat;
+  try {  // OpenCV throws cv::Exception (not a runtime_error) for what it refuses outright
+    mat = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw IoError(source + ": cannot decode image: " + e.err);
+  }
   if (mat.empty()) throw IoError(source + ": cannot decode image (truncated or not PNG/JPEG)");
   return from_mat(mat, source);
 }
@@ -101,8 +124,13 @@ void write_png(const std::filesystem::path& path, const ImageFrame& image) {
                   ": write_png expects 8-bit gray or RGB pixels of width*height*channels bytes");
   cv::Mat mat(image.height, image.width, image.channels == 1 ? CV_8UC1 : CV_8UC3,
               const_cast<uint8_t*>(image.pixels.data()));
-  cv::Mat out = mat;
-  if (image.channels == 3) cv::cvtColor(mat, out, cv::COLOR_RGB2BGR);
+  // `mat` wraps the caller's pixels: the BGR copy goes to a buffer of its own (converting in
+  // place swapped the caller's red and blue).
+  cv::Mat out;
+  if (image.channels == 3)
+    cv::cvtColor(mat, out, cv::COLOR_RGB2BGR);
+  else
+    out = mat;
   if (!cv::imwrite(file, out)) throw IoError(file + ": cannot write PNG");
 }
 
