@@ -10,29 +10,13 @@
 #include <memory>
 
 #include "worker/io/display_path.h"
+#include "worker/io/image_header.h"
 #include "worker/io/io_error.h"
 #include "worker/io/text_lines.h"
 
 namespace keel::io {
 
 namespace {
-
-uint32_t big_endian32(const uint8_t* p) {
-  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
-}
-
-const uint8_t kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-
-// Keel reads PNG and JPEG. cv::imdecode tries every codec OpenCV was built with, by signature
-// (Debian's: DICOM through GDCM, TIFF, OpenEXR, JPEG 2000, WebP...): fuzz_image found GDCM
-// aborting the process on bytes with "DICM" at offset 128. With a PNG or JPEG signature first,
-// imdecode picks libpng or libjpeg, which come before GDCM in its list.
-bool has_png_or_jpeg_signature(const std::vector<uint8_t>& bytes) {
-  static const uint8_t kJpeg[3] = {0xff, 0xd8, 0xff};
-  return (bytes.size() >= sizeof(kPngSignature) &&
-          std::memcmp(bytes.data(), kPngSignature, sizeof(kPngSignature)) == 0) ||
-         (bytes.size() >= sizeof(kJpeg) && std::memcmp(bytes.data(), kJpeg, sizeof(kJpeg)) == 0);
-}
 
 ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
   cv::Mat mat = decoded;
@@ -63,12 +47,12 @@ ImageFrame read_png_info(const std::filesystem::path& path) {
   if (!f) throw IoError(file + ": cannot open");
   uint8_t head[33];
   const size_t n = std::fread(head, 1, sizeof(head), f.get());
-  if (n < 8 || std::memcmp(head, kPngSignature, 8) != 0) throw IoError(file + ": not a PNG file");
-  if (n < 33 || std::memcmp(head + 12, "IHDR", 4) != 0)
-    throw IoError(file + ": truncated PNG (no IHDR chunk)");
+  if (image_kind(head, n) != ImageKind::kPng) throw IoError(file + ": not a PNG file");
+  const auto size = read_image_size(head, n);
+  if (n < 33 || !size) throw IoError(file + ": truncated PNG (no IHDR chunk)");
   ImageFrame frame;
-  frame.width = static_cast<int>(big_endian32(head + 16));
-  frame.height = static_cast<int>(big_endian32(head + 20));
+  frame.width = static_cast<int>(size->width);
+  frame.height = static_cast<int>(size->height);
   frame.bit_depth = head[24];
   switch (head[25]) {  // PNG colour type
     case 0:
@@ -93,12 +77,28 @@ ImageFrame read_png_info(const std::filesystem::path& path) {
   return frame;
 }
 
-ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source) {
+// Keel reads PNG and JPEG. cv::imdecode tries every codec OpenCV was built with, by signature
+// (Debian's: DICOM through GDCM, TIFF, OpenEXR, JPEG 2000, WebP...): fuzz_image found GDCM
+// aborting the process on bytes with "DICM" at offset 128. With a PNG or JPEG signature first,
+// imdecode picks libpng or libjpeg, which come before GDCM in its list. The size is checked
+// before OpenCV allocates for it (image_header.h).
+ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source,
+                        uint64_t max_pixels) {
   if (encoded.empty()) throw IoError(source + ": empty image (0 bytes)");
-  if (!has_png_or_jpeg_signature(encoded))
+  const auto kind = image_kind(encoded.data(), encoded.size());
+  if (!kind)
     throw IoError(source + ": not a PNG or JPEG image (its first bytes are neither signature)");
   if (encoded.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
     throw IoError(source + ": image of " + std::to_string(encoded.size()) + " bytes, over 2 GiB");
+  const auto size = read_image_size(encoded.data(), encoded.size());
+  if (!size)
+    throw IoError(source + (*kind == ImageKind::kPng
+                                ? ": PNG without its IHDR chunk (truncated?)"
+                                : ": JPEG without a frame header (SOF) before its data"));
+  if (uint64_t{size->width} * size->height > max_pixels)
+    throw IoError(source + ": image of " + std::to_string(size->width) + " x " +
+                  std::to_string(size->height) + " pixels, more than Keel reads (" +
+                  std::to_string(max_pixels) + ")");
   const cv::Mat buffer(1, static_cast<int>(encoded.size()), CV_8U,
                        const_cast<uint8_t*>(encoded.data()));
   cv::Mat mat;
