@@ -4,22 +4,20 @@
 #include "worker/io/image_header.h"
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include <string>
 #include <vector>
 
+#include "tests/worker/io/image_test_util.h"
 #include "worker/io/image_source.h"
 #include "worker/io/io_error.h"
 
 namespace keel::io {
 namespace {
 
-std::vector<uint8_t> encode(const std::string& ext, const cv::Mat& mat,
-                            const std::vector<int>& params = {}) {
-  std::vector<uint8_t> bytes;
-  cv::imencode(ext, mat, bytes, params);
-  return bytes;
+using image_testing::encode;
+std::string refusal(const std::vector<uint8_t>& bytes) {
+  return image_testing::refusal(bytes, "cam0/000002.jpg");
 }
 
 std::optional<ImageSize> size_of(const std::vector<uint8_t>& bytes) {
@@ -31,15 +29,6 @@ size_t frame_marker(const std::vector<uint8_t>& jpeg) {
   for (size_t i = 2; i + 1 < jpeg.size(); ++i)
     if (jpeg[i] == 0xff && (jpeg[i + 1] == 0xc0 || jpeg[i + 1] == 0xc2)) return i;
   return 0;
-}
-
-std::string refusal(const std::vector<uint8_t>& bytes) {
-  try {
-    decode_image(bytes, "cam0/000002.jpg");
-  } catch (const IoError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(ImageHeader, SizesAreTheOnesEncoded) {

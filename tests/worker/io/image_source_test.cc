@@ -4,29 +4,19 @@
 #include "worker/io/image_source.h"
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include <filesystem>
 #include <string>
 
+#include "tests/worker/io/image_test_util.h"
 #include "worker/io/io_error.h"
 
 namespace keel::io {
 namespace {
 
-std::vector<uint8_t> encode(const std::string& ext, const cv::Mat& mat) {
-  std::vector<uint8_t> bytes;
-  cv::imencode(ext, mat, bytes);
-  return bytes;
-}
-
+using image_testing::encode;
 std::string refusal(const std::vector<uint8_t>& bytes) {
-  try {
-    decode_image(bytes, "cam0/000001.png");
-  } catch (const IoError& e) {
-    return e.what();
-  }
-  return "";
+  return image_testing::refusal(bytes, "cam0/000001.png");
 }
 
 TEST(ImageSource, PngPixelsReadBackEqualAndJpegDecodesToItsSize) {
