@@ -324,6 +324,33 @@ void check_status(const draco::Status& status, const std::string& what) {
   if (!status.ok()) throw std::runtime_error(what + ": " + status.error_msg_string());
 }
 
+// One value of `attribute` (`count` components) as floats. Draco's ConvertValue<float> loads a
+// bool attribute's bytes as bool (undefined for bytes other than 0 and 1: fuzz_draco found
+// one) and casts doubles to float unchecked (undefined beyond float's range); those two types
+// are read here, the others through Draco. False when a value lies outside the attribute's
+// buffer or float's range.
+bool values_as_float(const draco::PointAttribute& attribute, draco::AttributeValueIndex index,
+                     int count, float* out) {
+  const auto type = attribute.data_type();
+  if (type != draco::DT_BOOL && type != draco::DT_FLOAT64) {
+    return attribute.ConvertValue<float>(index, static_cast<int8_t>(count), out);
+  }
+  const size_t size = type == draco::DT_BOOL ? 1 : sizeof(double);
+  const uint8_t* address = attribute.GetAddress(index);
+  for (int c = 0; c < count; ++c, address += size) {
+    if (!attribute.IsAddressValid(address + size - 1)) return false;
+    if (type == draco::DT_BOOL) {
+      out[c] = *address != 0 ? 1.0f : 0.0f;
+      continue;
+    }
+    double value;
+    std::memcpy(&value, address, sizeof(value));
+    if (std::isfinite(value) && std::abs(value) > std::numeric_limits<float>::max()) return false;
+    out[c] = static_cast<float>(value);
+  }
+  return true;
+}
+
 std::vector<Eigen::Vector3f> read_positions(const draco::PointCloud& geometry,
                                             const std::string& what) {
   const draco::PointAttribute* position =
@@ -333,12 +360,14 @@ std::vector<Eigen::Vector3f> read_positions(const draco::PointCloud& geometry,
   }
   std::vector<Eigen::Vector3f> positions(geometry.num_points());
   for (draco::PointIndex i(0); i < geometry.num_points(); ++i) {
-    position->ConvertValue<float>(position->mapped_index(i), 3, positions[i.value()].data());
+    if (!values_as_float(*position, position->mapped_index(i), 3, positions[i.value()].data()))
+      throw std::runtime_error(what + ": Draco position " + std::to_string(i.value()) +
+                               " is not a float value");
   }
   return positions;
 }
 
-std::vector<ScalarField> read_fields(const draco::PointCloud& geometry) {
+std::vector<ScalarField> read_fields(const draco::PointCloud& geometry, const std::string& what) {
   std::vector<ScalarField> fields;
   for (int a = 0; a < geometry.num_attributes(); ++a) {
     const draco::PointAttribute* attribute = geometry.attribute(a);
@@ -353,7 +382,9 @@ std::vector<ScalarField> read_fields(const draco::PointCloud& geometry) {
     }
     field.values.resize(geometry.num_points());
     for (draco::PointIndex i(0); i < geometry.num_points(); ++i) {
-      attribute->ConvertValue<float>(attribute->mapped_index(i), 1, &field.values[i.value()]);
+      if (!values_as_float(*attribute, attribute->mapped_index(i), 1, &field.values[i.value()]))
+        throw std::runtime_error(what + ": Draco field '" + field.name + "' value " +
+                                 std::to_string(i.value()) + " is not a float value");
     }
     fields.push_back(std::move(field));
   }
@@ -688,7 +719,7 @@ DracoPointCloud decode_draco_point_cloud(const std::string& bytes, const std::st
     auto decoded = decode_cloud(bytes);
     check_status(decoded.status(), what + ": not a valid Draco geometry");
     const draco::PointCloud& cloud = *decoded.value();
-    return {read_positions(cloud, what), read_fields(cloud)};
+    return {read_positions(cloud, what), read_fields(cloud, what)};
   });
 }
 
@@ -717,7 +748,7 @@ DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what,
       const auto& face = draco_mesh.face(f);
       result.mesh.faces.emplace_back(face[0].value(), face[1].value(), face[2].value());
     }
-    result.fields = read_fields(draco_mesh);
+    result.fields = read_fields(draco_mesh, what);
     return result;
   });
 }

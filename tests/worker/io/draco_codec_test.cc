@@ -286,5 +286,22 @@ TEST(DracoCodec, FilesDecodeWithDracoDecoderCli) {
   EXPECT_EQ(read_draco_file(dir / "hull.drc"), encode_draco_mesh(mesh).bytes);
 }
 
+// fuzz_draco's input: a mesh whose 'deviation' attribute was turned into a bool holding bytes
+// other than 0 and 1. Draco's ConvertValue<float> loads them as bool (undefined behaviour, which
+// the sanitizer build reports); Keel reads each as 0 or 1.
+TEST(DracoCodec, ABoolAttributeHoldingOtherBytesReadsAsZeroOrOne) {
+  std::ifstream in(
+      std::string(KEEL_SOURCE_DIR) + "/tests/fuzz/regressions/draco/bool-attribute-byte-35",
+      std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  bytes.erase(0, 1);  // the harness's selector byte
+  const DracoMesh decoded = decode_draco_mesh(bytes, "hull.drc");
+  const ScalarField* flag = find_field(decoded.fields, "deviation");
+  ASSERT_NE(flag, nullptr);
+  ASSERT_FALSE(flag->values.empty());
+  for (float v : flag->values) EXPECT_TRUE(v == 0.0f || v == 1.0f) << v;
+}
+
 }  // namespace
 }  // namespace keel::io
