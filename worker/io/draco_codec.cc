@@ -714,7 +714,7 @@ auto decoding(const std::string& what, Decode&& decode) {
 
 DracoPointCloud decode_draco_point_cloud(const std::string& bytes, const std::string& what,
                                          const DracoLimits& limits) {
-  check_draco_counts(bytes, what, limits);
+  check_draco_header(bytes, what, limits);
   return decoding(what, [&]() -> DracoPointCloud {
     auto decoded = decode_cloud(bytes);
     check_status(decoded.status(), what + ": not a valid Draco geometry");
@@ -732,7 +732,7 @@ DracoMesh decode_draco_mesh(const std::string& bytes, const std::string& what,
   if (type.value() != draco::TRIANGULAR_MESH) {
     throw std::runtime_error(what + ": Draco geometry is a point cloud, expected a mesh");
   }
-  check_draco_counts(bytes, what, limits);
+  check_draco_header(bytes, what, limits);
   return decoding(what, [&] {
     draco::Decoder decoder;
     auto decoded = decoder.DecodeMeshFromBuffer(&buffer);

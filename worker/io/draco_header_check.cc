@@ -85,8 +85,24 @@ std::optional<DracoDeclaredCounts> read_draco_counts(const std::string& bytes) {
   return std::nullopt;
 }
 
-void check_draco_counts(const std::string& bytes, const std::string& what,
+void check_draco_header(const std::string& bytes, const std::string& what,
                         const DracoLimits& limits) {
+  draco::DecoderBuffer buffer;
+  buffer.Init(bytes.data(), bytes.size());
+  draco::DracoHeader header;
+  if (!draco::PointCloudDecoder::DecodeHeader(&buffer, &header).ok()) return;  // Draco says so
+  const bool mesh = header.encoder_type == draco::TRIANGULAR_MESH;
+  const int major =
+      mesh ? draco::kDracoMeshBitstreamVersionMajor : draco::kDracoPointCloudBitstreamVersionMajor;
+  const int minor =
+      mesh ? draco::kDracoMeshBitstreamVersionMinor : draco::kDracoPointCloudBitstreamVersionMinor;
+  if (header.version_major != major || header.version_minor != minor) {
+    throw std::runtime_error(what + ": Draco bitstream " + std::to_string(header.version_major) +
+                             "." + std::to_string(header.version_minor) + "; Keel reads " +
+                             (mesh ? "meshes" : "point clouds") + " of bitstream " +
+                             std::to_string(major) + "." + std::to_string(minor) +
+                             " (re-encode with a current draco_encoder)");
+  }
   const auto counts = read_draco_counts(bytes);
   if (!counts) return;
   const auto refuse = [&](uint64_t n, const char* items, uint64_t limit) {

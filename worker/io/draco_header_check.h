@@ -35,9 +35,12 @@ struct DracoDeclaredCounts {
 // the decoder then reports that itself, without allocating.
 std::optional<DracoDeclaredCounts> read_draco_counts(const std::string& bytes);
 
-// Throws std::runtime_error naming `what` when the declared points (with split vertices) or
-// faces exceed `limits`.
-void check_draco_counts(const std::string& bytes, const std::string& what,
+// Throws std::runtime_error naming `what` when the bitstream is not the one Debian's Draco
+// (1.5) writes, point clouds 2.3 and meshes 2.2, or the declared points (with split vertices)
+// or faces exceed `limits`. Older bitstreams take Draco's backwards-compatibility paths,
+// which read further counts of their own (fuzz_draco: a 2.2 kd-tree cloud's attribute data
+// declared points again and asked 3.4 GB); Keel's maps and hulls are all 2.3 and 2.2.
+void check_draco_header(const std::string& bytes, const std::string& what,
                         const DracoLimits& limits = {});
 
 }  // namespace keel::io

@@ -154,7 +154,7 @@ DracoSummary summarize_draco(const std::string& bytes, const std::string& what) 
   buffer.Init(bytes.data(), bytes.size());
   const auto type = draco::Decoder::GetEncodedGeometryType(&buffer);
   if (!type.ok()) throw std::runtime_error(what + ": not a valid Draco geometry");
-  check_draco_counts(bytes, what);  // before Draco allocates what the header declares
+  check_draco_header(bytes, what);  // before Draco allocates what the header declares
   draco::Decoder decoder;
   if (type.value() == draco::TRIANGULAR_MESH) {
     auto mesh = decoder.DecodeMeshFromBuffer(&buffer);

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 #include "worker/io/draco_codec.h"
 
@@ -62,7 +64,7 @@ TEST(DracoHeaderCheck, ReadsTheCountsKeelsEncoderWroteForEachMethod) {
     EXPECT_EQ(counts->points, mesh.vertices.size());
     EXPECT_EQ(counts->faces, mesh.faces.size());
     EXPECT_EQ(bytes[kMethodByte], compression == 0 ? 0 : 1);  // sequential, edgebreaker
-    EXPECT_NO_THROW(check_draco_counts(bytes, "hull.drc"));
+    EXPECT_NO_THROW(check_draco_header(bytes, "hull.drc"));
   }
 }
 
@@ -72,10 +74,10 @@ TEST(DracoHeaderCheck, NoBoundRelativeToTheFileSizeWouldBeSoundSoTheLimitIsAbsol
   const std::vector<Eigen::Vector3f> same(200000, Eigen::Vector3f(1.f, 2.f, 3.f));
   const std::string bytes = encode_draco_point_cloud(same, {}, level(10)).bytes;
   EXPECT_GT(double(same.size()) / bytes.size(), 256.0) << bytes.size() << " bytes";
-  EXPECT_NO_THROW(check_draco_counts(bytes, "same.drc"));
+  EXPECT_NO_THROW(check_draco_header(bytes, "same.drc"));
   EXPECT_EQ(decode_draco_point_cloud(bytes, "same.drc").positions.size(), same.size());
   // The limit is the caller's.
-  EXPECT_NO_THROW(check_draco_counts(bytes, "same.drc", {200000, 0}));
+  EXPECT_NO_THROW(check_draco_header(bytes, "same.drc", {200000, 0}));
   EXPECT_THROW(decode_draco_point_cloud(bytes, "same.drc", {199999, 0}), std::runtime_error);
   const TriangleMesh mesh = grid(40);
   const std::string mesh_bytes = encode_draco_mesh(mesh, {}, level(7)).bytes;
@@ -129,7 +131,7 @@ TEST(DracoHeaderCheck, EdgebreakerAndSequentialMeshCountsAreBoundedToo) {
   EXPECT_EQ(counts->faces, 500000000u);
   EXPECT_THROW(decode_draco_mesh(edgebreaker, "hull.drc"), std::runtime_error);
   try {
-    check_draco_counts(edgebreaker, "hull.drc");
+    check_draco_header(edgebreaker, "hull.drc");
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("hull.drc: the Draco header declares 500000000 faces"),
@@ -141,7 +143,33 @@ TEST(DracoHeaderCheck, EdgebreakerAndSequentialMeshCountsAreBoundedToo) {
   counts = read_draco_counts(sequential);
   ASSERT_TRUE(counts);
   EXPECT_EQ(counts->points, 300000000u);
-  EXPECT_THROW(check_draco_counts(sequential, "hull.drc"), std::runtime_error);
+  EXPECT_THROW(check_draco_header(sequential, "hull.drc"), std::runtime_error);
+}
+
+TEST(DracoHeaderCheck, OnlyTheBitstreamsDracoWritesTodayAreRead) {
+  // fuzz_draco's input: a kd-tree cloud of bitstream 2.2, whose attribute data (read by Draco's
+  // backwards-compatibility path) declares its points again.
+  std::ifstream in(
+      std::string(KEEL_SOURCE_DIR) + "/tests/fuzz/regressions/draco/kd-tree-2.2-points-again-3.4GB",
+      std::ios::binary);
+  std::string old((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(old.size(), 1u);
+  old.erase(0, 1);  // the harness's selector byte
+  try {
+    decode_draco_point_cloud(old, "map_0.drc");
+    FAIL() << "decoded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "map_0.drc: Draco bitstream 2.2; Keel reads point clouds of bitstream 2.3 "
+              "(re-encode with a current draco_encoder)");
+  }
+  // What Keel writes passes: point clouds 2.3, meshes 2.2.
+  const std::string cloud = encode_draco_point_cloud(spiral(10), {}, level(7)).bytes;
+  EXPECT_EQ(cloud.substr(5, 2), std::string("\x02\x03"));
+  EXPECT_NO_THROW(check_draco_header(cloud, "map_0.drc"));
+  const std::string mesh = encode_draco_mesh(grid(4), {}, level(7)).bytes;
+  EXPECT_EQ(mesh.substr(5, 2), std::string("\x02\x02"));
+  EXPECT_NO_THROW(check_draco_header(mesh, "hull.drc"));
 }
 
 TEST(DracoHeaderCheck, WhatDracoRefusesItselfIsLeftToIt) {
