@@ -12,6 +12,9 @@
 #include <random>
 #include <set>
 
+#include <draco/compression/encode.h>
+#include <draco/point_cloud/point_cloud.h>
+
 #include "tests/worker/ba/mesh_fixtures.h"
 #include "tests/worker/io/mesh_test_util.h"
 
@@ -284,6 +287,56 @@ TEST(DracoCodec, FilesDecodeWithDracoDecoderCli) {
   EXPECT_EQ(ply_count(hull_ply, "vertex"), static_cast<long>(mesh.vertices.size()));
   EXPECT_EQ(ply_count(hull_ply, "face"), static_cast<long>(mesh.faces.size()));
   EXPECT_EQ(read_draco_file(dir / "hull.drc"), encode_draco_mesh(mesh).bytes);
+}
+
+// A cloud written by another tool with a float64 field: values within float's range are read
+// (rounded to float), a value beyond it is an error naming the file, the field and the point,
+// rather than the undefined double-to-float conversion Draco's ConvertValue<float> would do.
+std::string cloud_with_float64_field(const std::vector<double>& values) {
+  draco::PointCloud cloud;
+  cloud.set_num_points(static_cast<draco::PointIndex::ValueType>(values.size()));
+  draco::GeometryAttribute position;
+  position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false,
+                3 * sizeof(float), 0);
+  const int position_id = cloud.AddAttribute(position, true, values.size());
+  draco::GeometryAttribute field;
+  field.Init(draco::GeometryAttribute::GENERIC, nullptr, 1, draco::DT_FLOAT64, false,
+             sizeof(double), 0);
+  const int field_id = cloud.AddAttribute(field, true, values.size());
+  for (size_t i = 0; i < values.size(); ++i) {
+    const float xyz[3] = {static_cast<float>(i), 0.5f, -1.0f};
+    cloud.attribute(position_id)->SetAttributeValue(draco::AttributeValueIndex(i), xyz);
+    cloud.attribute(field_id)->SetAttributeValue(draco::AttributeValueIndex(i), &values[i]);
+  }
+  draco::Encoder encoder;
+  encoder.SetSpeedOptions(10, 10);  // sequential, no quantization: the doubles are stored as is
+  encoder.SetEncodingMethod(draco::POINT_CLOUD_SEQUENTIAL_ENCODING);
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodePointCloudToBuffer(cloud, &buffer);
+  EXPECT_TRUE(status.ok()) << status.error_msg_string();
+  return std::string(buffer.data(), buffer.size());
+}
+
+TEST(DracoCodec, Float64FieldsReadAsFloatAndOutOfRangeValuesAreRefused) {
+  const std::vector<double> in_range = {0.0, -2.25, 1e30, 3.0e38};
+  const DracoPointCloud decoded =
+      decode_draco_point_cloud(cloud_with_float64_field(in_range), "survey.drc");
+  ASSERT_EQ(decoded.positions.size(), in_range.size());
+  const ScalarField* field = find_field(decoded.fields, "generic_1");
+  ASSERT_NE(field, nullptr);
+  ASSERT_EQ(field->values.size(), in_range.size());
+  for (size_t i = 0; i < in_range.size(); ++i)
+    EXPECT_EQ(field->values[i], static_cast<float>(in_range[i])) << i;
+
+  const std::string beyond = cloud_with_float64_field({1.0, 2.0, 1e300});
+  try {
+    (void)decode_draco_point_cloud(beyond, "survey.drc");
+    FAIL() << "a float64 value of 1e300 was read as a float";
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("survey.drc"), std::string::npos) << message;
+    EXPECT_NE(message.find("'generic_1' value 2"), std::string::npos) << message;
+  }
 }
 
 // fuzz_draco's input: a mesh whose 'deviation' attribute was turned into a bool holding bytes
