@@ -5,7 +5,8 @@
 // several compression levels and with each kind of attribute its maps and hulls carry. Debian's
 // Draco is not instrumented, so libFuzzer sees only Keel's side of the decoder: without valid
 // files it would never get past Draco's header. Likewise small PNG and JPEG images (each pixel
-// format Keel reads) for fuzz_image.
+// format Keel reads) for fuzz_image; and a file of every encoding of the scan, mesh and
+// trajectory formats (file_seeds.h).
 //   fuzz_seeds OUT_DIR
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/fuzz/file_seeds.h"
 #include "tests/fuzz/fuzz_decode.h"
 #include "tests/sim/bag2_writer.h"
 #include "worker/io/byte_source.h"
@@ -122,7 +124,8 @@ int image_seeds(const fs::path& dir) {
     std::vector<uint8_t> bytes;
     cv::imencode(fs::path(name).extension().string(), mat, bytes, params);
     std::ofstream(dir / name, std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size()));
   }
   return static_cast<int>(images.size());
 }
@@ -141,7 +144,9 @@ int main(int argc, char** argv) {
   }
   const fs::path out = argv[1];
   fs::remove_all(out);
-  for (const char* d : {"mcap", "db3", "cdr", "draco", "image", "bags"}) fs::create_directories(out / d);
+  for (const char* d : {"mcap", "db3", "cdr", "draco", "image", "scan_file", "mesh", "trajectory",
+                        "csv_streams", "bundle_check", "bags"})
+    fs::create_directories(out / d);
   for (const char* compression : {"zstd", "lz4", "none"}) {
     sim::Bag2Options o;
     o.compression = compression;
@@ -177,7 +182,20 @@ int main(int argc, char** argv) {
   fs::remove_all(out / "bags");
   const int drc = draco_seeds(out / "draco");
   const int images = image_seeds(out / "image");
-  std::printf("fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files, %d images in %s\n",
-              n, drc, images, out.c_str());
+  int scans = 0, meshes = 0, trajectories = 0, csvs = 0, bundles = 0;
+  try {
+    scans = keel::fuzz::write_scan_seeds(out / "scan_file");
+    meshes = keel::fuzz::write_mesh_seeds(out / "mesh");
+    trajectories = keel::fuzz::write_trajectory_seeds(out / "trajectory");
+    csvs = keel::fuzz::write_csv_seeds(out / "csv_streams");
+    bundles = keel::fuzz::write_bundle_seeds(out / "bundle_check");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fuzz_seeds: %s\n", e.what());
+    return 1;
+  }
+  std::printf(
+      "fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files, %d images, %d scan, "
+      "%d mesh, %d trajectory, %d CSV and %d bundle seeds in %s\n",
+      n, drc, images, scans, meshes, trajectories, csvs, bundles, out.c_str());
   return 0;
 }

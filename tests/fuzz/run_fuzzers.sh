@@ -3,7 +3,9 @@
 #   bash tests/fuzz/run_fuzzers.sh SECONDS [harness...]
 # Seeds: the regressions in tests/fuzz/regressions/<name>/, a mission written by keel-sim
 # (when $KEEL_SIM is an executable; files sorted to the harness by extension) and the files
-# in ../shared/data when present; for draco and image, the valid files fuzz_seeds writes. Corpora grow in $KEEL_FUZZ_WORK (default build-fuzz/work).
+# in ../shared/data when present (up to 25 files of each kind from each), and the valid files
+# fuzz_seeds writes: one of every encoding each reader accepts (tests/fuzz/file_seeds.h).
+# Corpora grow in $KEEL_FUZZ_WORK (default build-fuzz/work).
 # A crash stops with the harness's report and the input saved as crash-*; copy it into the
 # regressions folder once fixed. Exit status: 0 when no harness crashed.
 set -euo pipefail
@@ -31,13 +33,16 @@ if [ -n "${KEEL_SIM:-}" ] && [ -x "$KEEL_SIM" ] && [ ! -d "$seeds/mission" ]; th
   "$KEEL_SIM" --scenario hauv-hull --out "$seeds/hull" --duration 3 >/dev/null 2>&1 || true
   (cd "$seeds/mission" && tar -cf "$seeds/mission.tar" mission.yaml) 2>/dev/null || true
 fi
+seeded_by_fuzz_seeds() {  # the harnesses fuzz_seeds writes a folder for
+  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check) echo yes ;; esac
+}
 seed_files() {  # name -> files for it (prefixing the selector byte where the harness has one)
   local name="$1" dir="$work/corpus/$name"
   mkdir -p "$dir"
   [ -d "$here/tests/fuzz/regressions/$name" ] && cp -n "$here/tests/fuzz/regressions/$name"/* "$dir"/ 2>/dev/null || true
-  # Valid Draco files and images from fuzz_seeds (CTest's fuzz/seeds writes them; made here
+  # Valid files of every encoding from fuzz_seeds (CTest's fuzz/seeds writes them; made here
   # otherwise).
-  if [ "$name" = draco ] || [ "$name" = image ]; then
+  if [ -n "$(seeded_by_fuzz_seeds "$name")" ]; then
     if [ ! -d "$build/fuzz-corpus/$name" ]; then
       ninja -C "$build" fuzz_seeds >/dev/null
       "$build/tests/fuzz/fuzz_seeds" "$build/fuzz-corpus" >/dev/null
@@ -56,22 +61,27 @@ seed_files() {  # name -> files for it (prefixing the selector byte where the ha
     bundle_check) patterns=("*.tar") ;;
     *) patterns=() ;;
   esac
-  local i=0
+  local i=0 pattern source taken f
   for pattern in "${patterns[@]}"; do
-    while IFS= read -r -d '' f; do
-      # A bag is a header and a stream of records: its first 256 KiB is a valid start (a
-      # keel-sim bag is several MB, too large for a seed); other files larger than 1 MiB wait.
-      if [ "$name" != bag ]; then [ "$(stat -c %s "$f")" -le 1048576 ] || continue; fi
-      i=$((i + 1))
-      if [ "$name" = bag ]; then
-        head -c 262144 "$f" >"$dir/seed-$i"
-      elif [ "$name" = mission_yaml ] || [ "$name" = bundle_check ]; then
-        cp "$f" "$dir/seed-$i"
-      else  # every selector value would be a different reader: seed each
-        for s in 0 1 2 3 4 5; do { printf "\\x$s"; cat "$f"; } >"$dir/seed-$i-$s"; done
-      fi
-      [ $i -ge 50 ] && break 2
-    done < <(find "$seeds" "$here/../shared/data" -name "$pattern" -type f -print0 2>/dev/null)
+    for source in "$seeds" "$here/../shared/data"; do
+      taken=0
+      while IFS= read -r -d '' f; do
+        # A bag is a header and a stream of records: its first 256 KiB is a valid start (a
+        # keel-sim bag is several MB, too large for a seed); other files larger than 1 MiB wait.
+        if [ "$name" != bag ]; then [ "$(stat -c %s "$f")" -le 1048576 ] || continue; fi
+        i=$((i + 1))
+        if [ "$name" = bag ]; then
+          head -c 262144 "$f" >"$dir/seed-$i"
+        elif [ "$name" = mission_yaml ] || [ "$name" = bundle_check ]; then
+          cp "$f" "$dir/seed-$i"
+        else  # every selector value would be a different reader: seed each
+          for s in 0 1 2 3 4 5; do { printf "\\x$s"; cat "$f"; } >"$dir/seed-$i-$s"; done
+        fi
+        taken=$((taken + 1))
+        # keel-sim writes hundreds of scans of one encoding: a few of each source are enough
+        [ $taken -ge 25 ] && break
+      done < <(find "$source" -name "$pattern" -type f -print0 2>/dev/null | sort -z)
+    done
   done
   echo "$dir"
 }
