@@ -15,6 +15,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/fuzz/contract_seeds.h"
 #include "tests/fuzz/file_seeds.h"
 #include "tests/fuzz/fuzz_decode.h"
 #include "tests/sim/bag2_writer.h"
@@ -145,7 +146,7 @@ int main(int argc, char** argv) {
   const fs::path out = argv[1];
   fs::remove_all(out);
   for (const char* d : {"mcap", "db3", "cdr", "draco", "image", "scan_file", "mesh", "trajectory",
-                        "csv_streams", "bundle_check", "bags"})
+                        "csv_streams", "bundle_check", "json_contracts", "bags"})
     fs::create_directories(out / d);
   for (const char* compression : {"zstd", "lz4", "none"}) {
     sim::Bag2Options o;
@@ -182,20 +183,21 @@ int main(int argc, char** argv) {
   fs::remove_all(out / "bags");
   const int drc = draco_seeds(out / "draco");
   const int images = image_seeds(out / "image");
-  int scans = 0, meshes = 0, trajectories = 0, csvs = 0, bundles = 0;
+  int scans = 0, meshes = 0, trajectories = 0, csvs = 0, bundles = 0, contracts = 0;
   try {
     scans = keel::fuzz::write_scan_seeds(out / "scan_file");
     meshes = keel::fuzz::write_mesh_seeds(out / "mesh");
     trajectories = keel::fuzz::write_trajectory_seeds(out / "trajectory");
     csvs = keel::fuzz::write_csv_seeds(out / "csv_streams");
     bundles = keel::fuzz::write_bundle_seeds(out / "bundle_check");
+    contracts = keel::fuzz::write_contract_seeds(out / "json_contracts");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "fuzz_seeds: %s\n", e.what());
     return 1;
   }
   std::printf(
       "fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files, %d images, %d scan, "
-      "%d mesh, %d trajectory, %d CSV and %d bundle seeds in %s\n",
-      n, drc, images, scans, meshes, trajectories, csvs, bundles, out.c_str());
+      "%d mesh, %d trajectory, %d CSV, %d bundle and %d JSON contract seeds in %s\n",
+      n, drc, images, scans, meshes, trajectories, csvs, bundles, contracts, out.c_str());
   return 0;
 }

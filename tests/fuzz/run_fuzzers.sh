@@ -34,7 +34,7 @@ if [ -n "${KEEL_SIM:-}" ] && [ -x "$KEEL_SIM" ] && [ ! -d "$seeds/mission" ]; th
   (cd "$seeds/mission" && tar -cf "$seeds/mission.tar" mission.yaml) 2>/dev/null || true
 fi
 seeded_by_fuzz_seeds() {  # the harnesses fuzz_seeds writes a folder for
-  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check) echo yes ;; esac
+  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check | json_contracts) echo yes ;; esac
 }
 seed_files() {  # name -> files for it (prefixing the selector byte where the harness has one)
   local name="$1" dir="$work/corpus/$name"
