@@ -1,12 +1,15 @@
-// Writes the fuzzers' seed corpora: small ROS 2 bags of every type keel-sim records, in MCAP
-// (zstd, lz4 and uncompressed chunks; one cut short) and SQLite3, and their messages one per
-// file for the CDR fuzzer (first byte: the type's index in fuzz_decode.h); and valid Draco
-// files for fuzz_draco (first byte: 0 a point cloud, 1 a mesh), written by Keel's encoder at
-// several compression levels and with each kind of attribute its maps and hulls carry. Debian's
-// Draco is not instrumented, so libFuzzer sees only Keel's side of the decoder: without valid
-// files it would never get past Draco's header. Likewise small PNG and JPEG images (each pixel
-// format Keel reads) for fuzz_image; and a file of every encoding of the scan, mesh and
-// trajectory formats (file_seeds.h).
+// Writes the fuzzers' seed corpora, one folder per harness:
+// - small ROS 2 bags of every type keel-sim records, in MCAP (zstd, lz4 and uncompressed
+//   chunks; one cut short) and SQLite3, and their messages one per file for the CDR fuzzer
+//   (first byte: the type's index in fuzz_decode.h);
+// - the same as whole ROS1 bags with bz2, lz4 and uncompressed chunks;
+// - valid Draco files (first byte: 0 a point cloud, 1 a mesh), written by Keel's encoder at
+//   several compression levels with each kind of attribute its maps and hulls carry, and small
+//   PNG and JPEG images of each pixel format Keel reads. Debian's Draco, libpng and libjpeg are
+//   not instrumented: libFuzzer sees only Keel's side of them, and without valid files would
+//   never get past their headers;
+// - a file of every encoding of the scan, mesh, trajectory, CSV and tar readers (file_seeds.h)
+//   and a valid document of every JSON contract (contract_seeds.h).
 //   fuzz_seeds OUT_DIR
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +22,8 @@
 #include "tests/fuzz/file_seeds.h"
 #include "tests/fuzz/fuzz_decode.h"
 #include "tests/sim/bag2_writer.h"
+#include "tests/sim/bag_writer.h"
+#include "worker/io/bag_reader.h"
 #include "worker/io/byte_source.h"
 #include "worker/io/draco_codec.h"
 #include "worker/io/mcap_reader.h"
@@ -146,7 +151,7 @@ int main(int argc, char** argv) {
   const fs::path out = argv[1];
   fs::remove_all(out);
   for (const char* d : {"mcap", "db3", "cdr", "draco", "image", "scan_file", "mesh", "trajectory",
-                        "csv_streams", "bundle_check", "json_contracts", "bags"})
+                        "csv_streams", "bundle_check", "json_contracts", "bag", "bags"})
     fs::create_directories(out / d);
   for (const char* compression : {"zstd", "lz4", "none"}) {
     sim::Bag2Options o;
@@ -181,6 +186,23 @@ int main(int argc, char** argv) {
     }
   }
   fs::remove_all(out / "bags");
+  // ROS1 bags, whole: rosbag reads a bag's index from its end, so a bag cut short is refused
+  // before any message is read.
+  const std::pair<const char*, sim::BagCompression> ros1[] = {
+      {"none.bag", sim::BagCompression::kNone},
+      {"bz2.bag", sim::BagCompression::kBz2},
+      {"lz4.bag", sim::BagCompression::kLz4}};
+  for (const auto& [name, compression] : ros1) {
+    {
+      sim::BagWriter bag((out / "bag" / name).string(), compression);
+      record(bag);
+    }
+    const io::BagReader check(out / "bag" / name);  // throws when Keel cannot read it
+    if (check.topics().size() != 6) {
+      std::fprintf(stderr, "fuzz_seeds: %s has %zu topics, not 6\n", name, check.topics().size());
+      return 1;
+    }
+  }
   const int drc = draco_seeds(out / "draco");
   const int images = image_seeds(out / "image");
   int scans = 0, meshes = 0, trajectories = 0, csvs = 0, bundles = 0, contracts = 0;
@@ -197,7 +219,7 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "fuzz_seeds: %d CDR messages, 4 MCAP files, 1 .db3, %d Draco files, %d images, %d scan, "
-      "%d mesh, %d trajectory, %d CSV, %d bundle and %d JSON contract seeds in %s\n",
+      "%d mesh, %d trajectory, %d CSV, %d bundle and %d JSON contract seeds, 3 ROS1 bags in %s\n",
       n, drc, images, scans, meshes, trajectories, csvs, bundles, contracts, out.c_str());
   return 0;
 }

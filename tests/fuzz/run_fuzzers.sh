@@ -34,7 +34,7 @@ if [ -n "${KEEL_SIM:-}" ] && [ -x "$KEEL_SIM" ] && [ ! -d "$seeds/mission" ]; th
   (cd "$seeds/mission" && tar -cf "$seeds/mission.tar" mission.yaml) 2>/dev/null || true
 fi
 seeded_by_fuzz_seeds() {  # the harnesses fuzz_seeds writes a folder for
-  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check | json_contracts) echo yes ;; esac
+  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check | json_contracts | bag) echo yes ;; esac
 }
 seed_files() {  # name -> files for it (prefixing the selector byte where the harness has one)
   local name="$1" dir="$work/corpus/$name"
@@ -66,13 +66,11 @@ seed_files() {  # name -> files for it (prefixing the selector byte where the ha
     for source in "$seeds" "$here/../shared/data"; do
       taken=0
       while IFS= read -r -d '' f; do
-        # A bag is a header and a stream of records: its first 256 KiB is a valid start (a
-        # keel-sim bag is several MB, too large for a seed); other files larger than 1 MiB wait.
-        if [ "$name" != bag ]; then [ "$(stat -c %s "$f")" -le 1048576 ] || continue; fi
+        # Files over 1 MiB (keel-sim's bag, KCS.stl) would slow every input: fuzz_seeds writes
+        # small whole ones (a ROS1 bag cut short is refused before a message is read).
+        [ "$(stat -c %s "$f")" -le 1048576 ] || continue
         i=$((i + 1))
-        if [ "$name" = bag ]; then
-          head -c 262144 "$f" >"$dir/seed-$i"
-        elif [ "$name" = mission_yaml ] || [ "$name" = bundle_check ]; then
+        if [ "$name" = mission_yaml ] || [ "$name" = bundle_check ] || [ "$name" = bag ]; then
           cp "$f" "$dir/seed-$i"
         else  # every selector value would be a different reader: seed each
           for s in 0 1 2 3 4 5; do { printf "\\x$s"; cat "$f"; } >"$dir/seed-$i-$s"; done

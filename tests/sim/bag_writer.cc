@@ -43,9 +43,12 @@ struct BagWriter::Impl {
   rosbag::Bag bag;
 };
 
-BagWriter::BagWriter(const std::string& path) : impl_(std::make_unique<Impl>()) {
+BagWriter::BagWriter(const std::string& path, BagCompression compression)
+    : impl_(std::make_unique<Impl>()) {
   try {
     impl_->bag.open(path, rosbag::bagmode::Write);
+    if (compression == BagCompression::kBz2) impl_->bag.setCompression(rosbag::compression::BZ2);
+    if (compression == BagCompression::kLz4) impl_->bag.setCompression(rosbag::compression::LZ4);
   } catch (const std::exception& e) {
     throw std::runtime_error("cannot write bag " + path + ": " + e.what());
   }

@@ -9,9 +9,12 @@
 
 namespace keel::sim {
 
+enum class BagCompression { kNone, kBz2, kLz4 };  // of the bag's chunks
+
 class BagWriter : public BagSink {
  public:
-  explicit BagWriter(const std::string& path);  // throws naming the path
+  // Throws naming the path.
+  explicit BagWriter(const std::string& path, BagCompression compression = BagCompression::kNone);
   ~BagWriter() override;
   BagWriter(const BagWriter&) = delete;
   BagWriter& operator=(const BagWriter&) = delete;

@@ -77,6 +77,18 @@ TimeNs stamp_of(const ros::Time& header_stamp, const rosbag::MessageInstance& m)
   return static_cast<TimeNs>(t.sec) * 1000000000 + t.nsec;
 }
 
+// rosbag gives a null message when the message's connection declares another type or MD5
+// than T: a topic written under two types, or a corrupt connection record (fuzz_bag).
+template <typename T>
+auto instantiate_as(const rosbag::MessageInstance& m, const std::string& what) {
+  auto msg = m.instantiate<T>();
+  if (!msg)
+    throw IoError(what + ": a " + m.getDataType() + " message (MD5 " + m.getMD5Sum() + "), not a " +
+                  ros::message_traits::datatype<T>() + " (MD5 " + ros::message_traits::md5sum<T>() +
+                  ")");
+  return msg;
+}
+
 // Names a message for errors: "<bag>: topic '/imu' message 17".
 std::string where(const BagReader::Impl& impl, const std::string& topic, size_t index) {
   return impl.name() + ": topic '" + topic + "' message " + std::to_string(index);
@@ -152,8 +164,7 @@ class BagScanSource : public ScanSource {
     return read_guarded(*impl_, topic_, index_, [&] {
       if (it_ == view_->end()) return false;
       const std::string what = where(*impl_, topic_, index_);
-      auto msg = it_->instantiate<sensor_msgs::PointCloud2>();
-      if (!msg) throw IoError(what + ": not a sensor_msgs/PointCloud2");
+      auto msg = instantiate_as<sensor_msgs::PointCloud2>(*it_, what);
       const TimeNs t_ns = stamp_of(msg->header.stamp, *it_);
       check_increasing(*impl_, topic_, index_, t_ns, previous_ns_);
       cloud = unpack_point_cloud2(view_of(*msg), t_ns, options_, what);
@@ -197,12 +208,12 @@ class BagImageSource : public ImageSource {
       const std::string what = where(*impl_, topic_, index_);
       TimeNs t_ns = 0;
       if (compressed_) {
-        auto msg = it_->instantiate<sensor_msgs::CompressedImage>();
+        auto msg = instantiate_as<sensor_msgs::CompressedImage>(*it_, what);
         t_ns = stamp_of(msg->header.stamp, *it_);
         frame = decode_image(msg->data, what);  // sizes need decoding for JPEG
         if (!decode) frame.pixels.clear();
       } else {
-        auto msg = it_->instantiate<sensor_msgs::Image>();
+        auto msg = instantiate_as<sensor_msgs::Image>(*it_, what);
         t_ns = stamp_of(msg->header.stamp, *it_);
         frame = unpack_image(view_of(*msg), decode, what);
       }
@@ -260,8 +271,8 @@ ImuSeries BagReader::read_imu(const std::string& topic) const {
   ImuSeries out;
   out.reserve(impl_->topic(topic).messages);
   impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
-    auto msg = m.instantiate<sensor_msgs::Imu>();
     const std::string what = where(*impl_, topic, i);
+    auto msg = instantiate_as<sensor_msgs::Imu>(m, what);
     ImuSample s;
     s.t_ns = stamp_of(msg->header.stamp, m);
     check_increasing(*impl_, topic, i, s.t_ns, out.empty() ? 0 : out.back().t_ns);
@@ -282,17 +293,18 @@ DvlSeries BagReader::read_dvl(const std::string& topic) const {
     const geometry_msgs::Vector3* linear = nullptr;
     geometry_msgs::TwistWithCovarianceStamped::ConstPtr a;
     geometry_msgs::TwistStamped::ConstPtr b;
+    const std::string what = where(*impl_, topic, i);
     if (with_covariance) {
-      a = m.instantiate<geometry_msgs::TwistWithCovarianceStamped>();
+      a = instantiate_as<geometry_msgs::TwistWithCovarianceStamped>(m, what);
       s.t_ns = stamp_of(a->header.stamp, m);
       linear = &a->twist.twist.linear;
     } else {
-      b = m.instantiate<geometry_msgs::TwistStamped>();
+      b = instantiate_as<geometry_msgs::TwistStamped>(m, what);
       s.t_ns = stamp_of(b->header.stamp, m);
       linear = &b->twist.linear;
     }
     check_increasing(*impl_, topic, i, s.t_ns, out.empty() ? 0 : out.back().t_ns);
-    s.velocity_m_s = finite3(*linear, where(*impl_, topic, i) + " twist.linear");
+    s.velocity_m_s = finite3(*linear, what + " twist.linear");
     out.push_back(s);
   });
   return out;
@@ -307,11 +319,11 @@ Trajectory BagReader::read_trajectory(const std::string& topic) const {
     const std::string what = where(*impl_, topic, i);
     StampedPose pose;
     if (odometry) {
-      auto msg = m.instantiate<nav_msgs::Odometry>();
+      auto msg = instantiate_as<nav_msgs::Odometry>(m, what);
       pose.t_ns = stamp_of(msg->header.stamp, m);
       pose.T_world_body = pose_of(msg->pose.pose, what + " pose");
     } else {
-      auto msg = m.instantiate<geometry_msgs::PoseStamped>();
+      auto msg = instantiate_as<geometry_msgs::PoseStamped>(m, what);
       pose.t_ns = stamp_of(msg->header.stamp, m);
       pose.T_world_body = pose_of(msg->pose, what + " pose");
     }
@@ -326,7 +338,7 @@ std::vector<StaticTransform> BagReader::read_static_transforms(const std::string
   if (!has_topic(topic)) return out;
   impl_->expect_type(topic, {"tf2_msgs/TFMessage"});
   impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
-    auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    auto msg = instantiate_as<tf2_msgs::TFMessage>(m, where(*impl_, topic, i));
     for (const auto& t : msg->transforms) {
       const std::string what =
           where(*impl_, topic, i) + " " + t.header.frame_id + "->" + t.child_frame_id;

@@ -178,6 +178,31 @@ TEST(Bag, HeaderFieldLongerThanItsHeaderIsRefused) {
   expect_error([&] { BagReader reader(dir / "noeq.bag"); }, {"noeq.bag", "no '='"});
 }
 
+// A connection whose MD5 is not its type's (a corrupt connection record, or a message
+// definition changed under the same type name): rosbag hands back no message, which fuzz_bag
+// found dereferenced; the error names the bag, topic, message and both MD5s.
+TEST(Bag, MessageWhoseMd5IsNotItsTypesIsNamed) {
+  TempDir dir;
+  MAKE_BAG_OR_SKIP(dir, bag);
+  std::ifstream in(bag, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const std::string pose_md5 = "d3812c3cbc69362b77dc0b19b345f8f5";  // geometry_msgs/PoseStamped
+  const std::string other_md5(32, 'a');
+  size_t replaced = 0;
+  for (size_t at = bytes.find(pose_md5); at != std::string::npos; at = bytes.find(pose_md5, at)) {
+    bytes.replace(at, pose_md5.size(), other_md5);
+    ++replaced;
+  }
+  ASSERT_GT(replaced, 0u);
+  std::ofstream(bag, std::ios::binary | std::ios::trunc) << bytes;
+  BagReader reader(bag);
+  expect_error([&] { (void)reader.read_trajectory("/slam/keyframes"); },
+               {"mission.bag", "topic '/slam/keyframes' message 0",
+                "a geometry_msgs/PoseStamped message (MD5 " + other_md5 + ")",
+                "not a geometry_msgs/PoseStamped (MD5 " + pose_md5 + ")"});
+}
+
 std::string bag_mission_yaml(const std::string& imu_topic) {
   return "keel_mission: 1\nname: bag-mission\nbag: mission.bag\nsensors:\n"
          "  - {name: imu, type: imu, topic: " +
