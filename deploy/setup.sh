@@ -21,6 +21,8 @@ packages=(
   # ROS1 bags without ROS (PLATFORM-NOTES.md)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev
+  # their bz2 and lz4 chunks, decompressed by Keel to check them before rosbag reads them
+  libbz2-dev libroslz4-dev
   # ROS 2 bags (MCAP chunk compression) and their fuzzers (clang 14's libFuzzer)
   libzstd-dev liblz4-dev clang libclang-rt-14-dev
   # tests and benchmarks

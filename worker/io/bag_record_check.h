@@ -1,18 +1,21 @@
-// Bounds checks of a ROS1 bag's records before Debian's rosbag reads them: rosbag's
-// ros::Header::parse trusts each header field's length (a heap-buffer-overflow on a crafted
-// bag, found by fuzz_bag). ROS bag format 2.0 (wiki.ros.org/Bags/Format/2.0): the magic line
-// "#ROSBAG V2.0\n", then records, each a little-endian uint32 header length, the header (fields,
-// each a uint32 length then "name=value"), a uint32 data length and the data. Records inside
-// an uncompressed chunk have the same layout and are checked too; those inside a bz2 or lz4
-// chunk are left to rosbag.
+// Checks of a ROS1 bag's structure before Debian's rosbag reads it: rosbag trusts every length
+// and position the file holds (fuzz_bag found a heap-buffer-overflow in ros::Header::parse and
+// an out-of-bounds read through an index entry). ROS bag format 2.0
+// (wiki.ros.org/Bags/Format/2.0): the magic line "#ROSBAG V2.0\n", then records, each a
+// little-endian uint32 header length, the header (fields, each a uint32 length then
+// "name=value"), a uint32 data length and the data. Checked: every record and header field
+// lies inside its container; each chunk, stored or decompressed as rosbag does (bz2, lz4), is
+// exactly as long as its `size` field (at most 1 GiB) and holds whole records; every index
+// entry points at a record of the chunk before it; every chunk info's chunk_pos at a chunk
+// and the bag header's index_pos at a record. Compressed chunks are so decompressed twice
+// (here and by rosbag).
 #pragma once
 
 #include <filesystem>
 
 namespace keel::io {
 
-// Throws IoError naming the file, the record's byte offset and what is wrong when a record
-// (or a field of its header) runs past its container, or a field has no '='.
+// Throws IoError naming the file, the record's byte offset and what is wrong.
 void check_bag_records(const std::filesystem::path& path);
 
 }  // namespace keel::io

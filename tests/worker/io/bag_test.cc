@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 
 #include "io_test_util.h"
+#include "worker/io/io_error.h"
 #include "worker/io/mission_reader.h"
 
 namespace keel::io {
@@ -19,11 +22,13 @@ using testing::write_text;
 
 constexpr TimeNs kT0 = 1700000000LL * 1000000000LL;
 
-// Writes the test bag with Debian's python (python3-rosbag); empty path when it cannot.
-std::filesystem::path make_bag(const TempDir& dir) {
+// Writes the test bag with Debian's python (python3-rosbag), its chunks stored as they are or
+// compressed ("lz4", "bz2"); empty path when it cannot.
+std::filesystem::path make_bag(const TempDir& dir, const std::string& compression = "none") {
   const auto bag = dir / "mission.bag";
   const std::string command = std::string("/usr/bin/python3 ") + KEEL_SOURCE_DIR +
-                              "/tests/worker/io/make_test_bag.py " + bag.string();
+                              "/tests/worker/io/make_test_bag.py " + bag.string() + " " +
+                              compression;
   if (std::system(command.c_str()) != 0) return {};
   return bag;
 }
@@ -42,9 +47,14 @@ TEST(Bag, ListsTopicsWithTypesAndCounts) {
   EXPECT_EQ(reader.topic("/lidar/points").messages, 5u);
 }
 
-TEST(Bag, ImuDvlAndTrajectoriesFollowTheirClosedForms) {
+// Each compression rosbag writes (Keel decompresses the chunks to check their records first).
+class BagCompressions : public ::testing::TestWithParam<std::string> {};
+INSTANTIATE_TEST_SUITE_P(Bag, BagCompressions, ::testing::Values("none", "lz4", "bz2"));
+
+TEST_P(BagCompressions, ImuDvlAndTrajectoriesFollowTheirClosedForms) {
   TempDir dir;
-  MAKE_BAG_OR_SKIP(dir, bag);
+  const auto bag = make_bag(dir, GetParam());
+  if (bag.empty()) GTEST_SKIP() << "/usr/bin/python3 with python3-rosbag unavailable";
   BagReader reader(bag);
   const ImuSeries imu = reader.read_imu("/imu/data");
   ASSERT_EQ(imu.size(), 200u);
@@ -201,6 +211,93 @@ TEST(Bag, MessageWhoseMd5IsNotItsTypesIsNamed) {
                {"mission.bag", "topic '/slam/keyframes' message 0",
                 "a geometry_msgs/PoseStamped message (MD5 " + other_md5 + ")",
                 "not a geometry_msgs/PoseStamped (MD5 " + pose_md5 + ")"});
+}
+
+// The top-level records of a bag 2.0 file: where each header field's value and each
+// record's data start, to corrupt one in place.
+struct BagRecord {
+  int op = -1;
+  size_t at = 0, data_at = 0;
+  std::map<std::string, size_t> value_at;  // field name -> byte of its value
+};
+std::vector<BagRecord> bag_records(const std::string& bytes) {
+  auto le32 = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, bytes.data() + at, 4);
+    return v;
+  };
+  std::vector<BagRecord> out;
+  for (size_t at = 13; at + 8 <= bytes.size();) {
+    BagRecord r;
+    r.at = at;
+    const uint32_t header_length = le32(at);
+    for (size_t f = at + 4; f < at + 4 + header_length;) {
+      const uint32_t length = le32(f);
+      const std::string field = bytes.substr(f + 4, length);
+      const std::string name = field.substr(0, field.find('='));
+      r.value_at[name] = f + 4 + name.size() + 1;
+      if (name == "op") r.op = static_cast<unsigned char>(field[name.size() + 1]);
+      f += 4 + length;
+    }
+    r.data_at = at + 8 + header_length;
+    out.push_back(r);
+    at = r.data_at + le32(at + 4 + header_length);
+  }
+  return out;
+}
+
+void put_le32(std::string& bytes, size_t at, uint32_t v) { std::memcpy(bytes.data() + at, &v, 4); }
+
+// rosbag reads a record wherever the bag's own positions point: an index entry (its offset
+// in the chunk), a chunk info (chunk_pos) and the bag header (index_pos) must each point at a
+// record, and a chunk must be as long as its `size` says once uncompressed. fuzz_bag's lz4
+// chunk whose index entry pointed 2.7 GB away read rosbag out of bounds (SEGV).
+TEST_P(BagCompressions, PositionsThatPointAtNoRecordAreRefused) {
+  TempDir dir;
+  const auto bag = make_bag(dir, GetParam());
+  if (bag.empty()) GTEST_SKIP() << "/usr/bin/python3 with python3-rosbag unavailable";
+  std::ifstream in(bag, std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const std::vector<BagRecord> records = bag_records(good);
+  const auto first = [&](int op) {
+    for (const BagRecord& r : records)
+      if (r.op == op) return r;
+    ADD_FAILURE() << "no record of op " << op;
+    return BagRecord{};
+  };
+  const auto refused = [&](const std::string& bytes, const std::vector<std::string>& needles) {
+    std::ofstream(bag, std::ios::binary | std::ios::trunc) << bytes;
+    try {
+      BagReader reader(bag);
+      ADD_FAILURE() << "accepted; expected: " << needles.back();
+    } catch (const IoError& e) {
+      for (const std::string& needle : needles)
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
+            << "'" << needle << "' not in: " << e.what();
+    }
+  };
+  std::string bytes = good;
+  const BagRecord index = first(0x04);
+  put_le32(bytes, index.data_at + 8, 2779096209u);  // entry 0: uint64 time, uint32 offset
+  refused(bytes, {"mission.bag", "record at byte " + std::to_string(index.at),
+                  "index entry 0 points at byte 2779096209 of its chunk, where no record starts"});
+
+  bytes = good;
+  const BagRecord chunk = first(0x05);
+  put_le32(bytes, chunk.value_at.at("size"), 1234567);
+  refused(bytes, {"record at byte " + std::to_string(chunk.at), "'size' field says 1234567"});
+
+  bytes = good;
+  const BagRecord info = first(0x06);
+  put_le32(bytes, info.value_at.at("chunk_pos"), 13);  // the bag header: a record, not a chunk
+  refused(bytes, {"chunk_pos 13 is not the start of a chunk"});
+
+  bytes = good;
+  put_le32(bytes, first(0x03).value_at.at("index_pos"), static_cast<uint32_t>(chunk.at + 1));
+  refused(bytes, {"index_pos " + std::to_string(chunk.at + 1) + " is not the start of a record"});
+  std::ofstream(bag, std::ios::binary | std::ios::trunc) << good;
+  EXPECT_NO_THROW(BagReader reader(bag));
 }
 
 std::string bag_mission_yaml(const std::string& imu_topic) {

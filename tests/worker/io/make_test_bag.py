@@ -44,8 +44,9 @@ def png_gray(width, height, value):
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
 
 
-def main(path):
-    with rosbag.Bag(path, "w") as bag:
+def main(path, compression="none"):
+    # Small chunks: several per bag, so chunk positions and index entries are exercised.
+    with rosbag.Bag(path, "w", compression=compression, chunk_threshold=8192) as bag:
         tf = TFMessage()
         for parent, child, xyz, yaw in [("base_link", "lidar", (0, 0, 0.5), 0.0),
                                         ("lidar", "lidar_optical", (0.1, 0, 0), math.pi / 2)]:
@@ -123,4 +124,4 @@ def main(path):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else "none")
