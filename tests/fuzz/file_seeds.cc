@@ -10,12 +10,12 @@
 #include <string>
 
 #include "server/bundle_check.h"
+#include "tests/fuzz/csv_streams.h"
 #include "tests/server/tar_builder.h"
 #include "worker/io/loop_closures.h"
 #include "worker/io/mesh_ply_writer.h"
 #include "worker/io/mesh_reader.h"
 #include "worker/io/scan_file.h"
-#include "worker/io/stream_csv.h"
 #include "worker/io/tum.h"
 #include "worker/main/trajectory_source.h"
 
@@ -190,28 +190,7 @@ const CsvSeed kCsvSeeds[] = {
 
 int write_csv_seeds(const fs::path& dir) {
   const auto read = [](char selector) {
-    return [selector](const fs::path& f) {
-      switch (selector) {
-        case 0:
-          (void)io::read_imu_csv(f);
-          break;
-        case 1:
-          (void)io::read_dvl_csv(f);
-          break;
-        case 2:
-          (void)io::read_dvl_ranges_csv(f);
-          break;
-        case 3:
-          (void)io::read_depth_csv(f);
-          break;
-        case 4:
-          (void)io::read_servo_csv(f);
-          break;
-        default:
-          (void)io::read_loop_closures(f);
-          break;
-      }
-    };
+    return [selector](const fs::path& f) { read_csv_stream(selector, f); };
   };
   int n = 0;
   for (const CsvSeed& seed : kCsvSeeds)
