@@ -20,7 +20,7 @@ ctest --test-dir "$build" --output-on-failure -j "$(nproc)" "$@"
 # least 4 minutes after its last fix (Draco and images on 2026-11-27, with valid seeds). Left
 # out: scan_file and bag, whose parsers are Debian's PCL and rosbag: 8-minute runs found
 # memory errors inside them (now refused before those libraries read: PCD headers checked,
-# PCD regression inputs replayed by CTest, every bag record's lengths checked), but they still
+# PCD regression inputs replayed by CTest, every bag record, chunk and position checked), but they still
 # run inside those uninstrumented libraries, where CI could hit another at random.
 # KEEL_SKIP_FUZZ=1 leaves them all out.
 if [ "${KEEL_SKIP_FUZZ:-0}" != 1 ]; then
