@@ -12,11 +12,14 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <boost/make_shared.hpp>
 #include <map>
+#include <vector>
 
 #include "worker/io/bag_record_check.h"
 #include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
+#include "worker/io/ros1_message_check.h"
 #include "worker/io/ros_messages.h"
 
 namespace keel::io {
@@ -77,15 +80,24 @@ TimeNs stamp_of(const ros::Time& header_stamp, const rosbag::MessageInstance& m)
   return static_cast<TimeNs>(t.sec) * 1000000000 + t.nsec;
 }
 
-// rosbag gives a null message when the message's connection declares another type or MD5
-// than T: a topic written under two types, or a corrupt connection record (fuzz_bag).
+// Decodes a message as T. rosbag's MessageInstance::instantiate would give a null message
+// when the message's connection declares another MD5 than T's (a topic written under two
+// types, or a corrupt connection record: fuzz_bag found it dereferenced), and roscpp's
+// deserializer allocates each array's declared length before it looks whether the message
+// holds it (4 GiB for a PointCloud2 in fuzz_bag); both are checked first, naming the message.
 template <typename T>
-auto instantiate_as(const rosbag::MessageInstance& m, const std::string& what) {
-  auto msg = m.instantiate<T>();
-  if (!msg)
+boost::shared_ptr<T> instantiate_as(const rosbag::MessageInstance& m, const std::string& what) {
+  const std::string md5 = ros::message_traits::md5sum<T>();
+  if (m.getMD5Sum() != md5)
     throw IoError(what + ": a " + m.getDataType() + " message (MD5 " + m.getMD5Sum() + "), not a " +
-                  ros::message_traits::datatype<T>() + " (MD5 " + ros::message_traits::md5sum<T>() +
-                  ")");
+                  ros::message_traits::datatype<T>() + " (MD5 " + md5 + ")");
+  std::vector<uint8_t> bytes(m.size());
+  ros::serialization::OStream out(bytes.data(), static_cast<uint32_t>(bytes.size()));
+  m.write(out);
+  check_ros1_message(ros::message_traits::datatype<T>(), bytes.data(), bytes.size(), what);
+  auto msg = boost::make_shared<T>();
+  ros::serialization::IStream in(bytes.data(), static_cast<uint32_t>(bytes.size()));
+  ros::serialization::deserialize(in, *msg);
   return msg;
 }
 
