@@ -24,7 +24,8 @@ constexpr size_t kMagicSize = sizeof(kMagic) - 1;
 // rather than allocated (rosbag allocates what the header says).
 constexpr uint32_t kMaxChunkBytes = 1u << 30;
 
-constexpr int kOpIndexData = 0x04, kOpChunk = 0x05, kOpChunkInfo = 0x06, kOpBagHeader = 0x03;
+constexpr int kOpIndexData = 0x04, kOpChunk = 0x05, kOpChunkInfo = 0x06, kOpBagHeader = 0x03,
+              kOpConnection = 0x07;
 
 uint32_t le32(const unsigned char* p) {
   return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
@@ -99,12 +100,15 @@ std::vector<uint32_t> check_records(const std::vector<unsigned char>& data,
                     " bytes runs past its chunk");
     const std::vector<unsigned char> header(data.begin() + at + 4,
                                             data.begin() + at + 4 + header_length);
-    (void)read_header(header, where);
+    const RecordHeader h = read_header(header, where);
     const size_t data_at = at + 4 + header_length;
     const uint32_t data_length = le32(data.data() + data_at);
     if (data_length > data.size() - data_at - 4)
       throw IoError(where + ": data of " + std::to_string(data_length) +
                     " bytes runs past its chunk");
+    if (h.op == kOpConnection)
+      (void)read_header({data.begin() + data_at + 4, data.begin() + data_at + 4 + data_length},
+                        where + " (its connection header)");
     starts.push_back(static_cast<uint32_t>(at));
     at = data_at + 4 + data_length;
   }
@@ -206,14 +210,16 @@ void check_bag_records(const std::filesystem::path& path) {
       throw IoError(where + ": data of " + std::to_string(data_length) +
                     " bytes runs past the end of the file");
     record_starts.push_back(at);
-    if (h.op == kOpChunk || h.op == kOpIndexData) {
+    if (h.op == kOpChunk || h.op == kOpIndexData || h.op == kOpConnection) {
       std::vector<unsigned char> data(data_length);
       in.read(reinterpret_cast<char*>(data.data()), data_length);
       if (h.op == kOpChunk) {
         chunk_starts.push_back(at);
         chunk_records = check_records(chunk_data(h, std::move(data), where), where + " (a chunk)");
-      } else {
+      } else if (h.op == kOpIndexData) {
         check_index(h, data, chunk_records ? &*chunk_records : nullptr, where);
+      } else {  // its data is the publisher's connection header, in the same field format
+        (void)read_header(data, where + " (its connection header)");
       }
     } else {
       in.seekg(static_cast<std::streamoff>(data_length), std::ios::cur);

@@ -296,6 +296,15 @@ TEST_P(BagCompressions, PositionsThatPointAtNoRecordAreRefused) {
   bytes = good;
   put_le32(bytes, first(0x03).value_at.at("index_pos"), static_cast<uint32_t>(chunk.at + 1));
   refused(bytes, {"index_pos " + std::to_string(chunk.at + 1) + " is not the start of a record"});
+  // A connection record's data is the publisher's connection header, parsed by
+  // ros::Header::parse as trustingly (fuzz_bag: heap-buffer-overflow): its first field's length.
+  bytes = good;
+  BagRecord connection;
+  for (const BagRecord& r : records)
+    if (r.op == 0x07) connection = r;  // the last: in the index section, after the chunks
+  put_le32(bytes, connection.data_at, 16473);
+  refused(bytes, {"record at byte " + std::to_string(connection.at) + " (its connection header)",
+                  "a header field of 16473 bytes runs past its header"});
   std::ofstream(bag, std::ios::binary | std::ios::trunc) << good;
   EXPECT_NO_THROW(BagReader reader(bag));
 }
