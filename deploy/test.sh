@@ -17,7 +17,7 @@ ctest --test-dir "$build" --output-on-failure -j "$(nproc)" "$@"
 # their regression inputs, then nine more harnesses (HTTP ranges, JSON contracts, tar
 # bundles, mission.yaml, TUM/KITTI, CSV, meshes, Draco, PNG/JPEG images) KEEL_CI_FUZZ_SECONDS
 # (20) each on seeds from keel-sim, fuzz_seeds and ../shared/data; each ran crash-free for at
-# least 4 minutes after its last fix (Draco and images on 2026-11-27, with valid seeds). Left
+# least 10 CPU-minutes on fuzz_seeds' valid inputs of every format (2026-11-27/28). Left
 # out: scan_file and bag, whose parsers are Debian's PCL and rosbag: 8-minute runs found
 # memory errors inside them (now refused before those libraries read: PCD headers checked,
 # PCD regression inputs replayed by CTest, every bag record, chunk and position checked), but they still
