@@ -2,7 +2,9 @@
 // parsed by ply_header.h; the vertex records of binary PLY are already packed, so they are
 // unpacked in place.
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <string_view>
 #include <vector>
 
@@ -126,6 +128,36 @@ PlyCloudLayout parse_layout(std::string_view bytes, const std::string& file) {
   return layout;
 }
 
+template <typename T>
+bool in_range(double value) {  // false for NaN too
+  return value >= static_cast<double>(std::numeric_limits<T>::lowest()) &&
+         value <= static_cast<double>(std::numeric_limits<T>::max());
+}
+
+// Whether an ascii value converts to its property's type: NaN or an out-of-range value into
+// an integer, or a finite double beyond float's range into a float, is undefined behaviour
+// (fuzz_scan_file: 'nan' for a uchar property).
+bool representable(FieldType type, double value) {
+  switch (type) {
+    case FieldType::kInt8:
+      return in_range<int8_t>(value);
+    case FieldType::kUint8:
+      return in_range<uint8_t>(value);
+    case FieldType::kInt16:
+      return in_range<int16_t>(value);
+    case FieldType::kUint16:
+      return in_range<uint16_t>(value);
+    case FieldType::kInt32:
+      return in_range<int32_t>(value);
+    case FieldType::kUint32:
+      return in_range<uint32_t>(value);
+    case FieldType::kFloat32:
+      return !std::isfinite(value) || in_range<float>(value);
+    default:
+      return true;
+  }
+}
+
 // Parses `count` ascii vertex lines into packed records; `position` and `line_number` end
 // after the last vertex line.
 std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLayout& h,
@@ -158,6 +190,10 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLa
       if (!parse_double(w[f], value))
         throw IoError(file + ":" + std::to_string(line_number) + ": property '" + field.name +
                       "': expected a number, got '" + std::string(w[f]) + "'");
+      if (!representable(field.type, value))
+        throw IoError(file + ":" + std::to_string(line_number) + ": property '" + field.name +
+                      "': '" + std::string(w[f]) + "' is not a " + to_string(field.type) +
+                      " value");
       uint8_t* p = record + field.offset;
       switch (field.type) {
         case FieldType::kInt8: {

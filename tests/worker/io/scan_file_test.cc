@@ -364,6 +364,25 @@ TEST(ScanFile, PlyDataBeyondTheHeaderIsNamed) {
                {"bf_short.ply", "truncated PLY", "element 'face' item 1 of 2"});
 }
 
+// An ascii PLY value its property's type cannot hold is refused naming the file, line and
+// property (converting it was undefined behaviour: fuzz_scan_file, 'nan' for a uchar).
+TEST(ScanFile, AsciiPlyValueOutsideItsTypeIsRefused) {
+  TempDir dir;
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+      "property float z\nproperty uchar ring\nend_header\n";
+  write_text(dir / "a.ply", header + "0 0 0 1\n1 1 1 nan\n");
+  expect_error([&] { (void)read_scan_file(dir / "a.ply", 0); },
+               {"a.ply:10", "property 'ring'", "'nan' is not a"});
+  write_text(dir / "b.ply", header + "0 0 0 256\n");
+  expect_error([&] { (void)read_scan_file(dir / "b.ply", 0); }, {"b.ply:9", "'256' is not a"});
+  write_text(dir / "c.ply", header + "1e300 0 0 1\n");
+  expect_error([&] { (void)read_scan_file(dir / "c.ply", 0); },
+               {"c.ply:9", "property 'x'", "'1e300' is not a"});
+  write_text(dir / "d.ply", header + "0.5 -2 nan 255\n0 0 0 0\n");  // NaN stays NaN in a float
+  EXPECT_NO_THROW((void)read_scan_file(dir / "d.ply", 0, ScanReadOptions{{}, 0.0, true, ""}));
+}
+
 TEST(ScanFile, ScanFolderReaderStreamsInIndexOrder) {
   TempDir dir;
   std::vector<IndexEntry> index;
