@@ -246,7 +246,9 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLa
 // file to be blank: data the header does not declare means header and data disagree.
 void check_ascii_rest(const std::string& bytes, const PlyHeader& h, const std::string& file,
                       size_t position, size_t line_number) {
-  mesh_detail::LineCursor lines(std::string_view(bytes).substr(position), line_number + 1);
+  // position is one past the end when the last vertex line has no newline.
+  mesh_detail::LineCursor lines(std::string_view(bytes).substr(std::min(position, bytes.size())),
+                                line_number + 1);
   std::string_view line;
   for (size_t e = 1; e < h.elements.size(); ++e) {
     const PlyElement& element = h.elements[e];

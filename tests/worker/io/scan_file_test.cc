@@ -381,6 +381,9 @@ TEST(ScanFile, AsciiPlyValueOutsideItsTypeIsRefused) {
                {"c.ply:9", "property 'x'", "'1e300' is not a"});
   write_text(dir / "d.ply", header + "0.5 -2 nan 255\n0 0 0 0\n");  // NaN stays NaN in a float
   EXPECT_NO_THROW((void)read_scan_file(dir / "d.ply", 0, ScanReadOptions{{}, 0.0, true, ""}));
+  // The last vertex line without its newline (fuzz_scan_file: std::out_of_range, not an IoError).
+  write_text(dir / "e.ply", header + "0 0 0 1\n1 2 3 4");
+  EXPECT_EQ(read_scan_file(dir / "e.ply", 0).size(), 2u);
 }
 
 TEST(ScanFile, ScanFolderReaderStreamsInIndexOrder) {
