@@ -120,10 +120,10 @@ class DiskFull : public ::testing::Test {
     if (mounted_) ::umount2(data_.c_str(), MNT_DETACH);
   }
 
-  void start(int64_t reserve_bytes) {
+  void start(int64_t reserve_bytes, int workers = 0) {
     stop();
     cluster_ = std::make_unique<Cluster>(
-        root_.path(), /*workers=*/0, 0,
+        root_.path(), workers, 0,
         std::vector<std::string>{"--min-free-bytes", std::to_string(reserve_bytes)});
     client::ClientConfig config;
     config.url = cluster_->url();
@@ -284,6 +284,28 @@ TEST_F(DiskFull, UploadsAreRefusedWith507BeforeTheDiskIsFullNothingIsCorruptAndT
   expect_reads_served();
   stop();
   expect_nothing_corrupt();
+}
+
+// A job whose products the server cannot store fails, saying so in the server's words: the
+// worker's upload of its artifacts is answered 507, which is no reason to abandon the lease
+// (the job would then fail as "lease expired 3 times", naming nothing: CI saw it once, when
+// another test had filled the machine's disk).
+TEST_F(DiskFull, AJobWhoseProductsCannotBeStoredFailsNamingTheServersDisk) {
+  const fs::path mission = root_.path() / "mission";  // not on the small disk
+  simulate_mission(mission, 3, "imu,dvl,depth");
+  start(kReserveBytes);
+  const RunResult submitted =
+      cluster_->keel({"submit", mission.string(), "--stages", "ingest", "-q"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
+  const std::string job = api_->list_jobs().at(0).id;
+  // The whole disk kept in reserve: the worker gets the mission, runs, and cannot upload.
+  start(kFsBytes, /*workers=*/1);
+  const proto::Job done = wait_job(
+      *api_, job, [](const proto::Job& j) { return proto::is_terminal(j.state); }, 120);
+  ASSERT_EQ(done.state, proto::JobState::kFailed) << proto::to_string(done.state);
+  EXPECT_NE(done.error.find("the server's disk has"), std::string::npos) << done.error;
+  EXPECT_NE(done.error.find("in reserve"), std::string::npos) << done.error;
+  EXPECT_EQ(done.attempts, 1) << done.error;
 }
 
 }  // namespace

@@ -18,8 +18,13 @@ namespace fs = std::filesystem;
 namespace {
 
 // Errors of the server or the link, not of the job: the job is abandoned and its lease
-// expires, so it is retried later (by this or another worker).
+// expires, so it is retried later (by this or another worker). Not 507 insufficient_storage:
+// a server that cannot store the products refuses every attempt alike, and three expired
+// leases would fail the job as "lease expired 3 times", hiding the server's own words (which
+// say how full its disk is). The job fails with them; the user reprocesses it once space is
+// freed.
 bool is_server_trouble(const client::ApiCallError& e) {
+  if (e.status() == 507) return false;
   return e.status() == 0 || e.status() == 408 || e.status() == 409 || e.status() == 429 ||
          e.status() >= 500;
 }
