@@ -9,7 +9,7 @@
 #include "client/api_client.h"
 #include "client/api_client_connection.h"
 #include "client/http_ranges.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 
 namespace keel::client {
 
@@ -155,7 +155,7 @@ void ApiClient::download(const std::string& target, const fs::path& destination,
     }
   }
   if (!expected_sha256.empty()) {
-    const std::string actual = storage::sha256_file(part);
+    const std::string actual = keel::sha256_file(part);
     if (actual != expected_sha256) {
       fs::remove(part);  // a corrupt part must not be resumed
       throw ApiCallError(0, "sha256_mismatch",

@@ -17,7 +17,7 @@
 #include "client/api_client_connection.h"
 #include "client/http_ranges.h"
 #include "proto/resources.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 
 namespace keel::client {
 
@@ -147,7 +147,7 @@ std::string ApiClient::upload_file(const fs::path& file, const fs::path& state_d
   if (!known_sha256.empty() && !proto::is_sha256_hex(known_sha256))
     throw std::invalid_argument("upload_file: known_sha256 '" + known_sha256 +
                                 "' is not 64 lowercase hex digits");
-  const std::string sha = known_sha256.empty() ? storage::sha256_file(file) : known_sha256;
+  const std::string sha = known_sha256.empty() ? keel::sha256_file(file) : known_sha256;
   fs::create_directories(state_dir, ec);
   if (ec) throw file_error(state_dir, "cannot create upload state folder: " + ec.message());
   const fs::path state_file = state_dir / ("upload-" + sha + "-" + std::to_string(size) + ".id");

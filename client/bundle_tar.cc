@@ -9,7 +9,7 @@
 #include <fstream>
 #include <memory>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 
 namespace keel::client {
 
@@ -152,7 +152,7 @@ fs::path write_bundle_to_cache(const fs::path& folder, const fs::path& cache_dir
     fs::remove(tmp, ec);
     throw;
   }
-  const fs::path final_path = cache_dir / (storage::sha256_file(tmp) + ".tar");
+  const fs::path final_path = cache_dir / (keel::sha256_file(tmp) + ".tar");
   fs::rename(tmp, final_path, ec);
   if (ec) throw LocalFileError(final_path.string() + ": cannot write: " + ec.message());
   return final_path;

@@ -7,7 +7,7 @@
 #include "client/bundle_tar.h"
 #include "client/local_file_error.h"
 #include "client/progress_bar.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 
 namespace keel::client {
 
@@ -48,7 +48,7 @@ std::string submit_idempotency_key(const std::string& bundle_blob, const std::st
                                    const nlohmann::json& options) {
   const nlohmann::json key = {
       {"bundle", bundle_blob}, {"cad", cad_blob}, {"stages", stages}, {"options", options}};
-  return storage::sha256_bytes(key.dump());  // nlohmann sorts object keys: a canonical form
+  return keel::sha256_bytes(key.dump());  // nlohmann sorts object keys: a canonical form
 }
 
 std::string mission_name_of(const fs::path& mission_dir) {

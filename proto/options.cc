@@ -3,11 +3,14 @@
 #include <algorithm>
 
 #include "proto/contract_error.h"
+#include "proto/stages.h"
 
 namespace keel::proto {
 
 const std::vector<std::string>& known_stages() {
-  static const std::vector<std::string> stages = {"ingest", "refine", "map", "ba", "inspect", "compare"};
+#define KEEL_STAGE_NAME(name) #name,
+  static const std::vector<std::string> stages = {KEEL_STAGES(KEEL_STAGE_NAME)};
+#undef KEEL_STAGE_NAME
   return stages;
 }
 

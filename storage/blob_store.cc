@@ -4,9 +4,9 @@
 #include <system_error>
 
 #include "proto/resources.h"
-#include "storage/durable_file.h"
+#include "core/durable_file.h"
 #include "storage/ids.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 
 namespace keel::storage {
 

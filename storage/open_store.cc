@@ -2,7 +2,7 @@
 
 #include <regex>
 
-#include "storage/durable_file.h"
+#include "core/durable_file.h"
 #include "storage/ids.h"
 #include "storage/migrations.h"
 #include "storage/pg_connection.h"

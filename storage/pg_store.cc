@@ -14,7 +14,7 @@
 #include "storage/open_store.h"
 #include "storage/pg_migrations.h"
 #include "storage/pg_queries.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "storage/store_rules.h"
 
 namespace keel::storage {

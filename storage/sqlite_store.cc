@@ -12,7 +12,7 @@
 
 #include "storage/ids.h"
 #include "storage/migrations.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "storage/sqlite_queries.h"
 #include "storage/store_rules.h"
 

@@ -2,7 +2,7 @@
 
 #include <system_error>
 
-#include "storage/durable_file.h"
+#include "core/durable_file.h"
 
 namespace keel::storage {
 

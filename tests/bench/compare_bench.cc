@@ -24,10 +24,10 @@
 #include <map>
 
 #include "proto/options.h"
-#include "worker/io/draco_codec.h"
-#include "worker/pipeline/compare_stage.h"
+#include "worker/io/draco/draco_codec.h"
+#include "worker/stages/compare/stage.h"
 #include "worker/pipeline/job_runner.h"
-#include "worker/pipeline/map_stage.h"
+#include "worker/stages/map/stage.h"
 
 namespace {
 

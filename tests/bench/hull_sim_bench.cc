@@ -27,10 +27,10 @@
 
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
-#include "worker/core/robust_spread.h"
+#include "core/robust_spread.h"
 #include "worker/io/yaml_json.h"
-#include "worker/pipeline/ba_stage.h"
-#include "worker/pipeline/inspect_stage.h"
+#include "worker/stages/ba/stage.h"
+#include "worker/stages/inspect/stage.h"
 
 namespace {
 

@@ -17,9 +17,9 @@
 
 #include "tests/sim/bag2_writer.h"
 
-#include "worker/io/bag_reader.h"
-#include "worker/io/rosbag2_reader.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/bag/bag_reader.h"
+#include "worker/io/bag/rosbag2_reader.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/scan_source.h"
 #include "worker/io/stream_csv.h"
 

@@ -33,10 +33,10 @@
 
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/tum.h"
 #include "worker/mapping/map_metrics.h"
-#include "worker/pipeline/map_stage.h"
+#include "worker/stages/map/stage.h"
 
 namespace {
 

@@ -24,8 +24,8 @@
 #include <string>
 
 #include "worker/mapping/filter_chain.h"
-#include "worker/pipeline/tiled_maps.h"
-#include "worker/pipeline/tiled_outputs.h"
+#include "worker/stages/map/tiled_maps.h"
+#include "worker/stages/map/tiled_outputs.h"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <random>
 
 #include "tests/worker/ba/mesh_fixtures.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 
 namespace {
 
@@ -18,8 +18,8 @@ const keel::TriangleMesh& hull() {
   return mesh;
 }
 
-const keel::ba::MeshQuery& hull_query() {
-  static const keel::ba::MeshQuery query(hull());
+const keel::MeshQuery& hull_query() {
+  static const keel::MeshQuery query(hull());
   return query;
 }
 
@@ -37,15 +37,15 @@ std::vector<Eigen::Vector3d> near_surface_points(size_t n, double sigma_m = 0.5)
 }
 
 // Beams from 2 m off the hull towards it, like a DVL on an inspection vehicle.
-std::vector<keel::ba::Ray> beams(size_t n) {
+std::vector<keel::Ray> beams(size_t n) {
   std::mt19937 rng(2);
   std::uniform_int_distribution<size_t> vertex(0, hull().vertices.size() - 1);
   std::normal_distribution<double> noise(0, 0.3);
-  std::vector<keel::ba::Ray> rays;
+  std::vector<keel::Ray> rays;
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d target = hull().vertices[vertex(rng)];
     const Eigen::Vector3d origin = target * (1.0 + 2.0 / target.norm());
-    keel::ba::Ray ray;
+    keel::Ray ray;
     ray.origin = origin;
     ray.direction = target - origin + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     ray.max_range_m = 30.0;
@@ -56,7 +56,7 @@ std::vector<keel::ba::Ray> beams(size_t n) {
 
 void BM_Build(benchmark::State& state) {
   for (auto _ : state) {
-    keel::ba::MeshQuery query(hull());
+    keel::MeshQuery query(hull());
     benchmark::DoNotOptimize(query.num_faces());
   }
   state.counters["triangles"] = static_cast<double>(hull().faces.size());
@@ -96,7 +96,7 @@ void BM_SignedDistanceMoving(benchmark::State& state) {
 void BM_SignedDistanceMovingLocal(benchmark::State& state) {
   const auto& query = hull_query();
   auto points = near_surface_points(10000, 0.02);
-  std::vector<keel::ba::LocalClosestPoint> local(points.size(), keel::ba::LocalClosestPoint(query));
+  std::vector<keel::LocalClosestPoint> local(points.size(), keel::LocalClosestPoint(query));
   for (size_t k = 0; k < points.size(); ++k) local[k].closest_point(points[k]);
   std::mt19937 rng(3);
   std::normal_distribution<double> step(0.0, 1e-6 * state.range(0));

@@ -26,7 +26,7 @@
 
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
-#include "worker/pipeline/refine_stage.h"
+#include "worker/stages/refine/stage.h"
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "fake_http_server.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "temp_dir.h"
 
 namespace keel::client {
@@ -211,7 +211,7 @@ struct UploadScript {
       return FakeReply{http_reply(200, upload_json())};
     }
     if (method == "POST" && target == "/v1/uploads/u1/complete") {
-      const std::string sha = storage::sha256_bytes(committed);
+      const std::string sha = keel::sha256_bytes(committed);
       return FakeReply{http_reply(
           200, R"({"blob":")" + sha + R"(","size":)" + std::to_string(committed.size()) + "}")};
     }
@@ -240,7 +240,7 @@ TEST(ApiClientUpload, SendsChunksWithContentRangesAndCompletes) {
     const std::string blob =
         client.upload_file(dir.path() / "f.bin", dir.path() / "state",
                            [&](int64_t d, int64_t t) { reports.emplace_back(d, t); });
-    EXPECT_EQ(blob, storage::sha256_bytes(bytes));
+    EXPECT_EQ(blob, keel::sha256_bytes(bytes));
     EXPECT_EQ(client.stats().upload_body_bytes, 10);
   }
   EXPECT_EQ(script.committed, bytes);
@@ -268,7 +268,7 @@ TEST(ApiClientUpload, DroppedLinkAndOffsetMismatchResumeAtTheServersOffset) {
     config.chunk_bytes = 256;
     ApiClient client(config);
     EXPECT_EQ(client.upload_file(dir.path() / "f.bin", dir.path() / "state"),
-              storage::sha256_bytes(bytes));
+              keel::sha256_bytes(bytes));
   }
   EXPECT_EQ(script.committed, bytes);
   EXPECT_EQ(
@@ -326,7 +326,7 @@ TEST(ApiClientDownload, CutLinkResumesWithRangeFromThePartSize) {
   int64_t last_done = 0;
   {
     ApiClient client(config_for(server));
-    client.download("/v1/blobs/x", dir.path() / "out.bin", storage::sha256_bytes(bytes),
+    client.download("/v1/blobs/x", dir.path() / "out.bin", keel::sha256_bytes(bytes),
                     [&](int64_t done, int64_t) { last_done = done; });
     EXPECT_EQ(client.stats().download_body_bytes, static_cast<int64_t>(bytes.size()));
   }

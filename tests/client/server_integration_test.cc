@@ -11,7 +11,7 @@
 #include "client/api_client.h"
 #include "client/submit.h"
 #include "server_process.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "temp_dir.h"
 
 namespace keel::client {
@@ -98,7 +98,7 @@ TEST_F(ServerIntegration, UploadResumesAtTheServersOffsetAfterADrop) {
   std::vector<int64_t> reports;
   const std::string blob = client.upload_file(
       dir_.path() / "big.bin", state, [&](int64_t done, int64_t) { reports.push_back(done); });
-  EXPECT_EQ(blob, storage::sha256_bytes(bytes));
+  EXPECT_EQ(blob, keel::sha256_bytes(bytes));
   EXPECT_EQ(client.stats().upload_body_bytes, static_cast<int64_t>(bytes.size()) - 8 * chunk)
       << "completed bytes must not be sent again";
   ASSERT_FALSE(reports.empty());
@@ -187,7 +187,7 @@ TEST_F(ServerIntegration, ClientAndWorkerCallsRoundTrip) {
 
   const auto artifacts = client.list_artifacts(first.job.id);
   ASSERT_EQ(artifacts.size(), 1u);
-  EXPECT_EQ(artifacts[0].sha256, storage::sha256_bytes(report));
+  EXPECT_EQ(artifacts[0].sha256, keel::sha256_bytes(report));
   client.download("/v1/artifacts/" + artifacts[0].id, dir_.path() / "got" / "report.json",
                   artifacts[0].sha256);
   EXPECT_EQ(read_file(dir_.path() / "got" / "report.json"), report);

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <regex>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "tests/e2e/cluster.h"
 
 namespace keel::e2e {

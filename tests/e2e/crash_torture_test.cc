@@ -15,7 +15,7 @@
 #include <set>
 #include <thread>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "storage/sqlite_db.h"
 #include "tests/e2e/cluster.h"
 
@@ -54,7 +54,7 @@ int check_folder(const fs::path& data) {
   for (const auto& entry : fs::recursive_directory_iterator(data / "blobs")) {
     if (!entry.is_regular_file()) continue;
     ++blobs;
-    EXPECT_EQ(storage::sha256_file(entry.path()), entry.path().filename().string())
+    EXPECT_EQ(keel::sha256_file(entry.path()), entry.path().filename().string())
         << entry.path() << " holds other bytes than its name says";
   }
   return blobs;
@@ -129,7 +129,7 @@ TEST(CrashTorture, KillNineAtRandomWhileClientsUploadAndWorkersRunJobs) {
       for (int f = 0; f < kFiles; ++f) {
         const fs::path file = root.path() / ("up-" + std::to_string(u) + "-" + std::to_string(f));
         write_random_file(file, 6 << 20, 100 * u + f);
-        const std::string expected = storage::sha256_file(file);
+        const std::string expected = keel::sha256_file(file);
         try {
           const std::string blob = keep_trying(
               [&] { return api.upload_file(file, root.path() / ("state-" + std::to_string(u))); },

@@ -17,7 +17,7 @@
 #include <map>
 #include <random>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "storage/sqlite_db.h"
 #include "tests/e2e/cluster.h"
 
@@ -151,7 +151,7 @@ class DiskFull : public ::testing::Test {
     for (const auto& entry : fs::recursive_directory_iterator(data_ / "blobs")) {
       if (!entry.is_regular_file()) continue;
       ++blobs;
-      EXPECT_EQ(storage::sha256_file(entry.path()), entry.path().filename().string())
+      EXPECT_EQ(keel::sha256_file(entry.path()), entry.path().filename().string())
           << entry.path();
     }
     EXPECT_EQ(blobs, static_cast<int>(blobs_.size()));
@@ -218,7 +218,7 @@ TEST_F(DiskFull, UploadsAreRefusedWith507BeforeTheDiskIsFullNothingIsCorruptAndT
       cut = &u;
     }
     if (cut) break;
-    const std::string sha256 = storage::sha256_bytes(u.bytes);
+    const std::string sha256 = keel::sha256_bytes(u.bytes);
     const client::HttpResult done = api_->request("POST", "/v1/uploads/" + u.id + "/complete",
                                                   nlohmann::json{{"sha256", sha256}}.dump());
     ASSERT_EQ(done.status, 200) << done.body;
@@ -276,7 +276,7 @@ TEST_F(DiskFull, UploadsAreRefusedWith507BeforeTheDiskIsFullNothingIsCorruptAndT
     const client::HttpResult r = put_chunk(*api_, cut->id, cut->bytes, at, kChunkBytes);
     ASSERT_EQ(r.status, 200) << r.body;
   }
-  const std::string sha256 = storage::sha256_bytes(cut->bytes);
+  const std::string sha256 = keel::sha256_bytes(cut->bytes);
   const client::HttpResult done = api_->request("POST", "/v1/uploads/" + cut->id + "/complete",
                                                 nlohmann::json{{"sha256", sha256}}.dump());
   ASSERT_EQ(done.status, 200) << done.body;

@@ -8,7 +8,7 @@
 #include <regex>
 #include <thread>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "tests/e2e/cluster.h"
 
 namespace keel::e2e {
@@ -71,7 +71,7 @@ TEST_F(EndToEnd, SubmitWaitFetchEveryArtifactWithMatchingSha256) {
   for (const auto& artifact : artifacts) {
     ASSERT_TRUE(fs::exists(out / artifact.name)) << artifact.name;
     EXPECT_EQ(static_cast<int64_t>(fs::file_size(out / artifact.name)), artifact.size);
-    EXPECT_EQ(storage::sha256_file(out / artifact.name), artifact.sha256) << artifact.name;
+    EXPECT_EQ(keel::sha256_file(out / artifact.name), artifact.sha256) << artifact.name;
   }
 
   // The report counts what keel-sim wrote: 10 s of IMU at 200 Hz and DVL at 20 Hz, both ends included.
@@ -141,7 +141,7 @@ TEST_F(EndToEnd, ServerKilledDuringUploadResumesAfterRestart) {
       out.write(reinterpret_cast<const char*>(&word), sizeof(word));
     }
   }
-  const std::string expected_sha = storage::sha256_file(file);
+  const std::string expected_sha = keel::sha256_file(file);
   Cluster cluster(root_.path(), /*workers=*/0, free_port());
 
   client::ClientConfig config;
@@ -168,7 +168,7 @@ TEST_F(EndToEnd, ServerKilledDuringUploadResumesAfterRestart) {
   for (const auto& entry : fs::recursive_directory_iterator(cluster.data_dir() / "blobs")) {
     if (!entry.is_regular_file()) continue;
     ++blobs;
-    EXPECT_EQ(storage::sha256_file(entry.path()), entry.path().filename().string());
+    EXPECT_EQ(keel::sha256_file(entry.path()), entry.path().filename().string());
   }
   EXPECT_EQ(blobs, 1);
 }
@@ -193,7 +193,7 @@ TEST_F(EndToEnd, ServerKilledDuringRunningJobRunsAgainAfterRestart) {
   for (const auto& artifact : api.list_artifacts(job_id)) {
     const fs::path copy = root_.path() / ("check-" + artifact.name);
     api.download("/v1/artifacts/" + artifact.id, copy, artifact.sha256);
-    EXPECT_EQ(storage::sha256_file(copy), artifact.sha256);
+    EXPECT_EQ(keel::sha256_file(copy), artifact.sha256);
   }
 }
 

@@ -17,7 +17,7 @@
 #include <random>
 #include <thread>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "tests/e2e/cluster.h"
 
 namespace keel::e2e {
@@ -103,7 +103,7 @@ TEST(Load, TwoHundredClientsMixingPollsLogsChunksAndRangesGetNoError) {
       const std::string chunk(kChunk, static_cast<char>('a' + c % 26));
       std::string whole;
       for (int64_t i = 0; i < kUpload / kChunk; ++i) whole += chunk;
-      const std::string whole_sha256 = storage::sha256_bytes(whole);
+      const std::string whole_sha256 = keel::sha256_bytes(whole);
       while (std::chrono::steady_clock::now() < until) {
         try {
           switch (c % 4) {

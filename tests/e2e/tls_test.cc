@@ -7,7 +7,7 @@
 #include <fstream>
 #include <regex>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "tests/e2e/cluster.h"
 #include "tests/e2e/test_ca.h"
 
@@ -179,7 +179,7 @@ TEST_F(Tls, SubmitWaitAndFetchOverHttpsWithExternalAndLocalWorkers) {
   const auto artifacts = api.list_artifacts(job);
   ASSERT_FALSE(artifacts.empty());
   for (const auto& artifact : artifacts)
-    EXPECT_EQ(storage::sha256_file(out / artifact.name), artifact.sha256) << artifact.name;
+    EXPECT_EQ(keel::sha256_file(out / artifact.name), artifact.sha256) << artifact.name;
   worker.signal(SIGTERM);
   worker.wait_for(30s);
 

@@ -1,11 +1,11 @@
-// ROS 1 bags (worker/io/bag_reader.h): any bytes open and read every topic as what its type
+// ROS 1 bags (worker/io/bag/bag_reader.h): any bytes open and read every topic as what its type
 // says, or are refused naming the bag (and topic, message).
 #include <rosbag/bag.h>
 
 #include <stdexcept>
 
 #include "tests/fuzz/fuzz_util.h"
-#include "worker/io/bag_reader.h"
+#include "worker/io/bag/bag_reader.h"
 
 // rosbag::Bag's constructor loads its encryption plugins through class_loader, which unloads
 // them with the last Bag. Reloaded for every input, their static initializers register exit

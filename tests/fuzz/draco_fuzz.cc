@@ -1,10 +1,10 @@
-// The Draco decoder path (worker/io/draco_codec.h) that reads maps and hulls back: any
+// The Draco decoder path (worker/io/draco/draco_codec.h) that reads maps and hulls back: any
 // bytes decode or are refused with an error naming the buffer. Seeds: fuzz_seeds' valid files.
 #include <stdexcept>
 #include <string>
 
 #include "tests/fuzz/fuzz_util.h"
-#include "worker/io/draco_codec.h"
+#include "worker/io/draco/draco_codec.h"
 
 // Keel's limits are for a worker with gigabytes to spare; libFuzzer stops at 2 GB, and one
 // Draco attribute may ask 2 KB a point (255 components of 8 bytes).

@@ -13,9 +13,9 @@
 #include "tests/fuzz/csv_streams.h"
 #include "tests/server/tar_builder.h"
 #include "worker/io/loop_closures.h"
-#include "worker/io/mesh_ply_writer.h"
-#include "worker/io/mesh_reader.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/mesh/mesh_ply_writer.h"
+#include "worker/io/mesh/mesh_reader.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/tum.h"
 #include "worker/main/trajectory_source.h"
 

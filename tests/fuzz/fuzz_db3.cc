@@ -1,7 +1,7 @@
 // libFuzzer target: a rosbag2 SQLite3 file in memory (sqlite3_deserialize), its topics read
 // and every message decoded by the topic's type.
 #include "tests/fuzz/fuzz_decode.h"
-#include "worker/io/db3_reader.h"
+#include "worker/io/bag/db3_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace keel::io;

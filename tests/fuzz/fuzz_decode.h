@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string_view>
 
-#include "worker/io/bag_format_error.h"
-#include "worker/io/ros2_messages.h"
+#include "worker/io/bag/bag_format_error.h"
+#include "worker/io/bag/ros2_messages.h"
 
 namespace keel::fuzz {
 

@@ -3,9 +3,9 @@
 #include <memory>
 
 #include "tests/fuzz/fuzz_decode.h"
-#include "worker/io/byte_source.h"
+#include "worker/io/bag/byte_source.h"
 #include "worker/io/io_error.h"
-#include "worker/io/mcap_reader.h"
+#include "worker/io/bag/mcap_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace keel::io;

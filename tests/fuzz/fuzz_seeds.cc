@@ -23,10 +23,10 @@
 #include "tests/fuzz/fuzz_decode.h"
 #include "tests/sim/bag2_writer.h"
 #include "tests/sim/bag_writer.h"
-#include "worker/io/bag_reader.h"
-#include "worker/io/byte_source.h"
-#include "worker/io/draco_codec.h"
-#include "worker/io/mcap_reader.h"
+#include "worker/io/bag/bag_reader.h"
+#include "worker/io/bag/byte_source.h"
+#include "worker/io/draco/draco_codec.h"
+#include "worker/io/bag/mcap_reader.h"
 
 namespace fs = std::filesystem;
 using namespace keel;

@@ -1,11 +1,11 @@
-// Meshes: PLY, OBJ, STL (ascii and binary) and OFF (worker/io/mesh_reader.h), and the PLY
+// Meshes: PLY, OBJ, STL (ascii and binary) and OFF (worker/io/mesh/mesh_reader.h), and the PLY
 // header parser shared with clouds. Any bytes are read or refused naming the file.
 #include <stdexcept>
 #include <string_view>
 
 #include "tests/fuzz/fuzz_util.h"
-#include "worker/io/mesh_reader.h"
-#include "worker/io/ply_header.h"
+#include "worker/io/mesh/mesh_reader.h"
+#include "worker/io/cloud/ply_header.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   namespace io = keel::io;

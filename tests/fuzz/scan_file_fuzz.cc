@@ -1,9 +1,9 @@
 // Point cloud scans: PCD (ascii, binary, binary_compressed) and PLY clouds
-// (worker/io/scan_file.h). Any bytes are read or refused naming the file.
+// (worker/io/cloud/scan_file.h). Any bytes are read or refused naming the file.
 #include <stdexcept>
 
 #include "tests/fuzz/fuzz_util.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   namespace io = keel::io;

@@ -119,7 +119,7 @@ class AuthorizationTest : public HandlerTest {
                     .status,
                 200);
       Response done =
-          post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
+          post("/v1/uploads/" + id + "/complete", {{"sha256", keel::sha256_bytes(bytes)}});
       EXPECT_EQ(done.status, 200) << done.body;
       return json_of(done)["blob"].get<std::string>();
     };
@@ -239,7 +239,7 @@ bool AuthorizationTest::make_case(const std::string& route, const Objects& o, bo
     c.request = {"DELETE", "/v1/uploads/" + o.open_upload, "", {}};
   } else if (route == "POST /v1/uploads/{id}/complete") {
     c.request = json_call("POST", "/v1/uploads/" + o.full_upload + "/complete",
-                          {{"sha256", storage::sha256_bytes(o.full_bytes)}});
+                          {{"sha256", keel::sha256_bytes(o.full_bytes)}});
   } else if (route == "GET /v1/blobs/{sha256}") {
     get("/v1/blobs/" + o.extra_blob);
   } else if (route == "POST /v1/missions") {

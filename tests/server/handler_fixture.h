@@ -12,7 +12,7 @@
 #include <string>
 
 #include "server/http_handler.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "storage/store.h"
 #include "tests/server/tar_builder.h"
 #include "tests/storage/store_fixture.h"
@@ -83,7 +83,7 @@ class HandlerTest : public ::testing::Test {
       EXPECT_EQ(put.status, 200) << put.body;
     }
     Response done =
-        post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
+        post("/v1/uploads/" + id + "/complete", {{"sha256", keel::sha256_bytes(bytes)}});
     EXPECT_EQ(done.status, 200) << done.body;
     return json_of(done)["blob"];
   }

@@ -12,7 +12,7 @@
 #include <chrono>
 #include <thread>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "tests/server/handler_fixture.h"
 #include "tests/server/raw_http_client.h"
 
@@ -133,7 +133,7 @@ TEST_F(HttpServerTest, CutConnectionMidChunkCommitsNothingAndResumeCompletes) {
   HttpReply second =
       must(control->exchange(chunk_header(id, chunk, chunk, total) + bytes.substr(chunk)));
   ASSERT_EQ(second.status, 200) << second.body;
-  const std::string sha = storage::sha256_bytes(bytes);
+  const std::string sha = keel::sha256_bytes(bytes);
   HttpReply done = must(control->exchange(
       request("POST", "/v1/uploads/" + id + "/complete", nlohmann::json{{"sha256", sha}}.dump())));
   ASSERT_EQ(done.status, 200) << done.body;
@@ -141,7 +141,7 @@ TEST_F(HttpServerTest, CutConnectionMidChunkCommitsNothingAndResumeCompletes) {
 
   HttpReply blob = must(control->exchange(request("GET", "/v1/blobs/" + sha)));
   ASSERT_EQ(blob.status, 200);
-  EXPECT_EQ(storage::sha256_bytes(blob.body), sha);
+  EXPECT_EQ(keel::sha256_bytes(blob.body), sha);
 }
 
 TEST_F(HttpServerTest, HeaderOverTheLimitGives431AndTheServerStaysUp) {
@@ -223,7 +223,7 @@ TEST_F(HttpServerTest, LargeFilesStreamWithRanges) {
   HttpReply full = must(c->exchange(request("GET", "/v1/blobs/" + sha)));
   ASSERT_EQ(full.status, 200);
   EXPECT_EQ(full.body.size(), bytes.size());
-  EXPECT_EQ(storage::sha256_bytes(full.body), sha);
+  EXPECT_EQ(keel::sha256_bytes(full.body), sha);
   HttpReply not_modified = must(
       c->exchange(request("GET", "/v1/blobs/" + sha, "", {{"If-None-Match", "\"" + sha + "\""}})));
   EXPECT_EQ(not_modified.status, 304);

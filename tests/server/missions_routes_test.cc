@@ -33,7 +33,7 @@ TEST_F(MissionRoutesTest, CreateGetAndListByPrefix) {
 }
 
 TEST_F(MissionRoutesTest, MissingBlobsGive404AndBadShaGives400) {
-  const std::string absent = storage::sha256_bytes("never uploaded");
+  const std::string absent = keel::sha256_bytes("never uploaded");
   Response response = post("/v1/missions", {{"name", "m"}, {"bundle_blob", absent}});
   EXPECT_EQ(response.status, 404);
   EXPECT_NE(response.body.find("bundle_blob"), std::string::npos);

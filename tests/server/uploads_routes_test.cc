@@ -64,7 +64,7 @@ TEST_F(UploadRoutesTest, ChunksCommitInOrderAndCompleteToTheRightBlob) {
   EXPECT_EQ(json_of(got)["offset"], 10000);
   EXPECT_EQ(call("HEAD", "/v1/uploads/" + id).headers.get("Upload-Length"), "10000");
 
-  const std::string sha = storage::sha256_bytes(bytes);
+  const std::string sha = keel::sha256_bytes(bytes);
   Response done = post("/v1/uploads/" + id + "/complete", {{"sha256", sha}});
   ASSERT_EQ(done.status, 200) << done.body;
   EXPECT_EQ(json_of(done)["blob"], sha);
@@ -74,7 +74,7 @@ TEST_F(UploadRoutesTest, ChunksCommitInOrderAndCompleteToTheRightBlob) {
   ASSERT_EQ(blob.status, 200);
   ASSERT_TRUE(blob.file.has_value());
   EXPECT_EQ(read_region(*blob.file), bytes);
-  EXPECT_EQ(storage::sha256_file(blob.file->path), sha);
+  EXPECT_EQ(keel::sha256_file(blob.file->path), sha);
 }
 
 TEST_F(UploadRoutesTest, OutOfOrderOrOverlappingChunksGive409WithTheOffset) {
@@ -119,13 +119,13 @@ TEST_F(UploadRoutesTest, WrongShaGives422AndKeepsNothing) {
   const std::string bytes = random_bytes(64, 3);
   const std::string id = new_upload(64);
   ASSERT_EQ(put(id, "bytes 0-63/64", bytes).status, 200);
-  const std::string wrong = storage::sha256_bytes("something else");
+  const std::string wrong = keel::sha256_bytes("something else");
   Response done = post("/v1/uploads/" + id + "/complete", {{"sha256", wrong}});
   EXPECT_EQ(done.status, 422);
   EXPECT_EQ(error_code_of(done), "sha256_mismatch");
   EXPECT_EQ(call("GET", "/v1/uploads/" + id).status, 404);
   EXPECT_EQ(call("GET", "/v1/blobs/" + wrong).status, 404);
-  EXPECT_EQ(call("GET", "/v1/blobs/" + storage::sha256_bytes(bytes)).status, 404);
+  EXPECT_EQ(call("GET", "/v1/blobs/" + keel::sha256_bytes(bytes)).status, 404);
   EXPECT_EQ(store_->metrics().blobs, 0);
 }
 
@@ -134,7 +134,7 @@ TEST_F(UploadRoutesTest, IncompleteUploadGivesSizeMismatch) {
   const std::string id = new_upload(64);
   ASSERT_EQ(put(id, "bytes 0-31/64", bytes.substr(0, 32)).status, 200);
   Response done =
-      post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes(bytes)}});
+      post("/v1/uploads/" + id + "/complete", {{"sha256", keel::sha256_bytes(bytes)}});
   EXPECT_EQ(done.status, 422);
   EXPECT_EQ(error_code_of(done), "size_mismatch");
 }
@@ -152,19 +152,19 @@ TEST_F(UploadRoutesTest, IdenticalContentGivesTheSameBlob) {
   const std::string first = upload(bytes, 1000);
   const std::string second = upload(bytes, 3000);
   EXPECT_EQ(first, second);
-  EXPECT_EQ(first, storage::sha256_bytes(bytes));
+  EXPECT_EQ(first, keel::sha256_bytes(bytes));
   EXPECT_EQ(store_->metrics().blobs, 1);
 }
 
 TEST_F(UploadRoutesTest, EmptyUploadCompletes) {
   const std::string id = new_upload(0);
-  Response done = post("/v1/uploads/" + id + "/complete", {{"sha256", storage::sha256_bytes("")}});
+  Response done = post("/v1/uploads/" + id + "/complete", {{"sha256", keel::sha256_bytes("")}});
   ASSERT_EQ(done.status, 200) << done.body;
-  Response blob = call("GET", "/v1/blobs/" + storage::sha256_bytes(""));
+  Response blob = call("GET", "/v1/blobs/" + keel::sha256_bytes(""));
   ASSERT_EQ(blob.status, 200);
   EXPECT_EQ(blob.file->length, 0u);
   EXPECT_EQ(
-      call("GET", "/v1/blobs/" + storage::sha256_bytes(""), "", {{"Range", "bytes=0-"}}).status,
+      call("GET", "/v1/blobs/" + keel::sha256_bytes(""), "", {{"Range", "bytes=0-"}}).status,
       416);
 }
 

@@ -105,7 +105,7 @@ TEST_F(WorkerRoutesTest, ArtifactNeedsAnUploadedBlob) {
   Response missing = post(worker_path(id, "artifacts"), {{"lease_id", lease_id},
                                                          {"stage", "ingest"},
                                                          {"name", "a.json"},
-                                                         {"blob", storage::sha256_bytes("never")}});
+                                                         {"blob", keel::sha256_bytes("never")}});
   EXPECT_EQ(missing.status, 404);
   Response bad_stage =
       post(worker_path(id, "artifacts"),

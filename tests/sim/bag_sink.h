@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
 
 namespace keel::sim {
 

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::sim {
 namespace {

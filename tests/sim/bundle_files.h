@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::sim {
 

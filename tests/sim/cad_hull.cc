@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "worker/io/mesh_reader.h"
+#include "worker/io/mesh/mesh_reader.h"
 
 namespace keel::sim {
 namespace {

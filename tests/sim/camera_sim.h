@@ -13,7 +13,7 @@
 #include "tests/sim/hull_model.h"
 #include "tests/sim/rng.h"
 #include "tests/sim/sim_world.h"
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::sim {
 

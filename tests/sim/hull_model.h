@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/pose.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::sim {
 

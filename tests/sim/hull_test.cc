@@ -13,7 +13,7 @@
 #include "tests/sim/mesh_bvh.h"
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::sim {
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "tests/sim/motion.h"
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::sim {
 

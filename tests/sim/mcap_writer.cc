@@ -6,7 +6,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "worker/io/crc32.h"
+#include "worker/io/bag/crc32.h"
 
 namespace keel::sim {
 

@@ -1,6 +1,6 @@
 // A compact bounding-volume hierarchy over a triangle mesh for ray casts.
 //
-// Why not CGAL's AABB tree (worker/ba/mesh_query.h)? The simulator casts ~300 k camera rays
+// Why not CGAL's AABB tree (core/mesh_query.h)? The simulator casts ~300 k camera rays
 // per hull image; CGAL's exact-predicate ray queries cost several microseconds each, and the
 // simulator must not depend on algorithm code it is used to test. This median-split BVH with
 // Moller-Trumbore tests is ~0.5 us per ray on the hull meshes here.
@@ -10,7 +10,7 @@
 
 #include <vector>
 
-#include "worker/core/triangle_mesh.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::sim {
 

@@ -5,7 +5,7 @@
 #include "tests/sim/pose_table.h"
 #include "tests/sim/rng.h"
 #include "tests/sim/sim_world.h"
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 
 namespace keel::sim {
 

@@ -13,7 +13,7 @@
 #include "tests/sim/hull_model.h"
 #include "tests/sim/hull_world.h"
 #include "tests/sim/motion.h"
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::sim {
 

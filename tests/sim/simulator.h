@@ -13,7 +13,7 @@
 #include "tests/sim/range_sensors.h"
 #include "tests/sim/scenarios.h"
 #include "tests/sim/slam_recording.h"
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::sim {
 

@@ -8,7 +8,7 @@
 #include <Eigen/Core>
 
 #include "tests/sim/pose_table.h"
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::sim {
 

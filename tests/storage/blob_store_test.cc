@@ -5,7 +5,7 @@
 #include <thread>
 #include <vector>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "store_fixture.h"
 
 namespace keel::storage {

@@ -5,7 +5,7 @@
 #include <set>
 #include <thread>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "store_fixture.h"
 
 namespace keel::storage {

@@ -1,7 +1,7 @@
 // Missions and jobs through the Store: creation, listing, idempotency, cancel, errors.
 #include <gtest/gtest.h>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "store_fixture.h"
 
 namespace keel::storage {

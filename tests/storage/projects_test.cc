@@ -6,7 +6,7 @@
 #include <mutex>
 
 #include "storage/migrations.h"
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "storage/sqlite_db.h"
 #include "store_fixture.h"
 

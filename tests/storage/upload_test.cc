@@ -3,7 +3,7 @@
 
 #include <chrono>
 
-#include "storage/sha256.h"
+#include "core/sha256.h"
 #include "store_fixture.h"
 
 namespace keel::storage {

@@ -17,7 +17,7 @@
 #include "worker/ba/ba_problem.h"
 #include "worker/ba/ba_result.h"
 #include "worker/ba/dvl_raycast_factor.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 
 namespace keel::ba {
 

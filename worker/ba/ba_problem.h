@@ -20,9 +20,9 @@
 #include <optional>
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/core/time.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/pose.h"
+#include "core/time.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::ba {
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "worker/ba/ba_options.h"
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::ba {
 

@@ -29,7 +29,7 @@
 #include <optional>
 
 #include "worker/ba/ba_options.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/ba/rig_geometry.h"
 
 namespace keel::ba {

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "worker/ba/ba_options.h"
-#include "worker/core/pose.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/pose.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::ba {
 

@@ -7,7 +7,7 @@
 #include "worker/ba/ba_graph.h"
 #include "worker/ba/feature_frontend.h"
 #include "worker/ba/gicp_alignment.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/ba/rig_geometry.h"
 #include "worker/ba/triangulation.h"
 

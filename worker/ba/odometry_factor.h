@@ -5,7 +5,7 @@
 
 #include <ceres/cost_function.h>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::ba {
 

@@ -12,7 +12,7 @@
 #include <array>
 #include <memory>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::ba {
 

@@ -4,7 +4,7 @@
 #include <ceres/cost_function.h>
 
 #include "worker/ba/ba_problem.h"
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::ba {
 

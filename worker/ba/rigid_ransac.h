@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::ba {
 

@@ -40,8 +40,8 @@
 
 #include <cstdint>
 
-#include "worker/ba/mesh_query.h"
-#include "worker/core/pose.h"
+#include "core/mesh_query.h"
+#include "core/pose.h"
 
 namespace keel::ba {
 

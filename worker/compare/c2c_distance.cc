@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "worker/mapping/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace keel::compare {
 namespace {
@@ -15,7 +15,7 @@ std::vector<float> distances(const Index& reference, const std::vector<Eigen::Ve
     if (!compared[i].allFinite())
       throw std::invalid_argument("C2C: compared point " + std::to_string(i) + " is not finite");
   std::vector<float> out(compared.size());
-  mapping::parallel_for(compared.size(), threads, [&](size_t begin, size_t end) {
+  keel::parallel_for(compared.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
       out[i] = static_cast<float>(reference.nearest(compared[i]).distance_m);
   });

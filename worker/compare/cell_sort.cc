@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "worker/mapping/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace keel::compare {
 namespace {
@@ -82,7 +82,7 @@ CellSort sort_into_cells(const std::vector<Eigen::Vector3f>& points, double cell
   }
   const int shift_x = out.bits[1] + out.bits[2], shift_y = out.bits[2];
   out.keyed = KeyedIndices(points.size(), out.bits[0] + out.bits[1] + out.bits[2]);
-  mapping::parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
+  keel::parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const Eigen::Vector3d c = (points[i].cast<double>() - lo) * inv;
       const uint64_t x = uint64_t(std::floor(c.x())), y = uint64_t(std::floor(c.y())),

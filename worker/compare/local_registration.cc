@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "worker/compare/cell_sort.h"
-#include "worker/mapping/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace keel::compare {
 namespace {
@@ -34,7 +34,7 @@ int bits_for(int64_t largest) {
 // cost ~20 times more.
 Tiles bucket(const std::vector<Eigen::Vector3f>& points, double side, int threads) {
   std::vector<Key> keys(points.size());
-  mapping::parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
+  keel::parallel_for(points.size(), threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) keys[i] = tile_of(points[i], side);
   });
   Tiles tiles;
@@ -133,7 +133,7 @@ LocalRegistration register_tiles(const std::vector<Eigen::Vector3f>& reference,
     return registered[x]->second.size() > registered[y]->second.size();
   });
   std::vector<std::optional<TileShift>> shifts(registered.size());
-  mapping::parallel_for_each(order.size(), threads, [&](size_t k) {
+  keel::parallel_for_each(order.size(), threads, [&](size_t k) {
     const size_t t = order[k];
     std::vector<Eigen::Vector3f> b;
     b.reserve(registered[t]->second.size());

@@ -11,7 +11,7 @@
 #include <unordered_set>
 #include <utility>
 
-#include "worker/mapping/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace keel::compare {
 namespace {
@@ -216,7 +216,7 @@ std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::
   const double s2 = options.core_spacing_m * options.core_spacing_m;
 
   std::vector<CoreChange> out(cores.size());
-  mapping::parallel_for(cores.size(), options.threads, [&](size_t begin, size_t end) {
+  keel::parallel_for(cores.size(), options.threads, [&](size_t begin, size_t end) {
     std::vector<uint32_t> scratch;
     Cylinders cylinders{clouds, {}, {}};
     for (size_t i = begin; i < end; ++i) {

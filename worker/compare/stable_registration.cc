@@ -12,8 +12,8 @@
 
 #include "worker/compare/nearest_index.h"
 #include "worker/compare/voxel_moments.h"
-#include "worker/core/robust_spread.h"
-#include "worker/mapping/parallel_for.h"
+#include "core/robust_spread.h"
+#include "core/parallel_for.h"
 
 namespace keel::compare {
 namespace {
@@ -34,7 +34,7 @@ std::vector<Plane> reference_planes(const std::vector<Eigen::Vector3f>& referenc
   const NearestIndex index(voxels.means);
   std::vector<Plane> planes(voxels.voxels.size());
   std::vector<char> keep(voxels.voxels.size(), 0);
-  mapping::parallel_for(voxels.voxels.size(), o.threads, [&](size_t begin, size_t end) {
+  keel::parallel_for(voxels.voxels.size(), o.threads, [&](size_t begin, size_t end) {
     std::vector<uint32_t> near;
     for (size_t v = begin; v < end; ++v) {
       index.within(voxels.means[v], o.plane_radius_m, &near);
@@ -102,7 +102,7 @@ StableRegistration register_stable(const std::vector<Eigen::Vector3f>& reference
   for (int iteration = 0; iteration < o.max_iterations; ++iteration) {
     if (o.check_canceled) o.check_canceled();
     // Pairs: each moved sample with A's nearest plane anchor.
-    mapping::parallel_for(n, o.threads, [&](size_t begin, size_t end) {
+    keel::parallel_for(n, o.threads, [&](size_t begin, size_t end) {
       for (size_t i = begin; i < end; ++i) {
         moved[i] = out.T_a_b * samples.voxels[i].mean;
         const Neighbour nb = plane_index.nearest(moved[i].cast<float>());

@@ -11,7 +11,7 @@
 #include <functional>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::compare {
 

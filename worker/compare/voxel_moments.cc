@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "worker/compare/cell_sort.h"
-#include "worker/mapping/parallel_for.h"
+#include "core/parallel_for.h"
 
 namespace keel::compare {
 
@@ -54,7 +54,7 @@ VoxelMoments voxelize(const std::vector<Eigen::Vector3f>& points, double voxel_m
   out.means.resize(voxels);
   if (keep_voxel_of) out.voxel_of.resize(points.size());
   // Voxels are independent, and each sums its points in index order whatever the thread.
-  mapping::parallel_for(voxels, threads, [&](size_t first, size_t last) {
+  keel::parallel_for(voxels, threads, [&](size_t first, size_t last) {
     for (size_t v = first; v < last; ++v) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       for (size_t k = begins[v]; k < begins[v + 1]; ++k)

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <utility>
 
-#include "worker/core/robust_spread.h"
+#include "core/robust_spread.h"
 
 namespace keel::inspect {
 

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "worker/core/triangle_mesh.h"
+#include "core/triangle_mesh.h"
 #include "worker/inspect/deviation_threshold.h"
 #include "worker/inspect/inspect_input.h"
 #include "worker/inspect/inspect_options.h"

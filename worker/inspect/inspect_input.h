@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/pose.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::inspect {
 

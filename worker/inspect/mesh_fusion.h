@@ -5,8 +5,8 @@
 
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/pose.h"
+#include "core/triangle_mesh.h"
 #include "worker/inspect/inspect_options.h"
 #include "worker/inspect/radius_index.h"
 #include "worker/inspect/shape_detection.h"

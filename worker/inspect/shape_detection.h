@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 #include "worker/inspect/alpha_shape_25d.h"
 #include "worker/inspect/inspect_input.h"
 #include "worker/inspect/inspect_options.h"

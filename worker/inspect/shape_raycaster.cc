@@ -40,11 +40,11 @@ std::optional<Eigen::Vector3d> ShapeRaycaster::intersect(const Eigen::Vector3d& 
   if ((image.array() < image_min_.array()).any() || (image.array() > image_max_.array()).any()) {
     return std::nullopt;
   }
-  ba::Ray ray;  // line 8: make_ray(pose, V_n[i])
+  keel::Ray ray;  // line 8: make_ray(pose, V_n[i])
   ray.origin = Eigen::Vector3d::Zero();
   ray.direction = vertex_camera;
   ray.max_range_m = vertex_camera.norm() + max_behind_vertex_m;
-  const std::optional<ba::RayHit> hit = query_.raycast(ray);  // lines 9-10
+  const std::optional<keel::RayHit> hit = query_.raycast(ray);  // lines 9-10
   if (!hit) return std::nullopt;
   return hit->point;
 }

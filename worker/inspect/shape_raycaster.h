@@ -6,7 +6,7 @@
 
 #include <optional>
 
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/inspect/alpha_shape_25d.h"
 
 namespace keel::inspect {
@@ -24,7 +24,7 @@ class ShapeRaycaster {
                                            double max_behind_vertex_m) const;
 
  private:
-  ba::MeshQuery query_;
+  keel::MeshQuery query_;
   // Bounding box of the shape's vertices in normalised image coordinates (x/z, y/z). With all
   // vertices in front of the camera, a ray can only meet the shape inside it: a cheap test that
   // skips the tree for most of the vertices within view range.

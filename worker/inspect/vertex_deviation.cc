@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/inspect/radius_index.h"
 
 namespace keel::inspect {
@@ -53,7 +53,7 @@ std::vector<double> vertex_deviations(const TriangleMesh& prior, const TriangleM
     queries.push_back(remeshed.vertices[i]);
   }
   if (moved.empty()) return deviation;
-  const ba::MeshQuery query(local_prior(prior, remeshed, moved));
+  const keel::MeshQuery query(local_prior(prior, remeshed, moved));
   const std::vector<double> h = query.signed_distances(queries);  // Eq. (5)
   for (size_t k = 0; k < moved.size(); ++k) deviation[moved[k]] = h[k];
   return deviation;

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "worker/core/triangle_mesh.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::inspect {
 

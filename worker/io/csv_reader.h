@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 #include "worker/io/text_lines.h"
 
 namespace keel::io {

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::io {
 

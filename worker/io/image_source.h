@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 #include "worker/io/folder_index.h"
 #include "worker/io/image_header.h"
 

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::io {
 

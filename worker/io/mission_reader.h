@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/io/bag_source.h"
+#include "core/pose.h"
+#include "worker/io/bag/bag_source.h"
 #include "worker/io/image_source.h"
 #include "worker/io/loop_closures.h"
 #include "worker/io/mission.h"

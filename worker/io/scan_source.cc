@@ -1,7 +1,7 @@
 #include "worker/io/scan_source.h"
 
 #include "worker/io/display_path.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 
 namespace keel::io {
 

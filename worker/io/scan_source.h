@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 #include "worker/io/folder_index.h"
-#include "worker/io/packed_cloud.h"
+#include "worker/io/cloud/packed_cloud.h"
 
 namespace keel::io {
 

@@ -9,7 +9,7 @@
 #include <optional>
 #include <vector>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::io {
 

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::io {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::io {
 

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/main/commands.h"
 #include "worker/mapping/filter_chain.h"
 

@@ -17,8 +17,8 @@
 #include <memory>
 #include <string>
 
-#include "worker/io/ply_cloud_writer.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/ply_cloud_writer.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/main/commands.h"
 #include "worker/mapping/map_metrics.h"
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 #include "worker/slam/trajectory_metrics.h"
 
 namespace keel::worker {

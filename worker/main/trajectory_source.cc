@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "worker/io/bag_reader.h"
+#include "worker/io/bag/bag_reader.h"
 #include "worker/io/text_lines.h"
 #include "worker/io/tum.h"
 

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <string>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::worker {
 

@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
 
 namespace keel::mapping {
 

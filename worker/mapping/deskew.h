@@ -10,8 +10,8 @@
 
 #include <string>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
 #include "worker/mapping/transform_tree.h"
 
 namespace keel::mapping {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 
 namespace keel::mapping {
 

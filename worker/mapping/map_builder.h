@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 #include "worker/mapping/deskew.h"
 #include "worker/mapping/filter_chain.h"
 #include "worker/mapping/transform_tree.h"

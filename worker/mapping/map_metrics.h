@@ -22,7 +22,7 @@
 #include <functional>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 
 namespace keel::mapping {
 

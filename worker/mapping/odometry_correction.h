@@ -6,7 +6,7 @@
 
 #include <cstddef>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::mapping {
 

@@ -7,7 +7,7 @@
 
 #include "worker/mapping/cloud_ops.h"
 #include "worker/mapping/filters.h"
-#include "worker/mapping/parallel_for.h"
+#include "core/parallel_for.h"
 #include "worker/mapping/radius_search.h"
 
 namespace keel::mapping {

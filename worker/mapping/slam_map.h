@@ -9,8 +9,8 @@
 #include <map>
 #include <string>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
 #include "worker/mapping/deskew.h"
 #include "worker/mapping/transform_tree.h"
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::mapping {
 

@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 #include "worker/mapping/filter_chain.h"
 #include "worker/mapping/tile_grid.h"
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 #include "worker/mapping/stamped_transforms.h"
 
 namespace keel::mapping {

@@ -23,7 +23,7 @@
 #include <memory>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
+#include "core/point_cloud.h"
 
 namespace keel::mapping {
 

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-#include "worker/io/draco_summary.h"
+#include "worker/io/draco/draco_summary.h"
 
 namespace keel::pipeline {
 

@@ -10,8 +10,6 @@
 #include <set>
 #include <stdexcept>
 
-#include "worker/pipeline/report_html.h"
-#include "worker/pipeline/trajectories_file.h"
 
 namespace keel::pipeline {
 
@@ -31,7 +29,9 @@ void write_all(int fd, const std::string& bytes, const std::filesystem::path& pa
   }
 }
 
-// Writes `text` to `path` atomically: a temporary file in the same folder, flushed, renamed.
+}  // namespace
+
+// A temporary file in the same folder, flushed, renamed over `path`.
 void write_text_atomically(const std::filesystem::path& path, const std::string& text) {
   static std::atomic<unsigned> counter{0};
   const std::filesystem::path temp =
@@ -57,7 +57,6 @@ void write_text_atomically(const std::filesystem::path& path, const std::string&
   }
 }
 
-}  // namespace
 
 nlohmann::ordered_json build_report(const ReportInput& input) {
   const std::set<std::string> in_order(input.stage_order.begin(), input.stage_order.end());
@@ -96,18 +95,6 @@ nlohmann::ordered_json build_report(const ReportInput& input) {
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document) {
   write_text_atomically(path, document.dump(2) + "\n");
-}
-
-std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
-                                            const nlohmann::ordered_json& report) {
-  write_json_atomically(work_dir / kReportFileName, report);
-  // The ATE over time comes from trajectories.json; a page without it beats no page.
-  nlohmann::json trajectories = nullptr;
-  std::ifstream in(work_dir / kTrajectoriesFile);
-  if (in) trajectories = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (trajectories.is_discarded()) trajectories = nullptr;
-  write_text_atomically(work_dir / kReportHtmlFileName, render_report_html(report, trajectories));
-  return {kReportFileName, kReportHtmlFileName};
 }
 
 }  // namespace keel::pipeline

@@ -40,10 +40,7 @@ nlohmann::ordered_json build_report(const ReportInput& input);
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document);
 
-// Writes report.json and report.html (render_report_html, with the work folder's
-// trajectories.json when one parses) into `work_dir`; returns their file names. Throws
-// std::runtime_error naming the file that could not be written.
-std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
-                                            const nlohmann::ordered_json& report);
+// `text` as the whole content of `path`, through a temporary sibling renamed into place.
+void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 
 }  // namespace keel::pipeline

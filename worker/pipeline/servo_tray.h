@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "proto/mission_manifest.h"
-#include "worker/core/pose.h"
-#include "worker/core/time.h"
+#include "core/pose.h"
+#include "core/time.h"
 #include "worker/io/stream_samples.h"
 #include "worker/slam/sensor_samples.h"
 

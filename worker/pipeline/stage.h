@@ -1,5 +1,8 @@
 // A processing stage: reads the mission (and earlier stages' outputs) from disk, writes its
-// artifacts into the job's work folder and returns its section of report.json.
+// artifacts into the job's work folder and returns its section of report.json; it also renders
+// that section for report.html and owns the table of its options. Each stage lives in its own
+// folder, worker/stages/<name>/ (stage.cc its numbered steps, options.cc its option table,
+// report_html.cc its report section, artifacts.h the files other stages read of it).
 // Stages know nothing of HTTP or databases: the same stage runs under `keel-worker` (leased
 // from a server) and `keel-worker run` (local, no server).
 #pragma once
@@ -13,7 +16,19 @@
 #include <string>
 #include <vector>
 
+#include "proto/stages.h"
+
 namespace keel::pipeline {
+
+class OptionsSchema;  // option_table.h
+namespace report_html {
+class Ref;  // report_html_parts.h
+}
+
+// What a stage's report.html section may read besides its section of report.json.
+struct ReportHtmlInputs {
+  nlohmann::json trajectories = nullptr;  // trajectories.json of the work folder, or null
+};
 
 // Thrown by StageContext::check_canceled(); the runner stops and reports nothing more.
 struct Canceled : std::runtime_error {
@@ -63,10 +78,26 @@ class Stage {
   // Throws std::exception with a message naming what is wrong; that message becomes the
   // job's error.
   virtual StageResult run(StageContext& context) = 0;
+  // Its section of report.html (HTML elements, within the page's <section> of the stage) from
+  // its section of report.json. Pure.
+  virtual std::string report_html(const report_html::Ref& section,
+                                  const ReportHtmlInputs& inputs) const = 0;
+  // Its options: the stage reads them, the docs list them and `keel-worker options` prints
+  // them from this one table.
+  // TODO(issue 29): pure once every stage has its table (worker/stages/<name>/options.cc).
+  virtual const OptionsSchema& options() const {
+    throw std::logic_error("stage '" + name() + "' has no option table yet");
+  }
 };
 
-// The stages built into this worker, by name ("ingest", ...). Throws for an unknown name.
+// The stages built into this worker, by name ("ingest", ...), from proto/stages.h's one list.
+// Throws for an unknown name.
 std::unique_ptr<Stage> make_stage(const std::string& name);
 std::vector<std::string> available_stages();
+
+// Each stage's factory, defined in its folder's stage.cc.
+#define KEEL_DECLARE_STAGE_FACTORY(name) std::unique_ptr<Stage> make_##name##_stage();
+KEEL_STAGES(KEEL_DECLARE_STAGE_FACTORY)
+#undef KEEL_DECLARE_STAGE_FACTORY
 
 }  // namespace keel::pipeline

@@ -4,12 +4,6 @@
 
 namespace keel::pipeline {
 
-std::string join_names(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 StageOptionReader::StageOptionReader(const nlohmann::json& options, const std::string& stage)
     : options_(options), reader_(options, "options." + stage) {}
 

@@ -1,4 +1,5 @@
-// Shared reading of a stage's JSON options (`--set stage.option=value`).
+// Shared reading of a stage's JSON options (`--set stage.option=value`). Being replaced by
+// option_table.h, stage by stage; removed once every stage has its table.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -7,11 +8,9 @@
 #include <vector>
 
 #include "proto/contract_error.h"
+#include "worker/pipeline/option_table.h"
 
 namespace keel::pipeline {
-
-// "a, b, c": for messages that list what is known.
-std::string join_names(const std::vector<std::string>& names);
 
 // Reads `options.<stage>` (an object) and remembers every option name asked for, so the
 // list of known options is the reading code itself. `finish()` then fails on a key that

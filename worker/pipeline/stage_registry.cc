@@ -1,15 +1,9 @@
-// The stages built into this worker. Adding a stage is one line in `entries` below (in
-// pipeline order) plus its source file in CMakeLists.txt.
+// The stages built into this worker: one entry per name of proto/stages.h, in pipeline order.
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "worker/pipeline/ba_stage.h"
-#include "worker/pipeline/compare_stage.h"
-#include "worker/pipeline/ingest_stage.h"
-#include "worker/pipeline/inspect_stage.h"
-#include "worker/pipeline/map_stage.h"
-#include "worker/pipeline/refine_stage.h"
+#include "worker/pipeline/option_table.h"
 #include "worker/pipeline/stage.h"
 
 namespace keel::pipeline {
@@ -22,14 +16,9 @@ struct StageEntry {
 };
 
 const std::vector<StageEntry>& entries() {
-  static const std::vector<StageEntry> table = {
-      {"ingest", make_ingest_stage},
-      {"refine", make_refine_stage},
-      {"map", make_map_stage},
-      {"ba", make_ba_stage},
-      {"inspect", make_inspect_stage},
-      {"compare", make_compare_stage},
-  };
+#define KEEL_STAGE_ENTRY(name) {#name, make_##name##_stage},
+  static const std::vector<StageEntry> table = {KEEL_STAGES(KEEL_STAGE_ENTRY)};
+#undef KEEL_STAGE_ENTRY
   return table;
 }
 
@@ -38,11 +27,10 @@ const std::vector<StageEntry>& entries() {
 std::unique_ptr<Stage> make_stage(const std::string& name) {
   for (const auto& entry : entries())
     if (name == entry.name) return entry.make();
-  std::string known;
-  for (const auto& entry : entries())
-    known += (known.empty() ? "" : ", ") + std::string(entry.name);
-  throw std::invalid_argument("unknown stage '" + name +
-                              "' (this worker has: " + (known.empty() ? "none" : known) + ")");
+  std::vector<std::string> known;
+  for (const auto& entry : entries()) known.emplace_back(entry.name);
+  throw std::invalid_argument("unknown stage '" + name + "' (this worker has: " +
+                              (known.empty() ? "none" : join_names(known)) + ")");
 }
 
 std::vector<std::string> available_stages() {

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <fstream>
 
-#include "worker/pipeline/ba_stage.h"
 #include "worker/pipeline/report.h"
 
 namespace keel::pipeline {

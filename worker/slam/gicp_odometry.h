@@ -6,8 +6,8 @@
 
 #include <vector>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
 #include "worker/slam/relative_pose.h"
 
 namespace keel::slam {

@@ -14,7 +14,7 @@
 
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 #include "worker/slam/map_pose_noise.h"
 
 namespace keel::slam {

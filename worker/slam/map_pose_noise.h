@@ -20,7 +20,7 @@
 
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::slam {
 

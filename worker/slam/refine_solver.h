@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 #include "worker/slam/degeneracy.h"
 #include "worker/slam/dvl_imu_reconciliation.h"
 #include "worker/slam/dvl_preintegration.h"

@@ -6,8 +6,8 @@
 
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/core/time.h"
+#include "core/pose.h"
+#include "core/time.h"
 
 namespace keel::slam {
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "worker/core/time.h"
+#include "core/time.h"
 
 namespace keel::slam {
 

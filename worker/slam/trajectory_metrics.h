@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 
 namespace keel::slam {
 

@@ -5,13 +5,13 @@
 #include <cmath>
 #include <random>
 
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/ba/rig_geometry.h"
 
 namespace keel::testing {
 namespace {
 
-using keel::ba::MeshQuery;
+using keel::MeshQuery;
 
 double hull_z(const SyntheticHullOptions& o, double x, double y) {
   return o.curvature_x * x * x + o.curvature_y * y * y;
@@ -197,7 +197,7 @@ void add_dvl(const SyntheticHullOptions& o, Noise& noise, SyntheticHull& out) {
                               mount.T_vehicle_servo(out.servo_angle_rad[i]) *
                               out.problem.rig.T_servo_dvl;
     for (size_t b = 0; b < beams.size(); ++b) {
-      keel::ba::Ray ray;
+      keel::Ray ray;
       ray.origin = T_model_dvl.translation();
       ray.direction = T_model_dvl.linear() * beams[b];
       ray.max_range_m = 10;

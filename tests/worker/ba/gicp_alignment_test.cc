@@ -12,7 +12,7 @@
 #include <cstdio>
 
 #include "tests/worker/ba/ba_synthetic.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/ba/rig_geometry.h"
 
 namespace keel::ba {

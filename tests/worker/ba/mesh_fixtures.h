@@ -9,7 +9,7 @@
 #include <map>
 #include <utility>
 
-#include "worker/core/triangle_mesh.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::testing {
 

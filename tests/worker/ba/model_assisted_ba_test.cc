@@ -13,7 +13,7 @@
 #include <numeric>
 
 #include "tests/worker/ba/ba_synthetic.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 #include "worker/ba/surface_factor.h"
 #include "worker/ba/triangulation.h"
 

@@ -12,7 +12,7 @@
 #include <sstream>
 
 #include "worker/compare/c2c_distance.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 
 namespace keel::compare {
 namespace {

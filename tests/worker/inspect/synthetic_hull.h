@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "worker/core/pose.h"
-#include "worker/core/triangle_mesh.h"
+#include "core/pose.h"
+#include "core/triangle_mesh.h"
 #include "worker/inspect/inspect_input.h"
 
 namespace keel::inspect::testing {

@@ -7,14 +7,14 @@
 #include <random>
 
 #include "tests/worker/ba/mesh_fixtures.h"
-#include "worker/ba/mesh_query.h"
+#include "core/mesh_query.h"
 
 namespace keel::inspect {
 namespace {
 
 TEST(VertexDeviation, MatchesTheSignedDistanceToTheWholePrior) {
   const TriangleMesh prior = keel::testing::make_icosphere(4, 1.0);  // curved, closed
-  const ba::MeshQuery whole(prior);
+  const keel::MeshQuery whole(prior);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> step(-0.3, 0.3);
   std::bernoulli_distribution pick(0.2);

@@ -1,4 +1,4 @@
-#include "worker/io/bag_reader.h"
+#include "worker/io/bag/bag_reader.h"
 
 #include <gtest/gtest.h>
 

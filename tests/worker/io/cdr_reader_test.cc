@@ -1,6 +1,6 @@
 // CDR against bytes laid out by hand from DDS-XTypes 1.3 §7.4 (alignment relative to the end
 // of the encapsulation header; XCDR2 caps it at 4), and its bounds checks.
-#include "worker/io/cdr_reader.h"
+#include "worker/io/bag/cdr_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "io_test_util.h"
-#include "worker/io/bag_format_error.h"
-#include "worker/io/ros2_messages.h"
+#include "worker/io/bag/bag_format_error.h"
+#include "worker/io/bag/ros2_messages.h"
 
 namespace keel::io {
 namespace {

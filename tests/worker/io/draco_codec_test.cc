@@ -1,7 +1,7 @@
 // Draco round trips: the position error is checked point by point through an `id` field
 // (a correspondence the encoder itself does not use), against the quantization bound
 // range / 2^bits and against the error the encoder reports.
-#include "worker/io/draco_codec.h"
+#include "worker/io/draco/draco_codec.h"
 
 #include <gtest/gtest.h>
 

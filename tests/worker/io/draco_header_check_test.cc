@@ -1,7 +1,7 @@
 // The counts read from a Draco header are the ones Keel's encoder wrote (each encoding method
 // Draco chooses: sequential and kd-tree clouds, sequential and edgebreaker meshes); a header
 // that declares more than the limits is refused before Draco allocates for it.
-#include "worker/io/draco_header_check.h"
+#include "worker/io/draco/draco_header_check.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "worker/io/draco_codec.h"
+#include "worker/io/draco/draco_codec.h"
 
 namespace keel::io {
 namespace {

@@ -2,7 +2,7 @@
 // decoded by Draco's own API: attributes found by unique id the way three.js's DRACOLoader finds
 // them, each one's range over every decoded value, the box of the decoded positions, the label
 // attribute's counts per part, and no_data kept out of the range but stored exactly.
-#include "worker/io/draco_summary.h"
+#include "worker/io/draco/draco_summary.h"
 
 #include <draco/compression/decode.h>
 #include <draco/metadata/geometry_metadata.h>
@@ -14,7 +14,7 @@
 #include <random>
 
 #include "tests/worker/ba/mesh_fixtures.h"
-#include "worker/io/draco_codec.h"
+#include "worker/io/draco/draco_codec.h"
 
 namespace keel::io {
 namespace {

@@ -1,4 +1,4 @@
-#include "worker/pipeline/ingest_stage.h"
+#include "worker/stages/ingest/stage.h"
 
 #include <gtest/gtest.h>
 

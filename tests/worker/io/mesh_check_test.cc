@@ -1,4 +1,4 @@
-#include "worker/io/mesh_check.h"
+#include "worker/io/mesh/mesh_check.h"
 
 #include <gtest/gtest.h>
 

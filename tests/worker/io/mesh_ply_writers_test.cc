@@ -12,9 +12,9 @@
 
 #include "tests/worker/ba/mesh_fixtures.h"
 #include "tests/worker/io/mesh_test_util.h"
-#include "worker/io/mesh_ply_writer.h"
-#include "worker/io/mesh_reader.h"
-#include "worker/io/ply_cloud_writer.h"
+#include "worker/io/mesh/mesh_ply_writer.h"
+#include "worker/io/mesh/mesh_reader.h"
+#include "worker/io/cloud/ply_cloud_writer.h"
 
 namespace keel::io {
 namespace {

@@ -1,4 +1,4 @@
-#include "worker/io/mesh_reader.h"
+#include "worker/io/mesh/mesh_reader.h"
 
 #include <gtest/gtest.h>
 

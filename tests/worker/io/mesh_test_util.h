@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/core/triangle_mesh.h"
+#include "core/triangle_mesh.h"
 
 namespace keel::testing {
 

@@ -1,7 +1,7 @@
 // PCD headers checked before PCL reads them (pcd_header_check.h): what the PCD specification
 // allows passes, and each way PCL was made to crash or allocate without bound is refused,
 // naming the file and the field or line.
-#include "worker/io/pcd_header_check.h"
+#include "worker/io/cloud/pcd_header_check.h"
 
 #include <gtest/gtest.h>
 

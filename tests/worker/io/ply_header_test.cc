@@ -1,7 +1,7 @@
 // The shared PLY header parser: known headers written out by hand (the expected elements,
 // types and offsets are counted from the text), and hostile headers that must be refused
 // with an IoError naming the file and the line.
-#include "worker/io/ply_header.h"
+#include "worker/io/cloud/ply_header.h"
 
 #include <gtest/gtest.h>
 

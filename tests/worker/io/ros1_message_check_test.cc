@@ -2,7 +2,7 @@
 // reads, serialized by roscpp with non-empty strings and arrays, passes; every shorter prefix
 // of it is refused (so the check walks exactly the bytes roscpp wrote); a length prefix that
 // declares more than the message holds is refused naming the field.
-#include "worker/io/ros1_message_check.h"
+#include "worker/io/bag/ros1_message_check.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TwistStamped.h>

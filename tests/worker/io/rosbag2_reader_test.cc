@@ -6,7 +6,7 @@
 // KEEL_ROSBAG2_TESTDATA (environment, or the CMake cache variable of the same name) at a
 // folder holding rosbag2_tests/resources and rosbag2_py/test/resources of ros2/rosbag2.
 // Those tests skip, saying so, when it is not set.
-#include "worker/io/rosbag2_reader.h"
+#include "worker/io/bag/rosbag2_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -18,10 +18,10 @@
 #include "tests/sim/cdr_writer.h"
 #include "tests/sim/db3_writer.h"
 #include "tests/sim/mcap_writer.h"
-#include "worker/io/cdr_reader.h"
-#include "worker/io/crc32.h"
+#include "worker/io/bag/cdr_reader.h"
+#include "worker/io/bag/crc32.h"
 #include "worker/io/io_error.h"
-#include "worker/io/rosbag2_metadata.h"
+#include "worker/io/bag/rosbag2_metadata.h"
 
 namespace keel::io {
 namespace {

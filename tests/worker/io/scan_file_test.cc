@@ -1,4 +1,4 @@
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 
 #include <gtest/gtest.h>
 

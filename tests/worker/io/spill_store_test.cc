@@ -9,7 +9,7 @@
 #include <thread>
 #include <vector>
 
-#include "worker/io/spill_store.h"
+#include "worker/io/cloud/spill_store.h"
 
 namespace keel::io {
 namespace {

@@ -9,7 +9,7 @@
 #include "io_test_util.h"
 #include "worker/io/folder_index.h"
 #include "worker/io/image_source.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/stream_csv.h"
 #include "worker/io/tum.h"
 

@@ -12,7 +12,7 @@
 #include <set>
 
 #include "tests/worker/io/pnts_reader.h"
-#include "worker/io/tileset_writer.h"
+#include "worker/io/cloud/tileset_writer.h"
 #include "worker/mapping/lod_octree.h"
 
 namespace keel::io {

@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "worker/core/point_cloud.h"
-#include "worker/core/pose.h"
+#include "core/point_cloud.h"
+#include "core/pose.h"
 
 namespace keel::mapping::testing {
 

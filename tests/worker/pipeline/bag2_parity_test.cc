@@ -9,9 +9,9 @@
 #include "tests/sim/simulator.h"
 #include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/tum.h"
-#include "worker/pipeline/ingest_stage.h"
-#include "worker/pipeline/map_stage.h"
-#include "worker/pipeline/refine_stage.h"
+#include "worker/stages/ingest/stage.h"
+#include "worker/stages/map/stage.h"
+#include "worker/stages/refine/stage.h"
 
 namespace keel::pipeline {
 namespace {

@@ -1,6 +1,6 @@
 // The compare stage on synthetic job folders: a scene and its later survey (a block added, a
 // known rigid offset), a hull job, and the refusals (map vs hull, other project, unfinished).
-#include "worker/pipeline/compare_stage.h"
+#include "worker/stages/compare/stage.h"
 
 #include <gtest/gtest.h>
 
@@ -18,13 +18,13 @@
 
 #include "proto/contract_error.h"
 #include "tests/worker/compare/test_surfaces.h"
-#include "worker/io/draco_codec.h"
-#include "worker/pipeline/ba_stage.h"
-#include "worker/pipeline/compare_hulls.h"
-#include "worker/pipeline/compare_runs.h"
+#include "worker/io/draco/draco_codec.h"
+#include "worker/stages/ba/stage.h"
+#include "worker/stages/compare/compare_hulls.h"
+#include "worker/stages/compare/compare_runs.h"
 #include "worker/pipeline/draco_sidecar.h"
-#include "worker/pipeline/inspect_stage.h"
-#include "worker/pipeline/map_stage.h"
+#include "worker/stages/inspect/stage.h"
+#include "worker/stages/map/stage.h"
 #include "worker/pipeline/report.h"
 
 namespace keel::pipeline {

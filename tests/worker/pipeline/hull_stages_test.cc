@@ -20,13 +20,13 @@
 
 #include "tests/sim/simulator.h"
 #include "tests/worker/pipeline/stage_run.h"
-#include "worker/ba/mesh_query.h"
-#include "worker/io/draco_codec.h"
-#include "worker/io/mesh_reader.h"
+#include "core/mesh_query.h"
+#include "worker/io/draco/draco_codec.h"
+#include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/tum.h"
 #include "worker/io/yaml_json.h"
-#include "worker/pipeline/ba_stage.h"
-#include "worker/pipeline/inspect_stage.h"
+#include "worker/stages/ba/stage.h"
+#include "worker/stages/inspect/stage.h"
 
 namespace keel::pipeline {
 namespace {
@@ -79,7 +79,7 @@ void expect_dvl_residual_table(const fs::path& table, const fs::path& cad, const
   std::string line;
   ASSERT_TRUE(std::getline(in, line)) << table;
   EXPECT_EQ(line, "state,t,x_model_m,y_model_m,z_model_m,residual_m");
-  const ba::MeshQuery query(io::read_mesh(cad));
+  const keel::MeshQuery query(io::read_mesh(cad));
   std::map<std::string, int> rows;
   while (std::getline(in, line)) {
     std::istringstream fields(line);

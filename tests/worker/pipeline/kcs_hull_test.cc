@@ -11,8 +11,8 @@
 
 #include "tests/sim/simulator.h"
 #include "tests/worker/pipeline/stage_run.h"
-#include "worker/pipeline/ba_stage.h"
-#include "worker/pipeline/inspect_stage.h"
+#include "worker/stages/ba/stage.h"
+#include "worker/stages/inspect/stage.h"
 
 namespace keel::pipeline {
 namespace {

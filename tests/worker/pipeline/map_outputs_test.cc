@@ -1,7 +1,7 @@
 // The map stage's extra files: the even thinning (exact count, uniform), the preview as a subset of
 // the map with the expected count, spread evenly in space and with each point's sensor kept, and
 // the per-point metrics against a brute-force neighbourhood count (Eq. 23) and plane fit (Eq. 24).
-#include "worker/pipeline/map_outputs.h"
+#include "worker/stages/map/map_outputs.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -12,7 +12,7 @@
 #include <map>
 #include <random>
 
-#include "worker/io/draco_codec.h"
+#include "worker/io/draco/draco_codec.h"
 
 namespace keel::pipeline {
 namespace {

@@ -4,7 +4,7 @@
 // error reported is the decoded-vs-original one, an Ouster-style uint32 nanosecond time field
 // gives the same map as Velodyne float seconds, tray sensors are skipped with a reason, and
 // option errors name the option.
-#include "worker/pipeline/map_stage.h"
+#include "worker/stages/map/stage.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -24,11 +24,11 @@
 #include "tests/sim/simulator.h"
 #include "tests/worker/io/pnts_reader.h"
 #include "tests/worker/pipeline/stage_run.h"
-#include "worker/io/draco_codec.h"
+#include "worker/io/draco/draco_codec.h"
 #include "worker/io/folder_index.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/tum.h"
-#include "worker/pipeline/refine_stage.h"
+#include "worker/stages/refine/stage.h"
 
 namespace keel::pipeline {
 namespace {

@@ -1,4 +1,4 @@
-#include "worker/pipeline/output_runner.h"
+#include "worker/stages/map/output_runner.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // Stage `refine` on short keel-sim missions (usv-bridge, IMU + DVL only): the refined keyframes
 // are closer to the simulator's ground truth than the recorded MAP poses and than the
 // refinement without DVL (seed 000 Table II); option and input errors name what is wrong.
-#include "worker/pipeline/refine_stage.h"
+#include "worker/stages/refine/stage.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -24,15 +24,15 @@
 #include <unordered_map>
 
 #include "tests/sim/simulator.h"
-#include "worker/io/draco_codec.h"
-#include "worker/io/mesh_reader.h"
+#include "worker/io/draco/draco_codec.h"
+#include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/mission.h"
-#include "worker/io/scan_file.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/tum.h"
-#include "worker/pipeline/ba_stage.h"
+#include "worker/stages/ba/stage.h"
 #include "worker/pipeline/job_runner.h"
-#include "worker/pipeline/map_stage.h"
-#include "worker/pipeline/refine_stage.h"
+#include "worker/stages/map/stage.h"
+#include "worker/stages/refine/stage.h"
 #include "worker/pipeline/report.h"
 #include "worker/pipeline/trajectories_file.h"
 

@@ -15,13 +15,13 @@
 
 #include "tests/worker/io/pnts_reader.h"
 #include "tests/worker/mapping/test_clouds.h"
-#include "worker/io/ply_cloud_writer.h"
+#include "worker/io/cloud/ply_cloud_writer.h"
 #include "worker/mapping/filter_chain.h"
 #include "worker/mapping/map_builder.h"
 #include "worker/mapping/map_metrics.h"
-#include "worker/pipeline/map_lod.h"
-#include "worker/pipeline/tiled_maps.h"
-#include "worker/pipeline/tiled_outputs.h"
+#include "worker/stages/map/map_lod.h"
+#include "worker/stages/map/tiled_maps.h"
+#include "worker/stages/map/tiled_outputs.h"
 
 namespace keel::pipeline {
 namespace {

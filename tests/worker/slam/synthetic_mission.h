@@ -8,7 +8,7 @@
 
 #include <cstdint>
 
-#include "worker/core/pose.h"
+#include "core/pose.h"
 #include "worker/slam/imu_preintegration.h"
 #include "worker/slam/refine_solver.h"
 

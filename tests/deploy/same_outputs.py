@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""The demo missions' outputs, byte for byte: a manifest of every artifact's SHA-256.
+
+    same_outputs.py manifest BIN_DIR WORK_DIR > manifest.txt
+    same_outputs.py check BIN_DIR WORK_DIR MANIFEST
+
+Runs keel-sim and `keel-worker run` (the pipeline without a server) on the README demo's
+missions: usv-bridge (ingest, refine, map), hauv-hull (ingest, refine, ba, inspect), and a
+compare of two usv-bridge surveys, then hashes every artifact. A refactoring that keeps
+behaviour must keep every hash: `check` fails naming each artifact that differs.
+
+Timings are the one thing not deterministic: in report.json and report.html the values under
+TIMING_KEYS (wall and CPU seconds, memory peaks) are replaced by "timing" before hashing. Every
+other byte counts, whatever the thread count (ordered_parallel commits results in order).
+"""
+import hashlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+# Keys whose values measure the machine, not the result.
+TIMING_KEYS = re.compile(
+    r"^(stage_seconds|.*_seconds|seconds|.*_s_wall|wall_s|cpu_s|.*_wall_s|.*_cpu_s|"
+    r"peak_rss_mib|.*_rss_mib|.*points_per_s|.*_per_second|throughput.*|timing|timings)$")
+
+MISSIONS = [
+    # name, keel-sim arguments, stages
+    ("bridge", ["--scenario", "usv-bridge", "--seed", "1", "--duration", "60"],
+     "ingest,refine,map"),
+    ("hull", ["--scenario", "hauv-hull", "--seed", "1", "--duration", "60"],
+     "ingest,refine,ba,inspect"),
+    ("bridge_survey2", ["--scenario", "usv-bridge", "--seed", "1", "--duration", "60",
+                        "--survey", "2"], "ingest,refine,map"),
+]
+
+
+def run(cmd):
+    done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if done.returncode != 0:
+        sys.stderr.write(done.stdout)
+        raise SystemExit(f"failed ({done.returncode}): {' '.join(cmd)}")
+
+
+def mask_timings(value, key=""):
+    if isinstance(value, dict):
+        return {k: ("timing" if TIMING_KEYS.match(k) else mask_timings(v, k))
+                for k, v in value.items()}
+    if isinstance(value, list):
+        return [mask_timings(v, key) for v in value]
+    return value
+
+
+def masked_pointers(value, pointer=""):
+    """JSON pointers of every value mask_timings replaces."""
+    out = []
+    if isinstance(value, dict):
+        for k, v in value.items():
+            p = pointer + "/" + k.replace("~", "~0").replace("/", "~1")
+            if TIMING_KEYS.match(k):
+                out.append(p)
+            else:
+                out += masked_pointers(v, p)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            out += masked_pointers(v, f"{pointer}/{i}")
+    return out
+
+
+def digest(path, report):
+    data = open(path, "rb").read()
+    name = os.path.basename(path)
+    if name == "report.json":
+        data = json.dumps(mask_timings(json.loads(data)), sort_keys=False).encode()
+    elif name == "report.html" and report is not None:
+        # <data value="X" data-pointer="P">X</data>: a timing's value, wherever it is printed.
+        text = data.decode("utf-8")
+        for pointer in masked_pointers(report):
+            p = re.escape(pointer.replace("&", "&amp;").replace('"', "&quot;"))
+            text = re.sub(r'<data value="[^"]*" data-pointer="' + p + r'(/[^"]*)?">[^<]*</data>',
+                          '<data value="timing">timing</data>', text)
+        # Timings also appear as plain numbers in the timeline; mask "<n> s" cells of it.
+        text = re.sub(r'(<section id="summary">.*?</section>)',
+                      lambda m: re.sub(r"\d+(\.\d+)? s\b", "timing", m.group(1)), text,
+                      flags=re.S)
+        data = text.encode()
+    return hashlib.sha256(data).hexdigest()
+
+
+def manifest(bin_dir, work):
+    sim, worker = os.path.join(bin_dir, "keel-sim"), os.path.join(bin_dir, "keel-worker")
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    lines = []
+    for name, args, stages in MISSIONS:
+        mission, out = os.path.join(work, name), os.path.join(work, name + "-out")
+        run([sim, *args, "--out", mission])
+        run([worker, "run", "--mission", mission, "--stages", stages, "--out", out])
+    run([worker, "compare", "--a", os.path.join(work, "bridge-out"),
+         "--b", os.path.join(work, "bridge_survey2-out"), "--out", os.path.join(work, "compare-out")])
+    for name in ["bridge", "hull", "bridge_survey2", "compare"]:
+        out = os.path.join(work, name + "-out")
+        report = None
+        if os.path.isfile(os.path.join(out, "report.json")):
+            report = json.load(open(os.path.join(out, "report.json")))
+        for file in sorted(os.listdir(out)):
+            path = os.path.join(out, file)
+            if os.path.isfile(path) and not file.startswith("."):
+                lines.append(f"{digest(path, report)}  {name}/{file}")
+    return lines
+
+
+def main():
+    if len(sys.argv) < 4 or sys.argv[1] not in ("manifest", "check"):
+        raise SystemExit(__doc__)
+    lines = manifest(sys.argv[2], sys.argv[3])
+    if sys.argv[1] == "manifest":
+        print("\n".join(lines))
+        return 0
+    expected = [l for l in open(sys.argv[4]).read().splitlines() if l and not l.startswith("#")]
+    want = {l.split("  ", 1)[1]: l.split("  ", 1)[0] for l in expected}
+    have = {l.split("  ", 1)[1]: l.split("  ", 1)[0] for l in lines}
+    problems = [f"{f}: missing" for f in want if f not in have]
+    problems += [f"{f}: not in the manifest (a new artifact?)" for f in have if f not in want]
+    problems += [f"{f}: differs" for f in want if f in have and want[f] != have[f]]
+    for p in sorted(problems):
+        print(p)
+    print(f"{len(have)} artifacts, {len(problems)} differ from {sys.argv[4]}")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
