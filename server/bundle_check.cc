@@ -8,39 +8,21 @@
 #include <set>
 #include <vector>
 
+#include "core/tar_path.h"
+
 namespace keel::server {
 
 namespace {
 
 using ArchivePtr = std::unique_ptr<archive, decltype(&archive_read_free)>;
 
-std::vector<std::string> split_components(const std::string& path) {
-  std::vector<std::string> parts;
-  size_t start = 0;
-  while (start <= path.size()) {
-    size_t slash = path.find('/', start);
-    if (slash == std::string::npos) slash = path.size();
-    std::string part = path.substr(start, slash - start);
-    if (!part.empty() && part != ".") parts.push_back(part);
-    start = slash + 1;
-  }
-  return parts;
-}
-
-std::string join(const std::vector<std::string>& parts, size_t count) {
-  std::string out;
-  for (size_t i = 0; i < count; ++i) out += (i ? "/" : "") + parts[i];
-  return out;
-}
-
 // The member's normalized relative components; throws unsafe_path for '/' or '..'.
 std::vector<std::string> safe_components(const std::string& name, const std::string& what) {
   if (!name.empty() && name.front() == '/')
     throw BundleError("unsafe_path", what + " '" + name + "' is an absolute path");
-  std::vector<std::string> parts = split_components(name);
-  for (const auto& part : parts)
-    if (part == "..")
-      throw BundleError("unsafe_path", what + " '" + name + "' has a '..' component");
+  std::vector<std::string> parts = tar_path_components(name);
+  if (has_parent_component(parts))
+    throw BundleError("unsafe_path", what + " '" + name + "' has a '..' component");
   return parts;
 }
 
@@ -50,7 +32,7 @@ void check_symlink_target(const std::string& member, const std::vector<std::stri
   const std::string what = "member '" + member + "': symlink target '" + target + "'";
   if (target.empty()) throw BundleError("bad_bundle", what + " is empty");
   if (target.front() == '/') throw BundleError("unsafe_path", what + " is absolute");
-  std::vector<std::string> parts = split_components(target);
+  std::vector<std::string> parts = tar_path_components(target);
   size_t depth = link_parts.empty() ? 0 : link_parts.size() - 1;  // folder holding the link
   bool seen_normal = false;
   for (const auto& part : parts) {
@@ -119,7 +101,7 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file,
     } else if (type == AE_IFLNK) {
       const char* target = archive_entry_symlink(entry);
       check_symlink_target(name, parts, target ? target : "");
-      symlinks.insert(join(parts, parts.size()));
+      symlinks.insert(join_tar_path(parts, parts.size()));
     } else if (type == AE_IFREG) {
       summary.file_bytes += archive_entry_size(entry);
       if (static_cast<double>(summary.file_bytes) > max_file_bytes)
@@ -141,7 +123,7 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file,
     members.push_back({name, std::move(parts)});
     if (hardlink) {
       // A hardlink's target may not pass through a symlink either.
-      members.push_back({name, split_components(hardlink)});
+      members.push_back({name, tar_path_components(hardlink)});
     }
 
     // Reading the data (rather than trusting the header) catches a truncated tar here.
@@ -155,7 +137,7 @@ BundleSummary check_mission_bundle(const std::filesystem::path& tar_file,
   // Unpacking a member below a symlink would write through it, wherever it points.
   for (const auto& member : members) {
     for (size_t count = 1; count < member.parts.size(); ++count) {
-      std::string prefix = join(member.parts, count);
+      std::string prefix = join_tar_path(member.parts, count);
       if (symlinks.count(prefix))
         throw BundleError("unsafe_path",
                           "member '" + member.name + "' lies under the symlink '" + prefix + "'");

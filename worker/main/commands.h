@@ -28,5 +28,6 @@ Subcommand add_rpe_command(CLI::App& app);    // rpe_command.cc (evo_rpe)
 Subcommand add_filter_command(CLI::App& app);   // filter_command.cc (map filter chains)
 Subcommand add_metrics_command(CLI::App& app);  // metrics_command.cc (Table V metrics)
 Subcommand add_compare_command(CLI::App& app);  // compare_command.cc (two job folders)
+Subcommand add_options_command(CLI::App& app);  // options_command.cc (stage options, docs)
 
 }  // namespace keel::worker

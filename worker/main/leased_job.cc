@@ -167,6 +167,12 @@ pipeline::JobSpec LeasedJob::prepare() {
 
   pipeline::JobSpec spec;
   spec.job = lease_.job.to_json();
+  spec.report_job = {{"id", lease_.job.id},
+                     {"mission_id", lease_.job.mission_id},
+                     {"stages", lease_.job.stages},
+                     {"options", lease_.job.options},
+                     {"attempts", lease_.job.attempts}};
+  spec.report_mission = lease_.mission.to_json();
   const proto::Mission& mission = lease_.mission;
 
   // A compare job reads two finished jobs' artifacts, not the mission (issue 16).
@@ -225,8 +231,6 @@ pipeline::JobSpec LeasedJob::prepare() {
   spec.options = lease_.job.options;
   for (const auto& output : lease_.completed) {
     spec.completed.push_back({output.stage, output.report, output.seconds});
-    reports_[output.stage] = output.report;
-    stage_seconds_[output.stage] = output.seconds;
   }
   return spec;
 }
@@ -243,10 +247,7 @@ void LeasedJob::download_completed_artifacts(const fs::path& work_dir) {
 
 void LeasedJob::on_stage_done(const std::string& stage, const pipeline::StageResult& result,
                               double seconds) {
-  reports_[stage] = result.report;
-  stage_seconds_[stage] = seconds;
   for (const auto& name : result.artifacts) upload_artifact(stage, name);
-  if (stage == lease_.job.stages.back()) upload_report(stage);
   proto::StageCompletion completion;
   completion.lease_id = lease_.lease_id;
   completion.report = result.report;
@@ -267,40 +268,19 @@ void LeasedJob::upload_artifact(const std::string& stage, const std::string& nam
   log(stage + ": uploaded " + name + " (" + std::to_string(fs::file_size(file)) + " bytes)");
 }
 
-pipeline::ReportInput LeasedJob::report_input() const {
-  pipeline::ReportInput input;
-  const proto::Job& job = lease_.job;
-  input.job = {{"id", job.id},
-               {"mission_id", job.mission_id},
-               {"stages", job.stages},
-               {"options", job.options},
-               {"attempts", job.attempts}};
-  input.mission = lease_.mission.to_json();
-  input.stage_order = job.stages;
-  input.stages = reports_;
-  input.stage_seconds = stage_seconds_;
-  return input;
-}
-
-void LeasedJob::upload_report(const std::string& stage) {
-  for (const auto& name :
-       pipeline::write_report_files(work_dir_, pipeline::build_report(report_input())))
-    upload_artifact(stage, name);
-  report_uploaded_ = true;
-}
-
-void LeasedJob::upload_failure_report(const std::string& failed_stage, const std::string& error) {
-  pipeline::ReportInput input = report_input();
-  input.stage_order.clear();  // the stages that finished, in the job's order
-  for (const auto& stage : lease_.job.stages)
-    if (reports_.contains(stage)) input.stage_order.push_back(stage);
-  input.failure = {{"stage", failed_stage}, {"error", error}};
-  // Under the last stage, as a finished job's report: a retry that succeeds replaces it.
+// report.json and report.html written by the runner outside a stage's artifacts (a failed
+// job's, or a job whose stages all finished earlier), uploaded under the last stage as a
+// finished job's report is: a retry that succeeds replaces them.
+void LeasedJob::upload_report_files(const pipeline::JobResult& result) {
+  if (!result.report_error.empty()) {
+    log("could not write the job's report: " + result.report_error);
+    return;
+  }
   try {
-    for (const auto& name : pipeline::write_report_files(work_dir_, pipeline::build_report(input)))
-      upload_artifact(lease_.job.stages.back(), name);
+    for (const auto& name : result.report_files) upload_artifact(lease_.job.stages.back(), name);
   } catch (const std::exception& e) {
-    // The failure itself still gets posted; the report is a courtesy.
+    // A failure itself still gets posted; its report is a courtesy.
+    if (result.outcome != pipeline::JobOutcome::kFailed) throw;
     log("could not upload the failed job's report: " + std::string(e.what()));
   }
 }
@@ -312,13 +292,13 @@ JobEnd LeasedJob::finish(const pipeline::JobResult& result) {
       if (heartbeat_->canceled()) return JobEnd::kCanceled;  // the server knows; say nothing more
       return give_back("worker stopping");
     case pipeline::JobOutcome::kFailed:
-      if (!lease_.job.stages.empty()) upload_failure_report(result.failed_stage, result.error);
+      if (!lease_.job.stages.empty()) upload_report_files(result);
       return fail(result.error);
     case pipeline::JobOutcome::kSucceeded:
       break;
   }
-  // Every stage was completed by earlier attempts: report.json may not have been uploaded.
-  if (!report_uploaded_) upload_report(lease_.job.stages.back());
+  // Every stage was completed by earlier attempts: the report is not among any stage's.
+  upload_report_files(result);
   if (!heartbeat_->flush(api_) && heartbeat_->lease_lost()) return abandon("lease lost");
   proto::JobFinish finish;
   finish.lease_id = lease_.lease_id;

@@ -54,9 +54,7 @@ class LeasedJob {
   void download_completed_artifacts(const std::filesystem::path& work_dir);
   void on_stage_done(const std::string& stage, const pipeline::StageResult& result, double seconds);
   void upload_artifact(const std::string& stage, const std::string& name);
-  pipeline::ReportInput report_input() const;
-  void upload_report(const std::string& stage);
-  void upload_failure_report(const std::string& failed_stage, const std::string& error);
+  void upload_report_files(const pipeline::JobResult& result);
   JobEnd finish(const pipeline::JobResult& result);
   JobEnd fail(const std::string& error);
   JobEnd abandon(const std::string& why);
@@ -75,9 +73,6 @@ class LeasedJob {
 
   std::filesystem::path job_dir_;
   std::filesystem::path work_dir_;
-  nlohmann::json reports_ = nlohmann::json::object();  // every finished stage's section
-  std::map<std::string, double> stage_seconds_;
-  bool report_uploaded_ = false;
   JobHeartbeat* heartbeat_ = nullptr;  // while run() runs
 };
 

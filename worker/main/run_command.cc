@@ -114,6 +114,9 @@ int run_local(const RunArgs& args) {
   }
   if (!args.cad.empty()) spec.cad_path = fs::absolute(args.cad);
 
+  spec.report_job = {{"id", "local"}, {"stages", spec.stages}, {"options", spec.options}};
+  spec.report_mission = {{"path", spec.mission_dir.string()}, {"cad", spec.cad_path.string()}};
+
   ProgressPrinter printer;
   pipeline::JobHooks hooks;
   hooks.progress = [&](const std::string& stage, double p) { printer(stage, p); };
@@ -125,20 +128,8 @@ int run_local(const RunArgs& args) {
     std::cerr << "keel-worker run: interrupted during " << result.failed_stage << "\n";
     return kExitInterrupted;
   }
-  pipeline::ReportInput input;
-  input.job = {{"id", "local"}, {"stages", spec.stages}, {"options", spec.options}};
-  input.mission = {{"path", spec.mission_dir.string()}, {"cad", spec.cad_path.string()}};
-  input.stages = result.reports;
-  input.stage_seconds = result.stage_seconds;
-  // A failed run's report holds the stages that finished, and the error.
-  for (const auto& stage : spec.stages)
-    if (result.reports.contains(stage)) input.stage_order.push_back(stage);
-  if (result.outcome == pipeline::JobOutcome::kFailed)
-    input.failure = {{"stage", result.failed_stage}, {"error", result.error}};
-  try {
-    pipeline::write_report_files(spec.work_dir, pipeline::build_report(input));
-  } catch (const std::exception& e) {
-    std::cerr << "keel-worker run: " << e.what() << "\n";
+  if (!result.report_error.empty()) {
+    std::cerr << "keel-worker run: " << result.report_error << "\n";
     return kExitStageFailed;
   }
   if (result.outcome == pipeline::JobOutcome::kFailed) {

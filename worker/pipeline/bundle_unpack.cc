@@ -9,6 +9,8 @@
 #include <system_error>
 #include <vector>
 
+#include "core/tar_path.h"
+
 namespace keel::pipeline {
 
 namespace fs = std::filesystem;
@@ -25,26 +27,6 @@ struct WriteCloser {
 std::string archive_message(archive* a) {
   const char* text = archive_error_string(a);
   return text ? text : "unknown libarchive error";
-}
-
-// Splits a member name into components, dropping "" and "." ("./a//b" -> a, b).
-std::vector<std::string> components(const std::string& name) {
-  std::vector<std::string> parts;
-  size_t start = 0;
-  while (start <= name.size()) {
-    size_t slash = name.find('/', start);
-    if (slash == std::string::npos) slash = name.size();
-    std::string part = name.substr(start, slash - start);
-    if (!part.empty() && part != ".") parts.push_back(std::move(part));
-    start = slash + 1;
-  }
-  return parts;
-}
-
-std::string join(const std::vector<std::string>& parts) {
-  std::string out;
-  for (const auto& p : parts) out += (out.empty() ? "" : "/") + p;
-  return out;
 }
 
 // True when `inner` is `outer` or below it (both canonical, component-wise).
@@ -113,10 +95,10 @@ class Unpacker {
     const std::string name(raw);
     if (name.empty()) fail_member(name, "empty member name");
     if (name.front() == '/') fail_member(name, "absolute path not allowed");
-    const auto parts = components(name);
-    for (const auto& part : parts)
-      if (part == "..") fail_member(name, "'..' component not allowed (path leaves the bundle)");
-    return join(parts);
+    const auto parts = tar_path_components(name);
+    if (has_parent_component(parts))
+      fail_member(name, "'..' component not allowed (path leaves the bundle)");
+    return join_tar_path(parts);
   }
 
   // A symlink's text, resolved lexically from the member's folder, must stay inside.
@@ -125,9 +107,9 @@ class Unpacker {
     const std::string text(target);
     if (text.front() == '/')
       fail_member(member, "symbolic link to absolute path '" + text + "' not allowed");
-    auto parts = components(rel);
+    auto parts = tar_path_components(rel);
     parts.pop_back();  // the link's own name
-    for (const auto& part : components(text)) {
+    for (const auto& part : tar_path_components(text)) {
       if (part != "..") {
         parts.push_back(part);
       } else if (parts.empty()) {
@@ -159,12 +141,12 @@ class Unpacker {
       const std::string target(hardlink);
       if (target.empty() || target.front() == '/')
         fail_member(member, "hard link to absolute path '" + target + "' not allowed");
-      const auto parts = components(target);
-      for (const auto& part : parts)
-        if (part == "..") fail_member(member, "hard link to '" + target + "' leaves the bundle");
-      if (!regular_files_.count(join(parts)))
+      const auto parts = tar_path_components(target);
+      if (has_parent_component(parts))
+        fail_member(member, "hard link to '" + target + "' leaves the bundle");
+      if (!regular_files_.count(join_tar_path(parts)))
         fail_member(member, "hard link to '" + target + "', which is not an earlier file member");
-      archive_entry_set_hardlink(entry, (root_ / join(parts)).c_str());
+      archive_entry_set_hardlink(entry, (root_ / join_tar_path(parts)).c_str());
     } else if (type == AE_IFLNK) {
       if (rel.empty()) fail_member(member, "the bundle root cannot be a symbolic link");
       check_symlink_text(member, rel, archive_entry_symlink(entry));

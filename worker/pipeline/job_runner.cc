@@ -8,6 +8,8 @@
 #include <utility>
 
 #include "worker/io/display_path.h"
+#include "worker/pipeline/report.h"
+#include "worker/pipeline/report_html.h"
 
 namespace keel::pipeline {
 
@@ -62,6 +64,21 @@ class ProgressForwarder {
   bool reported_ = false;
 };
 
+// report.json of the stages finished so far (in the job's order) and, for a failed job, its
+// error; written with report.html into work_dir. Returns the file names.
+std::vector<std::string> write_report(const JobSpec& spec, const JobResult& result) {
+  ReportInput input;
+  input.job = spec.report_job;
+  input.mission = spec.report_mission;
+  input.stages = result.reports;
+  input.stage_seconds = result.stage_seconds;
+  for (const auto& stage : spec.stages)
+    if (result.reports.contains(stage)) input.stage_order.push_back(stage);
+  if (result.outcome == JobOutcome::kFailed)
+    input.failure = {{"stage", result.failed_stage}, {"error", result.error}};
+  return write_report_files(spec.work_dir, build_report(input));
+}
+
 }  // namespace
 
 std::string to_string(JobOutcome outcome) {
@@ -86,15 +103,25 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     if (hooks.log) hooks.log(line);
   };
   auto canceled = [&] { return hooks.canceled && hooks.canceled(); };
+  // 5. report.json and report.html, outside the last stage's artifacts.
+  auto report_aside = [&] {
+    try {
+      result.report_files = write_report(spec, result);
+    } catch (const std::exception& e) {
+      result.report_error = e.what();
+    }
+  };
   auto fail = [&](const std::string& stage, const std::string& message) {
     result.outcome = JobOutcome::kFailed;
     result.failed_stage = stage;
     result.error = stage + ": " + message;
     log("failed: " + result.error);
+    report_aside();
     return result;
   };
 
   std::set<std::string> done;
+  bool report_with_last_stage = false;
   for (const auto& completed : spec.completed) {
     result.reports[completed.stage] = completed.report;
     result.stage_seconds[completed.stage] = completed.seconds;
@@ -182,8 +209,19 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     result.stage_seconds[name] = seconds;
     result.ran.push_back(name);
     log(name + ": done in " + format_seconds(seconds) + " s");
+    // 5. After the last stage, the report is among its artifacts.
+    if (i + 1 == stages.size()) {
+      try {
+        for (auto& file : write_report(spec, result)) stage_result.artifacts.push_back(file);
+        report_with_last_stage = true;
+      } catch (const std::exception& e) {
+        return fail(name, e.what());
+      }
+    }
     if (hooks.on_stage_done) hooks.on_stage_done(name, stage_result, seconds);
   }
+  // Every stage was finished by an earlier attempt (or none was asked for).
+  if (!report_with_last_stage) report_aside();
   return result;
 }
 

@@ -8,7 +8,11 @@
 //   3. run each remaining stage with its options and the reports of the stages before it,
 //      timing it and forwarding its progress (monotone, in [0, 1]) and log lines;
 //   4. a std::exception thrown by a stage ends the job as failed with "<stage>: <what()>";
-//      Canceled (or hooks.canceled() turning true) ends it as canceled.
+//      Canceled (or hooks.canceled() turning true) ends it as canceled;
+//   5. report.json and report.html of every finished stage (and a failed job's error) are
+//      written into work_dir, for `keel-worker serve` and `keel-worker run` alike. After the
+//      last stage they are among its artifacts (so they are uploaded with them); otherwise
+//      JobResult::report_files names them.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -40,6 +44,10 @@ struct JobSpec {
   std::vector<CompletedStage> completed;              // skipped; reports passed on
   std::vector<InputJob> input_jobs;                   // the jobs a `compare` stage reads
   nlohmann::json job = nlohmann::json::object();      // the job's own record (a lease's)
+  // What report.json says of the job ({"id", "stages", "options", ...}) and of its mission
+  // ({"id", "name", ...} or {"path", "cad"}).
+  nlohmann::json report_job = nlohmann::json::object();
+  nlohmann::json report_mission = nlohmann::json::object();
 };
 
 // Every hook is optional. They are called on the thread that calls run(). An exception
@@ -64,6 +72,11 @@ struct JobResult {
   nlohmann::json reports = nlohmann::json::object();
   std::map<std::string, double> stage_seconds;
   std::vector<std::string> ran;  // stages run (not skipped) by this call, in order
+  // report.json and report.html when they were written and are not among the last stage's
+  // artifacts (a failed job; a job whose stages were all finished earlier); `report_error`
+  // says why they could not be written (the job's outcome stands).
+  std::vector<std::string> report_files;
+  std::string report_error;
 };
 
 using StageFactory = std::function<std::unique_ptr<Stage>(const std::string& name)>;

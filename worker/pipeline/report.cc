@@ -1,62 +1,11 @@
 #include "worker/pipeline/report.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <atomic>
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <set>
 #include <stdexcept>
 
+#include "core/replaced_file.h"
 
 namespace keel::pipeline {
-
-namespace {
-
-std::runtime_error io_error(const std::filesystem::path& path, const std::string& what) {
-  return std::runtime_error(path.string() + ": " + what + ": " + std::strerror(errno));
-}
-
-void write_all(int fd, const std::string& bytes, const std::filesystem::path& path) {
-  size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw io_error(path, "write failed");
-    done += static_cast<size_t>(n);
-  }
-}
-
-}  // namespace
-
-// A temporary file in the same folder, flushed, renamed over `path`.
-void write_text_atomically(const std::filesystem::path& path, const std::string& text) {
-  static std::atomic<unsigned> counter{0};
-  const std::filesystem::path temp =
-      path.string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw io_error(temp, "cannot create");
-  try {
-    write_all(fd, text, temp);
-    if (::fsync(fd) != 0) throw io_error(temp, "fsync failed");
-  } catch (...) {
-    ::close(fd);
-    ::unlink(temp.c_str());
-    throw;
-  }
-  if (::close(fd) != 0) {
-    ::unlink(temp.c_str());
-    throw io_error(temp, "close failed");
-  }
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const auto error = io_error(path, "cannot rename " + temp.filename().string() + " over it");
-    ::unlink(temp.c_str());
-    throw error;
-  }
-}
-
 
 nlohmann::ordered_json build_report(const ReportInput& input) {
   const std::set<std::string> in_order(input.stage_order.begin(), input.stage_order.end());
@@ -94,7 +43,7 @@ nlohmann::ordered_json build_report(const ReportInput& input) {
 
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document) {
-  write_text_atomically(path, document.dump(2) + "\n");
+  write_file_replacing(path, document.dump(2) + "\n");
 }
 
 }  // namespace keel::pipeline

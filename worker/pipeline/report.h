@@ -35,12 +35,10 @@ struct ReportInput {
 // a section is not an object, or a section/duration belongs to no stage of stage_order.
 nlohmann::ordered_json build_report(const ReportInput& input);
 
-// Writes `document` (pretty-printed) to `path` atomically: a temporary file in the same
-// folder, flushed, then renamed over `path`. Throws std::runtime_error naming the file.
+// Writes `document` (pretty-printed) to `path` atomically (core/replaced_file.h: a temporary
+// sibling renamed over `path`). Throws std::runtime_error naming the file.
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document);
 
-// `text` as the whole content of `path`, through a temporary sibling renamed into place.
-void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 
 }  // namespace keel::pipeline

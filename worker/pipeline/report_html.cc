@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "worker/pipeline/html_text.h"
+#include "core/replaced_file.h"
 #include "worker/pipeline/report.h"
 #include "worker/pipeline/trajectories_file.h"
 #include "worker/pipeline/report_html_parts.h"
@@ -122,7 +123,7 @@ std::vector<std::string> write_report_files(const std::filesystem::path& work_di
   std::ifstream in(work_dir / kTrajectoriesFile);
   if (in) trajectories = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
   if (trajectories.is_discarded()) trajectories = nullptr;
-  write_text_atomically(work_dir / kReportHtmlFileName, render_report_html(report, trajectories));
+  write_file_replacing(work_dir / kReportHtmlFileName, render_report_html(report, trajectories));
   return {kReportFileName, kReportHtmlFileName};
 }
 
