@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "worker/pipeline/pose_json.h"
 #include "worker/pipeline/report.h"
 
 namespace keel::pipeline {

@@ -26,17 +26,10 @@
 #include "worker/ba/ba_options.h"
 #include "core/pose.h"
 #include "worker/pipeline/stage.h"
+#include "worker/pipeline/pose_json.h"
+#include "worker/stages/ba/artifacts.h"
 
 namespace keel::pipeline {
-
-inline constexpr const char* kBaTrajectoryFile = "trajectory_ba.tum";
-inline constexpr const char* kBaSolutionFile = "ba_solution.json";
-// Fig. 18(a)-(b): each DVL beam's residual where it meets the CAD mesh, after GICP and after the
-// BA (the artifacts' mode): `state,t,x_model_m,y_model_m,z_model_m,residual_m`.
-inline constexpr const char* kBaDvlResidualsFile = "dvl_residuals.csv";
-// The job's CAD mesh as a Draco mesh in its own (model) frame, for measuring against it in a
-// viewer; its sidecar is cad_model.json.
-inline constexpr const char* kCadModelFile = "cad_model.drc";
 
 // `--set ba.<name>=<value>`.
 struct BaStageOptions {
@@ -77,28 +70,6 @@ struct BaStageOptions {
   std::vector<ba::BaMode> modes() const;
 };
 
-// ba_solution.json <-> its contents (also what the inspect stage reads).
-struct BaSolutionLandmark {
-  int64_t id = 0;
-  Eigen::Vector3d point_world = Eigen::Vector3d::Zero();
-  double h_m = 0.0;        // Eq. (5) signed distance to the CAD mesh, positive outside
-  int lambda = 0;          // Eq. (7) label, 1 = on the model
-  std::vector<int> views;  // indices into BaSolution::T_world_camera
-};
-struct BaSolution {
-  std::string mode;
-  Pose3 T_world_model = Pose3::Identity();  // x_gM
-  std::vector<TimeNs> t_ns;                 // per keyframe
-  std::vector<Pose3> T_world_camera;        // per keyframe, top camera
-  std::vector<BaSolutionLandmark> landmarks;
-};
-nlohmann::json ba_solution_to_json(const BaSolution& solution);
-// Throws ContractError naming `source` and the field.
-BaSolution ba_solution_from_json(const nlohmann::json& document, const std::string& source);
-
-nlohmann::json pose_to_json(const Pose3& T);
-Pose3 pose_from_json(const nlohmann::json& value, const std::string& path);
-
 // A residual distribution as the report gives it (Fig. 18): count, mean, sigma (the standard
 // deviation), robust_sigma (1.4826 x the median absolute deviation from the median), the 5/25/
 // 50/75/95 percentiles and a histogram over +-histogram_range_m in histogram_bin_m bins.
@@ -108,7 +79,5 @@ nlohmann::json residual_stats(std::vector<double> residuals_m, const BaStageOpti
 // translation error's norm and its components along the true model frame's axes, m, and the
 // rotation angle between them, degrees.
 nlohmann::json model_error(const Pose3& estimate, const Pose3& truth);
-
-std::unique_ptr<Stage> make_ba_stage();
 
 }  // namespace keel::pipeline

@@ -12,9 +12,9 @@
 #include "worker/io/draco/draco_codec.h"
 #include "worker/io/mesh/mesh_ply_writer.h"
 #include "worker/mapping/map_metrics.h"
-#include "worker/stages/ba/stage.h"
+#include "worker/stages/ba/artifacts.h"
 #include "worker/pipeline/draco_sidecar.h"
-#include "worker/stages/inspect/stage.h"
+#include "worker/stages/inspect/artifacts.h"
 #include "worker/pipeline/report.h"
 
 namespace keel::pipeline {

@@ -22,7 +22,7 @@
 #include "worker/mapping/map_metrics.h"
 #include "core/parallel_for.h"
 #include "worker/pipeline/draco_sidecar.h"
-#include "worker/stages/map/stage.h"
+#include "worker/stages/map/artifacts.h"
 
 namespace keel::pipeline {
 namespace {

@@ -111,8 +111,6 @@ class CompareStage : public Stage {
 
 }  // namespace
 
-std::string change_draco_file(const std::string& name) { return "change_" + name + ".drc"; }
-std::string change_ply_file(const std::string& name) { return "change_" + name + ".ply"; }
 
 CompareStageOptions CompareStageOptions::from_json(const json& options) {
   CompareStageOptions o;

@@ -23,15 +23,9 @@
 #include "worker/compare/m3c2.h"
 #include "worker/compare/stable_registration.h"
 #include "worker/pipeline/stage.h"
+#include "worker/stages/compare/artifacts.h"
 
 namespace keel::pipeline {
-
-inline constexpr const char* kChangesFile = "changes.json";
-inline constexpr const char* kHullChangeName = "hull";
-
-// change_<name>.drc / .ply.
-std::string change_draco_file(const std::string& name);
-std::string change_ply_file(const std::string& name);
 
 // `--set compare.<name>=<value>`.
 struct CompareStageOptions {
@@ -67,7 +61,5 @@ struct CompareStageOptions {
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static CompareStageOptions from_json(const nlohmann::json& options);
 };
-
-std::unique_ptr<Stage> make_compare_stage();
 
 }  // namespace keel::pipeline

@@ -8,6 +8,5 @@
 
 namespace keel::pipeline {
 
-std::unique_ptr<Stage> make_ingest_stage();
 
 }  // namespace keel::pipeline

@@ -21,7 +21,7 @@
 #include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/mission.h"
 #include "worker/io/yaml_json.h"
-#include "worker/stages/ba/stage.h"
+#include "worker/stages/ba/artifacts.h"
 #include "worker/pipeline/draco_sidecar.h"
 #include "worker/pipeline/report.h"
 

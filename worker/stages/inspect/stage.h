@@ -18,12 +18,9 @@
 
 #include "worker/inspect/inspect_options.h"
 #include "worker/pipeline/stage.h"
+#include "worker/stages/inspect/artifacts.h"
 
 namespace keel::pipeline {
-
-inline constexpr const char* kRemeshedDracoFile = "mesh_remeshed.drc";
-inline constexpr const char* kRemeshedPlyFile = "mesh_remeshed.ply";
-inline constexpr const char* kShapesFile = "shapes.json";
 
 // `--set inspect.<name>=<value>`.
 struct InspectStageOptions {
@@ -40,7 +37,5 @@ struct InspectStageOptions {
   // Fails (ContractError) naming the option, and listing the known ones for an unknown name.
   static InspectStageOptions from_json(const nlohmann::json& options);
 };
-
-std::unique_ptr<Stage> make_inspect_stage();
 
 }  // namespace keel::pipeline

@@ -42,7 +42,7 @@
 #include "worker/pipeline/draco_sidecar.h"
 #include "worker/stages/map/map_outputs.h"
 #include "worker/stages/map/output_runner.h"
-#include "worker/stages/refine/stage.h"
+#include "worker/stages/refine/artifacts.h"
 #include "worker/stages/map/tiled_maps.h"
 #include "worker/stages/map/tiled_outputs.h"
 
@@ -1162,9 +1162,6 @@ class MapStage : public Stage {
 
 }  // namespace
 
-std::string map_draco_file(const std::string& sensor) { return "map_" + sensor + ".drc"; }
-std::string map_ply_file(const std::string& sensor) { return "map_" + sensor + ".ply"; }
-std::string map_tiles_file(const std::string& sensor) { return "tiles_" + sensor + ".tar"; }
 
 MapStageOptions MapStageOptions::from_json(const json& options) {
   MapStageOptions o;

@@ -22,16 +22,9 @@
 
 #include "worker/mapping/map_builder.h"
 #include "worker/pipeline/stage.h"
+#include "worker/stages/map/artifacts.h"
 
 namespace keel::pipeline {
-
-inline constexpr const char* kCombinedMapName = "combined";
-
-// `map_<sensor>.drc` / `map_<sensor>.ply` (sensor "combined" for the union).
-std::string map_draco_file(const std::string& sensor);
-std::string map_ply_file(const std::string& sensor);
-// `tiles_<sensor>.tar`: the map's level-of-detail tileset (docs/artifacts.md).
-std::string map_tiles_file(const std::string& sensor);
 
 // The smallest map.memory_budget_mb accepted: the spill store's buffers and one tile per
 // thread need a few MiB each; a dense map may need more (refused naming the minimum).
@@ -117,7 +110,5 @@ struct MapStageOptions {
   mapping::SensorMapOptions sensor_options(const std::string& sensor,
                                            const std::string& type) const;
 };
-
-std::unique_ptr<Stage> make_map_stage();
 
 }  // namespace keel::pipeline

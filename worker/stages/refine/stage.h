@@ -13,14 +13,10 @@
 #include <vector>
 
 #include "worker/pipeline/stage.h"
+#include "worker/stages/refine/artifacts.h"
 #include "worker/slam/refine_solver.h"
 
 namespace keel::pipeline {
-
-inline constexpr const char* kRefinedTrajectoryFile = "trajectory_refined.tum";
-// The self-check per keyframe: movement from the MAP pose and whether it exceeds the MAP
-// pose's stated uncertainty (slam::compare_with_map).
-inline constexpr const char* kSelfCheckFile = "refine_self_check.csv";
 
 // `--set refine.<name>=<value>`; defaults are seed 000's (Table I noise comes from mission.yaml).
 struct RefineStageOptions {
@@ -88,7 +84,5 @@ struct RefineStageOptions {
   // The solver options these stand for (sensor noise is filled in from mission.yaml).
   slam::RefineOptions solver_options() const;
 };
-
-std::unique_ptr<Stage> make_refine_stage();
 
 }  // namespace keel::pipeline
