@@ -21,10 +21,15 @@ import shutil
 import subprocess
 import sys
 
-# Keys whose values measure the machine, not the result.
+# Keys whose values measure the machine, not the result; and the names of the `compare` stage's
+# run figures ("map.combined.draco.encode_seconds") made of such keys.
 TIMING_KEYS = re.compile(
-    r"^(stage_seconds|.*_seconds|seconds|.*_s_wall|wall_s|cpu_s|.*_wall_s|.*_cpu_s|"
-    r"peak_rss_mib|.*_rss_mib|.*points_per_s|.*_per_second|throughput.*|timing|timings)$")
+    r"^(.*seconds|.*_time_s|.*wall_s|.*cpu_s|.*_rss_mib|.*points_per_s|.*_per_second)$")
+
+
+def is_timing_figure(value):
+    return (isinstance(value, dict) and isinstance(value.get("figure"), str) and
+            any(TIMING_KEYS.match(part) for part in value["figure"].split(".")))
 
 MISSIONS = [
     # name, keel-sim arguments, stages
@@ -49,7 +54,7 @@ def mask_timings(value, key=""):
         return {k: ("timing" if TIMING_KEYS.match(k) else mask_timings(v, k))
                 for k, v in value.items()}
     if isinstance(value, list):
-        return [mask_timings(v, key) for v in value]
+        return [("timing" if is_timing_figure(v) else mask_timings(v, key)) for v in value]
     return value
 
 
@@ -65,14 +70,16 @@ def masked_pointers(value, pointer=""):
                 out += masked_pointers(v, p)
     elif isinstance(value, list):
         for i, v in enumerate(value):
-            out += masked_pointers(v, f"{pointer}/{i}")
+            out += [f"{pointer}/{i}"] if is_timing_figure(v) else masked_pointers(v, f"{pointer}/{i}")
     return out
 
 
-def digest(path, report):
+def digest(path, report, work):
     data = open(path, "rb").read()
     name = os.path.basename(path)
-    if name == "report.json":
+    # Where the missions were written (report.json's mission path) is not an output.
+    data = data.replace(os.path.abspath(work).encode(), b"<work>")
+    if name in ("report.json", "changes.json"):
         data = json.dumps(mask_timings(json.loads(data)), sort_keys=False).encode()
     elif name == "report.html" and report is not None:
         # <data value="X" data-pointer="P">X</data>: a timing's value, wherever it is printed.
@@ -104,11 +111,12 @@ def manifest(bin_dir, work):
         out = os.path.join(work, name + "-out")
         report = None
         if os.path.isfile(os.path.join(out, "report.json")):
-            report = json.load(open(os.path.join(out, "report.json")))
+            text = open(os.path.join(out, "report.json")).read()
+            report = json.loads(text.replace(os.path.abspath(work), "<work>"))
         for file in sorted(os.listdir(out)):
             path = os.path.join(out, file)
             if os.path.isfile(path) and not file.startswith("."):
-                lines.append(f"{digest(path, report)}  {name}/{file}")
+                lines.append(f"{digest(path, report, work)}  {name}/{file}")
     return lines
 
 

@@ -44,7 +44,7 @@ using nlohmann::json;
 using proto::ContractError;
 using proto::SensorType;
 
-void require(bool ok, const std::string& option, const std::string& expected) {
+void local_require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.ba." + option + ": expected " + expected);
 }
 
@@ -563,35 +563,35 @@ BaStageOptions BaStageOptions::from_json(const json& options) {
   o.histogram_range_m = r.optional<double>("histogram_range_m", o.histogram_range_m);
   o.cad_draco_position_bits = r.optional<int>("cad_draco_position_bits", o.cad_draco_position_bits);
   r.finish();
-  require(o.mode == "all" || o.mode == "proposed" || o.mode == "geva" || o.mode == "naive", "mode",
+  local_require(o.mode == "all" || o.mode == "proposed" || o.mode == "geva" || o.mode == "naive", "mode",
           "proposed, geva, naive or all, got '" + o.mode + "'");
-  require(o.tracks == "frontend" || o.tracks == "ground_truth", "tracks",
+  local_require(o.tracks == "frontend" || o.tracks == "ground_truth", "tracks",
           "frontend or ground_truth, got '" + o.tracks + "'");
-  require(o.use_depth || o.depth_sensor.empty(), "depth_sensor", "empty when use_depth is false");
-  require(std::isfinite(o.dvl_max_dt_s) && o.dvl_max_dt_s > 0, "dvl_max_dt_s", "a positive number");
-  require(
+  local_require(o.use_depth || o.depth_sensor.empty(), "depth_sensor", "empty when use_depth is false");
+  local_require(std::isfinite(o.dvl_max_dt_s) && o.dvl_max_dt_s > 0, "dvl_max_dt_s", "a positive number");
+  local_require(
       std::isfinite(o.triangulation_max_reprojection_px) && o.triangulation_max_reprojection_px > 0,
       "triangulation_max_reprojection_px", "a positive number");
-  require(std::isfinite(o.servo_window_s) && o.servo_window_s >= 0, "servo_window_s",
+  local_require(std::isfinite(o.servo_window_s) && o.servo_window_s >= 0, "servo_window_s",
           "a number >= 0");
-  require(o.max_keyframes >= 0, "max_keyframes", ">= 0");
-  require(o.max_iterations > 0, "max_iterations", "> 0");
-  require(
+  local_require(o.max_keyframes >= 0, "max_keyframes", ">= 0");
+  local_require(o.max_iterations > 0, "max_iterations", "> 0");
+  local_require(
       std::isfinite(o.function_tolerance) && o.function_tolerance > 0 && o.function_tolerance < 1,
       "function_tolerance", "a number in (0, 1)");
-  require(o.threads > 0, "threads", "> 0");
-  require(o.linear_solver == "sparse_schur" || o.linear_solver == "iterative_schur" ||
+  local_require(o.threads > 0, "threads", "> 0");
+  local_require(o.linear_solver == "sparse_schur" || o.linear_solver == "iterative_schur" ||
               o.linear_solver == "dense_schur",
           "linear_solver",
           "sparse_schur, iterative_schur or dense_schur, got '" + o.linear_solver + "'");
-  require(o.dvl_range_normal == "interpolated" || o.dvl_range_normal == "facet", "dvl_range_normal",
+  local_require(o.dvl_range_normal == "interpolated" || o.dvl_range_normal == "facet", "dvl_range_normal",
           "interpolated or facet, got '" + o.dvl_range_normal + "'");
-  require(std::isfinite(o.histogram_bin_m) && o.histogram_bin_m > 0, "histogram_bin_m",
+  local_require(std::isfinite(o.histogram_bin_m) && o.histogram_bin_m > 0, "histogram_bin_m",
           "a positive number");
-  require(std::isfinite(o.histogram_range_m) && o.histogram_range_m >= o.histogram_bin_m &&
+  local_require(std::isfinite(o.histogram_range_m) && o.histogram_range_m >= o.histogram_bin_m &&
               o.histogram_range_m / o.histogram_bin_m <= 10000,
           "histogram_range_m", "a number in [histogram_bin_m, 10000 * histogram_bin_m]");
-  require(o.cad_draco_position_bits >= 1 && o.cad_draco_position_bits <= 30,
+  local_require(o.cad_draco_position_bits >= 1 && o.cad_draco_position_bits <= 30,
           "cad_draco_position_bits", "an integer in [1, 30]");
   return o;
 }

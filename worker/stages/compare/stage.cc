@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using proto::ContractError;
 
-void require(bool ok, const std::string& option, const std::string& expected) {
+void local_require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.compare." + option + ": expected " + expected);
 }
 
@@ -121,9 +121,9 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   r.optional<std::string>("job_b", "");
   if (r.has("sensors")) {
     const json& list = r.at("sensors");
-    require(list.is_array(), "sensors", "a list of map names");
+    local_require(list.is_array(), "sensors", "a list of map names");
     for (const auto& s : list) {
-      require(s.is_string() && !s.get<std::string>().empty(), "sensors", "a list of map names");
+      local_require(s.is_string() && !s.get<std::string>().empty(), "sensors", "a list of map names");
       o.sensors.push_back(s.get<std::string>());
     }
   }
@@ -161,25 +161,25 @@ CompareStageOptions CompareStageOptions::from_json(const json& options) {
   } catch (const std::invalid_argument& e) {
     throw ContractError(std::string("options.compare.") + e.what());
   }
-  require(std::isfinite(o.local_registration_tile_m) && o.local_registration_tile_m >= 0,
+  local_require(std::isfinite(o.local_registration_tile_m) && o.local_registration_tile_m >= 0,
           "local_registration_tile_m", "a number >= 0 (0: off)");
-  require(std::isfinite(o.registration_error_m), "registration_error_m",
+  local_require(std::isfinite(o.registration_error_m), "registration_error_m",
           "a number (< 0: from the registration)");
-  require(o.histogram_bins >= 1 && o.histogram_bins <= 1000, "histogram_bins",
+  local_require(o.histogram_bins >= 1 && o.histogram_bins <= 1000, "histogram_bins",
           "an integer in [1, 1000]");
-  require(std::isfinite(o.histogram_range_m) && o.histogram_range_m > 0, "histogram_range_m",
+  local_require(std::isfinite(o.histogram_range_m) && o.histogram_range_m > 0, "histogram_range_m",
           "> 0");
-  require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
+  local_require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
           "an integer in [1, 30]");
-  require(o.draco_compression_level >= 0 && o.draco_compression_level <= 10,
+  local_require(o.draco_compression_level >= 0 && o.draco_compression_level <= 10,
           "draco_compression_level", "an integer in [0, 10]");
-  require(o.draco_field_bits >= 0 && o.draco_field_bits <= 30, "draco_field_bits",
+  local_require(o.draco_field_bits >= 0 && o.draco_field_bits <= 30, "draco_field_bits",
           "an integer in [0, 30]");
-  require(std::isfinite(o.growth_sigmas) && o.growth_sigmas > 0, "growth_sigmas", "> 0");
-  require(std::isfinite(o.shape_max_offset_m) && o.shape_max_offset_m >= 0 &&
+  local_require(std::isfinite(o.growth_sigmas) && o.growth_sigmas > 0, "growth_sigmas", "> 0");
+  local_require(std::isfinite(o.shape_max_offset_m) && o.shape_max_offset_m >= 0 &&
               o.shape_max_offset_m <= 10,
           "shape_max_offset_m", "a length in [0, 10] m");
-  require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
+  local_require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
   return o;
 }
 

@@ -33,7 +33,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using proto::ContractError;
 
-void require(bool ok, const std::string& option, const std::string& expected) {
+void local_require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.inspect." + option + ": expected " + expected);
 }
 
@@ -255,11 +255,11 @@ InspectStageOptions InspectStageOptions::from_json(const json& options) {
   } catch (const std::invalid_argument& e) {
     throw ContractError(std::string("options.inspect: ") + e.what());
   }
-  require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
+  local_require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
           "an integer in [1, 30]");
-  require(o.draco_field_bits >= 0 && o.draco_field_bits <= 30, "draco_field_bits",
+  local_require(o.draco_field_bits >= 0 && o.draco_field_bits <= 30, "draco_field_bits",
           "an integer in [0, 30]");
-  require(std::isfinite(o.match_distance_m) && o.match_distance_m >= 0, "match_distance_m",
+  local_require(std::isfinite(o.match_distance_m) && o.match_distance_m >= 0, "match_distance_m",
           "a number >= 0");
   return o;
 }

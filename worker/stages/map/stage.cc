@@ -58,7 +58,7 @@ using proto::SensorType;
 // Progress: scans take [0, kScansDone], the outputs and metrics the rest.
 constexpr double kScansDone = 0.75;
 
-void require(bool ok, const std::string& option, const std::string& expected) {
+void local_require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.map." + option + ": expected " + expected);
 }
 
@@ -1190,7 +1190,7 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   o.metrics_radius_m = r.optional<double>("metrics_radius_m", o.metrics_radius_m);
   const long long max_points =
       r.optional<long long>("metrics_max_points", static_cast<long long>(o.metrics_max_points));
-  require(max_points >= 0, "metrics_max_points", "an integer >= 0 (0: every point)");
+  local_require(max_points >= 0, "metrics_max_points", "an integer >= 0 (0: every point)");
   o.metrics_max_points = static_cast<size_t>(max_points);
   o.slam_sensor = r.optional<std::string>("slam_sensor", o.slam_sensor);
   o.slam_keyframe_leaf_m = r.optional<double>("slam_keyframe_leaf_m", o.slam_keyframe_leaf_m);
@@ -1200,38 +1200,38 @@ MapStageOptions MapStageOptions::from_json(const json& options) {
   const long long preview_max = r.optional<long long>(
       "preview_max_points",
       static_cast<long long>(o.write_tiles ? 0 : MapStageOptions::kDefaultPreviewPoints));
-  require(preview_max == 0 || (preview_max >= 1000 && preview_max <= 1000000000LL),
+  local_require(preview_max == 0 || (preview_max >= 1000 && preview_max <= 1000000000LL),
           "preview_max_points", "0 (none) or an integer in [1000, 1e9]");
   o.preview_max_points = static_cast<size_t>(preview_max);
   r.finish();
 
-  require(o.lidar_filters.is_object(), "lidar_filters",
+  local_require(o.lidar_filters.is_object(), "lidar_filters",
           "an object {scan_filters, intermediary_filters, final_filters, deskew}");
-  require(o.sonar_filters.is_object(), "sonar_filters",
+  local_require(o.sonar_filters.is_object(), "sonar_filters",
           "an object {scan_filters, intermediary_filters, final_filters, deskew}");
-  require(o.sensor_filters.is_object(), "sensor_filters",
+  local_require(o.sensor_filters.is_object(), "sensor_filters",
           "an object {\"<sensor>\": {scan_filters, intermediary_filters, final_filters, deskew}}");
-  require(std::isfinite(o.final_voxel_leaf_m) && o.final_voxel_leaf_m >= 0.0, "final_voxel_leaf_m",
+  local_require(std::isfinite(o.final_voxel_leaf_m) && o.final_voxel_leaf_m >= 0.0, "final_voxel_leaf_m",
           "a leaf in metres >= 0 (0: no final voxel grid)");
-  require(o.final_voxel_merge_radius_leaves >= 0.0 &&
+  local_require(o.final_voxel_merge_radius_leaves >= 0.0 &&
               o.final_voxel_merge_radius_leaves <= mapping::VoxelAccumulator::kMaxMergeLeaves,
           "final_voxel_merge_radius_leaves", "a radius in leaves in [0, 2] (0: no merging)");
-  require(o.scans_per_intermediary >= 1 && o.scans_per_intermediary <= 100000,
+  local_require(o.scans_per_intermediary >= 1 && o.scans_per_intermediary <= 100000,
           "scans_per_intermediary", "an integer in [1, 100000]");
-  require(o.max_sweep_duration_s > 0.0, "max_sweep_duration_s", "> 0");
-  require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
+  local_require(o.max_sweep_duration_s > 0.0, "max_sweep_duration_s", "> 0");
+  local_require(o.draco_position_bits >= 1 && o.draco_position_bits <= 30, "draco_position_bits",
           "an integer in [1, 30]");
-  require(o.draco_compression_level >= 0 && o.draco_compression_level <= 10,
+  local_require(o.draco_compression_level >= 0 && o.draco_compression_level <= 10,
           "draco_compression_level", "an integer in [0, 10]");
-  require(std::isfinite(o.metrics_radius_m) && o.metrics_radius_m > 0.0 &&
+  local_require(std::isfinite(o.metrics_radius_m) && o.metrics_radius_m > 0.0 &&
               o.metrics_radius_m <= mapping::kMaxMetricsRadiusM,
           "metrics_radius_m",
           "a radius in metres in (0, " + std::to_string(mapping::kMaxMetricsRadiusM) +
               "] (Table V: 0.25)");
-  require(std::isfinite(o.slam_keyframe_leaf_m) && o.slam_keyframe_leaf_m > 0.0,
+  local_require(std::isfinite(o.slam_keyframe_leaf_m) && o.slam_keyframe_leaf_m > 0.0,
           "slam_keyframe_leaf_m", "a leaf in metres > 0");
-  require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
-  require(o.memory_budget_mb >= kMinMemoryBudgetMb && o.memory_budget_mb <= 1 << 20,
+  local_require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
+  local_require(o.memory_budget_mb >= kMinMemoryBudgetMb && o.memory_budget_mb <= 1 << 20,
           "memory_budget_mb",
           "an integer in [" + std::to_string(kMinMemoryBudgetMb) +
               ", 1048576] (MiB; the spill buffers and a tile per thread need at least " +

@@ -46,7 +46,7 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 
 // ---- options ------------------------------------------------------------------------------
 
-void require(bool ok, const std::string& option, const std::string& expected) {
+void local_require(bool ok, const std::string& option, const std::string& expected) {
   if (!ok) throw ContractError("options.refine." + option + ": expected " + expected);
 }
 
@@ -881,33 +881,33 @@ RefineStageOptions RefineStageOptions::from_json(const json& options) {
   o.rpe_delta_m = r.optional<double>("rpe_delta_m", o.rpe_delta_m);
   r.finish();
 
-  require(o.dvl_scale_initial > 0.5 && o.dvl_scale_initial < 1.5, "dvl_scale_initial",
+  local_require(o.dvl_scale_initial > 0.5 && o.dvl_scale_initial < 1.5, "dvl_scale_initial",
           "a value in (0.5, 1.5)");
-  require(o.dvl_scale_prior_sigma > 0.0, "dvl_scale_prior_sigma", "> 0");
-  require(o.dvl_rotation_prior_sigma_deg > 0.0, "dvl_rotation_prior_sigma_deg", "> 0");
-  require(o.max_dvl_gap_s > 0.0, "max_dvl_gap_s", "> 0");
-  require(std::isfinite(o.servo_window_s) && o.servo_window_s >= 0.0, "servo_window_s", ">= 0");
-  require(o.odometry == "auto" || o.odometry == "recorded" || o.odometry == "gicp", "odometry",
+  local_require(o.dvl_scale_prior_sigma > 0.0, "dvl_scale_prior_sigma", "> 0");
+  local_require(o.dvl_rotation_prior_sigma_deg > 0.0, "dvl_rotation_prior_sigma_deg", "> 0");
+  local_require(o.max_dvl_gap_s > 0.0, "max_dvl_gap_s", "> 0");
+  local_require(std::isfinite(o.servo_window_s) && o.servo_window_s >= 0.0, "servo_window_s", ">= 0");
+  local_require(o.odometry == "auto" || o.odometry == "recorded" || o.odometry == "gicp", "odometry",
           "auto, recorded or gicp, got '" + o.odometry + "'");
-  require(o.odometry_sigma_translation_m > 0.0, "odometry_sigma_translation_m", "> 0");
-  require(o.odometry_sigma_translation_per_m >= 0.0, "odometry_sigma_translation_per_m", ">= 0");
-  require(o.odometry_sigma_rotation_rad > 0.0, "odometry_sigma_rotation_rad", "> 0");
-  require(o.odometry_sigma_rotation_per_rad >= 0.0, "odometry_sigma_rotation_per_rad", ">= 0");
-  require(
+  local_require(o.odometry_sigma_translation_m > 0.0, "odometry_sigma_translation_m", "> 0");
+  local_require(o.odometry_sigma_translation_per_m >= 0.0, "odometry_sigma_translation_per_m", ">= 0");
+  local_require(o.odometry_sigma_rotation_rad > 0.0, "odometry_sigma_rotation_rad", "> 0");
+  local_require(o.odometry_sigma_rotation_per_rad >= 0.0, "odometry_sigma_rotation_per_rad", ">= 0");
+  local_require(
       o.degeneracy == "drop" || o.degeneracy == "keep_well_conditioned" || o.degeneracy == "ignore",
       "degeneracy", "drop, keep_well_conditioned or ignore, got '" + o.degeneracy + "'");
-  require(o.degeneracy_sigma_translation_m > 0.0, "degeneracy_sigma_translation_m", "> 0");
-  require(o.degeneracy_sigma_rotation_rad > 0.0, "degeneracy_sigma_rotation_rad", "> 0");
-  require(o.map_sigma_translation_m > 0.0, "map_sigma_translation_m", "> 0");
-  require(o.map_sigma_rotation_rad > 0.0, "map_sigma_rotation_rad", "> 0");
-  require(o.map_drift_per_sqrt_m > 0.0, "map_drift_per_sqrt_m", "> 0");
-  require(o.max_iterations >= 1 && o.max_iterations <= 10000, "max_iterations",
+  local_require(o.degeneracy_sigma_translation_m > 0.0, "degeneracy_sigma_translation_m", "> 0");
+  local_require(o.degeneracy_sigma_rotation_rad > 0.0, "degeneracy_sigma_rotation_rad", "> 0");
+  local_require(o.map_sigma_translation_m > 0.0, "map_sigma_translation_m", "> 0");
+  local_require(o.map_sigma_rotation_rad > 0.0, "map_sigma_rotation_rad", "> 0");
+  local_require(o.map_drift_per_sqrt_m > 0.0, "map_drift_per_sqrt_m", "> 0");
+  local_require(o.max_iterations >= 1 && o.max_iterations <= 10000, "max_iterations",
           "an integer in [1, 10000]");
-  require(o.relinearization_passes >= 1 && o.relinearization_passes <= 10, "relinearization_passes",
+  local_require(o.relinearization_passes >= 1 && o.relinearization_passes <= 10, "relinearization_passes",
           "an integer in [1, 10]");
-  require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
-  require(o.ate_max_time_difference_s >= 0.0, "ate_max_time_difference_s", ">= 0");
-  require(o.rpe_delta_m > 0.0, "rpe_delta_m", "> 0");
+  local_require(o.threads >= 1 && o.threads <= 256, "threads", "an integer in [1, 256]");
+  local_require(o.ate_max_time_difference_s >= 0.0, "ate_max_time_difference_s", ">= 0");
+  local_require(o.rpe_delta_m > 0.0, "rpe_delta_m", "> 0");
   return o;
 }
 
