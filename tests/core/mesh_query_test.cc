@@ -13,7 +13,7 @@
 #include <random>
 #include <string>
 
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 
 namespace keel::ba {
 namespace {

@@ -3,9 +3,11 @@
 
 #include <gtest/gtest.h>
 
-#include "store_fixture.h"
+#include <filesystem>
+#include <fstream>
+#include <string>
 
-namespace keel::storage {
+namespace keel {
 namespace {
 
 TEST(Sha256, FipsOneBlockMessageAbc) {
@@ -29,9 +31,10 @@ TEST(Sha256, FipsMillionAsStreamedAndFromFile) {
   for (int i = 0; i < 1000; ++i) hash.update(block.data(), block.size());
   EXPECT_EQ(hash.hex_digest(), expected);
 
-  testing::TempDir dir;
-  testing::write_file(dir.path() / "a.bin", std::string(1'000'000, 'a'));
-  EXPECT_EQ(sha256_file(dir.path() / "a.bin"), expected);  // spans the 1 MiB read blocks
+  const auto file = std::filesystem::temp_directory_path() / "keel-sha256-test-a.bin";
+  std::ofstream(file, std::ios::binary) << std::string(1'000'000, 'a');
+  EXPECT_EQ(sha256_file(file), expected);  // spans the 1 MiB read blocks
+  std::filesystem::remove(file);
 }
 
 TEST(Sha256, MissingFileErrorNamesIt) {
@@ -44,4 +47,4 @@ TEST(Sha256, MissingFileErrorNamesIt) {
 }
 
 }  // namespace
-}  // namespace keel::storage
+}  // namespace keel

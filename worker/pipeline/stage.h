@@ -79,15 +79,14 @@ class Stage {
   // job's error.
   virtual StageResult run(StageContext& context) = 0;
   // Its section of report.html (HTML elements, within the page's <section> of the stage) from
-  // its section of report.json. Pure.
+  // its section of report.json. Pure. None by default.
   virtual std::string report_html(const report_html::Ref& section,
-                                  const ReportHtmlInputs& inputs) const = 0;
-  // Its options: the stage reads them, the docs list them and `keel-worker options` prints
-  // them from this one table.
-  // TODO(issue 29): pure once every stage has its table (worker/stages/<name>/options.cc).
-  virtual const OptionsSchema& options() const {
-    throw std::logic_error("stage '" + name() + "' has no option table yet");
+                                  const ReportHtmlInputs& inputs) const {
+    return "";
   }
+  // Its options: the stage reads them, the docs list them and `keel-worker options` prints
+  // them from this one table. None by default (only {} is accepted).
+  virtual const OptionsSchema& options() const;
 };
 
 // The stages built into this worker, by name ("ingest", ...), from proto/stages.h's one list.

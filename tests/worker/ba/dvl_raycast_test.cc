@@ -12,7 +12,7 @@
 #include <random>
 
 #include "tests/worker/ba/ba_synthetic.h"
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "worker/ba/pose_block.h"
 
 namespace keel::ba {

@@ -11,7 +11,7 @@
 #include <random>
 
 #include "tests/worker/ba/ba_synthetic.h"
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "worker/ba/ba_options.h"
 #include "worker/ba/dvl_raycast_factor.h"
 #include "worker/ba/odometry_factor.h"

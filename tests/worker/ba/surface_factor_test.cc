@@ -13,7 +13,7 @@
 #include <memory>
 #include <random>
 
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "worker/ba/pose_block.h"
 
 namespace keel::ba {

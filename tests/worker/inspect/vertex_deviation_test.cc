@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "core/mesh_query.h"
 
 namespace keel::inspect {

@@ -15,7 +15,7 @@
 #include <draco/compression/encode.h>
 #include <draco/point_cloud/point_cloud.h>
 
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "tests/worker/io/mesh_test_util.h"
 
 namespace keel::io {

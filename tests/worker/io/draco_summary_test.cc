@@ -13,7 +13,7 @@
 #include <limits>
 #include <random>
 
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "worker/io/draco/draco_codec.h"
 
 namespace keel::io {

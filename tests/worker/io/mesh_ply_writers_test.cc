@@ -10,7 +10,7 @@
 #include <iterator>
 #include <random>
 
-#include "tests/worker/ba/mesh_fixtures.h"
+#include "tests/core/mesh_fixtures.h"
 #include "tests/worker/io/mesh_test_util.h"
 #include "worker/io/mesh/mesh_ply_writer.h"
 #include "worker/io/mesh/mesh_reader.h"
