@@ -40,5 +40,12 @@ nlohmann::ordered_json build_report(const ReportInput& input);
 void write_json_atomically(const std::filesystem::path& path,
                            const nlohmann::ordered_json& document);
 
+// Writes report.json and report.html (render_report_html, with the work folder's
+// trajectories.json when one parses) into `work_dir`; returns their file names. Throws
+// std::runtime_error naming the file that could not be written. (report_html.cc: it asks
+// every stage for its section, so it lives with the registry in keel_pipeline.)
+std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
+                                            const nlohmann::ordered_json& report);
+
 
 }  // namespace keel::pipeline

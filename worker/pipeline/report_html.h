@@ -10,9 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
 #include <string>
-#include <vector>
 
 namespace keel::pipeline {
 
@@ -22,11 +20,5 @@ inline constexpr const char* kReportHtmlFileName = "report.html";
 // (the refine stage's ATE over time) or null when there is none.
 std::string render_report_html(const nlohmann::ordered_json& report,
                                const nlohmann::json& trajectories = nullptr);
-
-// Writes report.json and report.html (render_report_html, with the work folder's
-// trajectories.json when one parses) into `work_dir`; returns their file names. Throws
-// std::runtime_error naming the file that could not be written.
-std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
-                                            const nlohmann::ordered_json& report);
 
 }  // namespace keel::pipeline

@@ -1,6 +1,4 @@
 // The stages built into this worker: one entry per name of proto/stages.h, in pipeline order.
-#include <map>
-#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -24,19 +22,7 @@ const std::vector<StageEntry>& entries() {
   return table;
 }
 
-struct NoOptions {};
-
 }  // namespace
-
-// A stage without options accepts only {} (its table has no rows).
-const OptionsSchema& Stage::options() const {
-  static std::mutex mutex;
-  static std::map<std::string, std::unique_ptr<OptionTable<NoOptions>>> tables;
-  const std::lock_guard<std::mutex> lock(mutex);
-  auto& table = tables[name()];
-  if (!table) table = std::make_unique<OptionTable<NoOptions>>(name(), OptionTable<NoOptions>::Rows{});
-  return *table;
-}
 
 std::unique_ptr<Stage> make_stage(const std::string& name) {
   for (const auto& entry : entries())
