@@ -41,6 +41,7 @@ function(keel_test test_name)
   string(REPLACE "/" "_" target "test_${test_name}")
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main keel_warnings)
+  target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR})
   target_compile_definitions(${target} PRIVATE
     KEEL_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared"
     KEEL_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
