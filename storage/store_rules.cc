@@ -5,7 +5,7 @@
 #include "proto/auth.h"
 #include "proto/contract_error.h"
 #include "proto/options.h"
-#include "storage/sqlite_queries.h"  // pipeline_index
+#include "storage/sql_queries.h"  // pipeline_index
 
 namespace keel::storage::rules {
 
