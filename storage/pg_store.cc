@@ -1,5 +1,5 @@
-// PostgreSQL under the store's rules: the Sql interface (storage/sql.h) over PgPool, and
-// PgStore, which adds the change feed between replicas.
+// PostgreSQL under the store's rules: the Sql interface (storage/sql.h) over PgPool, with the
+// change feed between replicas (PgChangeFeed).
 #include "storage/pg_store.h"
 
 #include <spdlog/spdlog.h>
@@ -10,6 +10,7 @@
 
 #include "storage/ids.h"
 #include "storage/open_store.h"
+#include "storage/pg_change_feed.h"
 #include "storage/pg_connection.h"
 #include "storage/pg_migrations.h"
 
@@ -72,10 +73,14 @@ class PgSqlTx : public SqlTx {
 
 class PgSql : public Sql {
  public:
-  // Connects (Unavailable on failure) and migrates.
-  PgSql(const std::string& url, size_t max_connections) : pool_(url, max_connections) {
+  // Connects (Unavailable on failure), migrates and starts the change feed.
+  explicit PgSql(const PgStoreOptions& options)
+      : url_(with_connect_timeout(options.database_url, options.connect_timeout_s)),
+        pool_(url_, options.max_connections) {
     apply_pg_migrations(pool_, pg_migrations());
+    if (options.listen) listen(options.connect_timeout_s);
   }
+  ~PgSql() override { feed_.reset(); }  // before the pool: its threads may use the store
 
  protected:
   void transact(Mode mode, const std::function<void(SqlTx&)>& work) override {
@@ -93,63 +98,54 @@ class PgSql : public Sql {
     } catch (const pqxx::disk_full& error) {
       throw StorageFull(std::string("no space left for the database: ") + error.what());
     }
-    committed(changes);
+    changed(changes);
+    if (feed_) feed_->send(changes);
   }
 
  private:
+  // This replica's changes go to the others after the commit; theirs arrive here.
+  void listen(int connect_timeout_s) {
+    PgChangeFeedOptions listen;
+    listen.database_url = url_;
+    listen.origin = random_hex(8);
+    listen.deliver = [this](const std::vector<Change>& changes) { changed(changes); };
+    // Notifications sent while the link was down are lost: every project's listeners are
+    // told to re-read (a job_id "" change, as for a batch).
+    listen.on_reconnect = [this] {
+      try {
+        std::vector<Change> reload;
+        pool_.snapshot([&](PgTx& tx) {
+          for (const pqxx::row& row : tx.work().exec("SELECT name FROM projects ORDER BY name")) {
+            Change change;
+            change.project = row[0].as<std::string>();
+            reload.push_back(change);
+          }
+        });
+        changed(reload);
+      } catch (const std::exception& error) {
+        spdlog::warn("change feed: after reconnecting: {}", error.what());
+      }
+    };
+    feed_ = std::make_unique<PgChangeFeed>(std::move(listen));
+    // The pool just connected, so the listener's connection normally follows within
+    // milliseconds; if it does not, the store still works (the long poll's fallback tick).
+    const auto wait = std::chrono::milliseconds(1000 * std::max(1, connect_timeout_s));
+    if (!feed_->wait_listening(wait))
+      spdlog::warn(
+          "change feed: not listening yet after {} ms; changes of other replicas reach this "
+          "one by the fallback poll until it is",
+          wait.count());
+  }
+
+  std::string url_;
   PgPool pool_;
+  std::unique_ptr<PgChangeFeed> feed_;
 };
 
 }  // namespace
 
 PgStore::PgStore(const PgStoreOptions& options, Clock clock)
-    : SqlStore(std::make_unique<PgSql>(
-                   with_connect_timeout(options.database_url, options.connect_timeout_s),
-                   options.max_connections),
-               StoreFiles{options.blob_dir, true, options.stale_file_age_s}, std::move(clock)),
-      origin_(random_hex(8)) {
-  if (!options.listen) return;
-  const std::string url = with_connect_timeout(options.database_url, options.connect_timeout_s);
-  notifier_ = std::make_unique<PgNotifier>(url, origin_);
-  PgListenerOptions listen;
-  listen.database_url = url;
-  listen.origin = origin_;
-  listen.deliver = [this](const std::vector<Change>& changes) { change_hub().publish(changes); };
-  // Notifications sent while the link was down are lost: every project's listeners are told
-  // to re-read (a job_id "" change, as for a batch).
-  listen.on_reconnect = [this] {
-    try {
-      std::vector<Change> reload;
-      for (const proto::Project& project : list_projects()) {
-        Change change;
-        change.project = project.name;
-        change.state = proto::JobState::kQueued;
-        reload.push_back(change);
-      }
-      change_hub().publish(reload);
-    } catch (const std::exception& error) {
-      spdlog::warn("change feed: after reconnecting: {}", error.what());
-    }
-  };
-  listener_ = std::make_unique<PgListener>(std::move(listen));
-  // The pool just connected, so the listener's connection normally follows within
-  // milliseconds; if it does not, the store still works (the long poll's fallback tick).
-  const auto wait = std::chrono::milliseconds(1000 * std::max(1, options.connect_timeout_s));
-  if (!listener_->wait_listening(wait))
-    spdlog::warn(
-        "change feed: not listening yet after {} ms; changes of other replicas reach this one "
-        "by the fallback poll until it is",
-        wait.count());
-}
-
-PgStore::~PgStore() {
-  listener_.reset();
-  notifier_.reset();
-}
-
-void PgStore::committed(const std::vector<Change>& changes) {
-  SqlStore::committed(changes);
-  if (notifier_) notifier_->send(changes);
-}
+    : SqlStore(std::make_unique<PgSql>(options),
+               StoreFiles{options.blob_dir, true, options.stale_file_age_s}, std::move(clock)) {}
 
 }  // namespace keel::storage

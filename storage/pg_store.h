@@ -8,16 +8,12 @@
 // - Idempotency-Key is UNIQUE in the database: replicas agree on the first job.
 // - Change feed: this replica's listeners get a transaction's changes at once after its
 //   commit (never for a rollback); other replicas hear them through pg_notify, sent after
-//   the commit in batches (PgNotifier says why), on their LISTEN connection (PgListener).
+//   the commit in batches, on their LISTEN connection (PgChangeFeed says why).
 #pragma once
 
 #include <filesystem>
-#include <memory>
 #include <string>
-#include <vector>
 
-#include "storage/pg_listener.h"
-#include "storage/pg_notifier.h"
 #include "storage/sql_store.h"
 
 namespace keel::storage {
@@ -33,18 +29,10 @@ struct PgStoreOptions {
   bool listen = true;  // tell other replicas of changes and hear theirs (NOTIFY/LISTEN)
 };
 
+// SqlStore on PostgreSQL (its Sql is in pg_store.cc).
 class PgStore : public SqlStore {
  public:
   PgStore(const PgStoreOptions& options, Clock clock);
-  ~PgStore() override;
-
- protected:
-  void committed(const std::vector<Change>& changes) override;
-
- private:
-  std::string origin_;  // this store's id in its notifications (its own are not re-heard)
-  std::unique_ptr<PgNotifier> notifier_;
-  std::unique_ptr<PgListener> listener_;
 };
 
 }  // namespace keel::storage

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -95,19 +96,27 @@ class Sql {
     }
   }
 
-  // Called after each commit with the transaction's changes (not while a lock is held).
-  void on_commit(std::function<void(const std::vector<Change>&)> listener) {
-    on_commit_ = std::move(listener);
+  // Called with the changes of each commit (not while a lock is held) and, where the
+  // database tells of other processes' commits (PostgreSQL's LISTEN), with theirs.
+  void on_change(std::function<void(const std::vector<Change>&)> listener) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    on_change_ = std::move(listener);
   }
 
  protected:
   virtual void transact(Mode mode, const std::function<void(SqlTx&)>& work) = 0;
-  void committed(const std::vector<Change>& changes) const {
-    if (!changes.empty() && on_commit_) on_commit_(changes);
+  void changed(const std::vector<Change>& changes) {
+    std::function<void(const std::vector<Change>&)> listener;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      listener = on_change_;
+    }
+    if (!changes.empty() && listener) listener(changes);
   }
 
  private:
-  std::function<void(const std::vector<Change>&)> on_commit_;
+  std::mutex mutex_;
+  std::function<void(const std::vector<Change>&)> on_change_;
 };
 
 // A dialect's fills of the {name} fragments (see the top of this file).

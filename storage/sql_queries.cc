@@ -2,7 +2,8 @@
 
 #include <algorithm>
 
-#include "storage/store_rules.h"
+#include "proto/contract_error.h"
+#include "proto/options.h"
 
 namespace keel::storage {
 
@@ -21,15 +22,8 @@ const std::string kMissionSelect =
     "m.project FROM missions m";
 
 proto::Mission read_mission(const SqlRow& row) {
-  proto::Mission mission;
-  mission.id = row.text(0);
-  mission.name = row.text(1);
-  mission.bundle_blob = row.text(2);
-  mission.cad_blob = row.text(3);
-  mission.cad_name = row.text(4);
-  mission.created_at_ms = row.int64(5);
-  mission.project = row.text(6);
-  return mission;
+  return {row.text(0), row.text(1),  row.text(2), row.text(3),
+          row.text(4), row.int64(5), row.text(6)};
 }
 
 // One statement reads the job and its finished stages, so both come from one snapshot.
@@ -72,16 +66,8 @@ const std::string kArtifactSelect =
     "FROM artifacts a JOIN jobs j ON j.id = a.job_id";
 
 proto::Artifact read_artifact(const SqlRow& row) {
-  proto::Artifact artifact;
-  artifact.id = row.text(0);
-  artifact.job_id = row.text(1);
-  artifact.stage = row.text(2);
-  artifact.name = row.text(3);
-  artifact.sha256 = row.text(4);
-  artifact.size = row.int64(5);
-  artifact.created_at_ms = row.int64(6);
-  artifact.project = row.text(7);
-  return artifact;
+  return {row.text(0), row.text(1),  row.text(2),  row.text(3),
+          row.text(4), row.int64(5), row.int64(6), row.text(7)};
 }
 
 template <typename Read>
@@ -106,6 +92,24 @@ std::string project_filter(const std::string& project) {
 
 }  // namespace
 
+NotFound job_not_found(const std::string& job_id) {
+  return NotFound("job " + job_id + " not found");
+}
+
+void require_sha256(const std::string& sha256, const std::string& field) {
+  if (!proto::is_sha256_hex(sha256))
+    throw Invalid(field + ": expected 64 lowercase hex digits (SHA-256), got '" + sha256 + "'");
+}
+
+void require_pipeline(const std::vector<std::string>& stages, const nlohmann::json& options) {
+  try {
+    proto::validate_stage_list(stages, "stages");
+    proto::validate_options(options, "options");
+  } catch (const proto::ContractError& error) {
+    throw Invalid(error.what());
+  }
+}
+
 size_t pipeline_index(const std::vector<std::string>& stages, const std::string& stage) {
   return static_cast<size_t>(std::find(stages.begin(), stages.end(), stage) - stages.begin());
 }
@@ -125,7 +129,7 @@ std::optional<proto::Job> find_job(SqlTx& tx, const std::string& job_id) {
 
 proto::Job require_job(SqlTx& tx, const std::string& job_id) {
   auto job = find_job(tx, job_id);
-  if (!job) throw rules::job_not_found(job_id);
+  if (!job) throw job_not_found(job_id);
   return *job;
 }
 

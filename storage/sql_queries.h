@@ -1,5 +1,6 @@
-// Statements shared by SqlStore's files, inside the caller's transaction: reads that find
-// one kind of row by id (or the rows of a job) and turn it into its proto type.
+// What SqlStore's files share: reads that find one kind of row by id (or the rows of a job)
+// and turn it into its proto type, inside the caller's transaction, and the checks and errors
+// more than one of them says the same way.
 #pragma once
 
 #include <optional>
@@ -37,6 +38,12 @@ std::vector<proto::StageOutput> completed_outputs(SqlTx& tx, const proto::Job& j
 
 // Notes that `project` references the blob (Store::project_usage, project_has_blob).
 void note_blob_ref(SqlTx& tx, const std::string& project, const std::string& sha256);
+
+NotFound job_not_found(const std::string& job_id);
+// Invalid unless `sha256` is 64 lowercase hex digits; `field` names it in the message.
+void require_sha256(const std::string& sha256, const std::string& field);
+// Invalid for an unknown stage or option (the contract's messages).
+void require_pipeline(const std::vector<std::string>& stages, const nlohmann::json& options);
 
 // Index of `stage` in `stages`, or stages.size() when absent (sorts unknown stages last).
 size_t pipeline_index(const std::vector<std::string>& stages, const std::string& stage);

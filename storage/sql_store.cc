@@ -10,13 +10,10 @@
 #include "storage/ids.h"
 #include "storage/sha256.h"
 #include "storage/sql_queries.h"
-#include "storage/store_rules.h"
 
 namespace keel::storage {
 
 namespace fs = std::filesystem;
-using namespace rules;
-
 namespace {
 
 bool older_than(const fs::path& file, int64_t age_s) {
@@ -31,15 +28,13 @@ const std::string kTokenSelect =
     "FROM api_tokens";
 
 proto::TokenInfo read_token(const SqlRow& row) {
-  proto::TokenInfo token;
-  token.id = row.text(0);
-  token.label = row.text(1);
-  token.role = proto::role_from_string(row.text(2), "api_tokens.role of " + token.id);
-  token.project = row.text(3);
-  token.created_at_ms = row.int64(4);
-  token.expires_at_ms = row.int64(5);
-  token.revoked_at_ms = row.int64(6);
-  return token;
+  return {row.text(0),
+          row.text(1),
+          proto::role_from_string(row.text(2), "api_tokens.role of " + row.text(0)),
+          row.text(3),
+          row.int64(4),
+          row.int64(5),
+          row.int64(6)};
 }
 
 const std::string kProjectSelect = "SELECT name, created_at_ms, quota_bytes FROM projects";
@@ -50,6 +45,17 @@ void insert_project(SqlTx& tx, const std::string& name, int64_t now_ms) {
   tx.exec(
       "INSERT INTO projects (name, created_at_ms) VALUES (?1, ?2) ON CONFLICT (name) DO NOTHING",
       {name, now_ms});
+}
+
+NotFound upload_not_found(const std::string& upload_id) {
+  return NotFound("upload " + upload_id + " not found");
+}
+
+void require_project_name(const std::string& name, const std::string& field) {
+  if (!proto::is_project_name(name))
+    throw Invalid(field + ": project name '" + name +
+                  "' must be 1..64 characters of a-z, 0-9, '.', '_' or '-', starting with a "
+                  "letter or digit");
 }
 
 void insert_blob(SqlTx& tx, const std::string& sha256, int64_t size, int64_t now_ms) {
@@ -72,40 +78,18 @@ void note_blob_ref(SqlTx& tx, const std::string& project, const std::string& sha
 }
 
 SqlStore::SqlStore(std::unique_ptr<Sql> sql, const StoreFiles& files, Clock clock)
-    : sql_(std::move(sql)),
-      clock_(clock ? std::move(clock) : Clock(system_clock_ms)),
+    : clock_(clock ? std::move(clock) : Clock(system_clock_ms)),
       blobs_(files.dir / "blobs", files.dir / "tmp"),
-      uploads_(files.dir / "uploads") {
-  sql_->on_commit([this](const std::vector<Change>& changes) { committed(changes); });
+      uploads_(files.dir / "uploads"),
+      sql_(std::move(sql)) {
+  sql_->on_change([this](const std::vector<Change>& changes) { changes_.publish(changes); });
   if (files.recover) recover_uploads(files.stale_file_age_s);
 }
 
 // --- change feed ---
 
-void SqlStore::committed(const std::vector<Change>& changes) { changes_.publish(changes); }
-
 std::unique_ptr<Subscription> SqlStore::subscribe(ChangeListener listener) {
   return changes_.subscribe(std::move(listener));
-}
-
-void SqlStore::note_job(SqlTx& tx, const std::string& job_id) {
-  auto row = tx.row("SELECT project, state FROM jobs WHERE id = ?1", {job_id});
-  if (!row) return;
-  Change change;
-  change.job_id = job_id;
-  change.project = row->text(0);
-  change.state = proto::job_state_from_string(row->text(1));
-  tx.changes.push_back(std::move(change));
-}
-
-void SqlStore::note_worker(SqlTx& tx, const std::string& worker, const std::string& job_id,
-                           int64_t now_ms) {
-  if (worker.empty()) return;
-  tx.exec(
-      "INSERT INTO workers (id, job_id, last_seen_ms) VALUES (?1, ?2, ?3) "
-      "ON CONFLICT (id) DO UPDATE SET job_id = excluded.job_id, "
-      "last_seen_ms = excluded.last_seen_ms",
-      {worker, job_id, now_ms});
 }
 
 // --- uploads ---
@@ -141,7 +125,8 @@ void SqlStore::recover_uploads(int64_t stale_file_age_s) {
 }
 
 proto::Upload SqlStore::create_upload(const proto::UploadRequest& request) {
-  require_upload_size(request.size);
+  if (request.size < 0)
+    throw Invalid("upload size: expected >= 0 bytes, got " + std::to_string(request.size));
   proto::Upload upload;
   upload.id = new_id(kUploadPrefix);
   upload.name = request.name;
@@ -298,7 +283,15 @@ std::string SqlStore::put_blob(const std::string& bytes) {
 // --- missions ---
 
 proto::Mission SqlStore::create_mission(const proto::MissionRequest& request) {
-  require_mission_request(request);
+  if (request.name.empty()) throw Invalid("name: expected a non-empty mission name");
+  require_sha256(request.bundle_blob, "bundle_blob");
+  if (!request.cad_blob.empty()) {
+    require_sha256(request.cad_blob, "cad_blob");
+    if (request.cad_name.empty())
+      throw Invalid("cad_name: required with cad_blob (its extension tells the mesh format)");
+  } else if (!request.cad_name.empty()) {
+    throw Invalid("cad_name: given without cad_blob");
+  }
   proto::Mission mission;
   mission.id = new_id(kMissionPrefix);
   mission.name = request.name;
@@ -325,7 +318,7 @@ proto::Mission SqlStore::create_mission(const proto::MissionRequest& request) {
 
 proto::Mission SqlStore::get_mission(const std::string& mission_id) {
   auto mission = read([&](SqlTx& tx) { return find_mission(tx, mission_id); });
-  if (!mission) throw mission_not_found(mission_id);
+  if (!mission) throw NotFound("mission " + mission_id + " not found");
   return *mission;
 }
 
@@ -344,7 +337,11 @@ std::string SqlStore::project_of_request(SqlTx& tx, const std::string& project) 
 }
 
 proto::TokenInfo SqlStore::add_token(const std::string& token, const TokenSpec& spec) {
-  require_token_spec(token, spec);
+  if (token.empty()) throw Invalid("token: expected a non-empty token");
+  if (spec.project != proto::kAllProjects)
+    require_project_name(spec.project, "project");
+  else if (spec.role != proto::Role::kAdmin && spec.role != proto::Role::kWorker)
+    throw Invalid("project: '*' (every project) is only for admin and worker tokens");
   const std::string hash = sha256_bytes(token);  // the clear token is never stored
   return write([&](SqlTx& tx) {
     const int64_t now_ms = clock_();

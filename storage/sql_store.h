@@ -13,7 +13,8 @@
 // - Uploads: the committed offset is in the database, the part file in the (shared) folder.
 //   A chunk is written and fsynced before its offset commits, under the upload's lock (this
 //   process's, and for PostgreSQL the row's across replicas), so a resume is byte-exact.
-// - Changes committed by a write reach this store's listeners after the commit (committed()).
+// - Changes committed by a write reach this store's listeners after the commit (and, with
+//   PostgreSQL, other replicas' changes too).
 #pragma once
 
 #include <array>
@@ -108,11 +109,6 @@ class SqlStore : public Store {
 
   Metrics metrics() override;
 
- protected:
-  // After a write's commit, with its changes: this store's listeners hear them.
-  virtual void committed(const std::vector<Change>& changes);
-  ChangeHub& change_hub() { return changes_; }
-
  private:
   template <typename Work>
   auto write(Work&& work, Sql::Mode mode = Sql::Mode::kWrite) {
@@ -123,30 +119,20 @@ class SqlStore : public Store {
     return sql_->run(Sql::Mode::kRead, std::forward<Work>(work));
   }
 
-  // In a write: the job's row changed (its project and state are read) / got log lines.
-  void note_job(SqlTx& tx, const std::string& job_id);
-  // The worker called the worker protocol now, holding `job_id` ("" = none).
-  void note_worker(SqlTx& tx, const std::string& worker, const std::string& job_id, int64_t now_ms);
   // The project a request names ("" = default), created when new; Invalid for a bad name.
   std::string project_of_request(SqlTx& tx, const std::string& project);
-  // Appends lines to the job's log. The caller's transaction holds the job's row (changed it
-  // or read it {for_update}), so concurrent writers of one log never pick the same number.
-  void insert_log_lines(SqlTx& tx, const std::string& job_id, const std::vector<std::string>& lines,
-                        int64_t now_ms);
-  // Requeues (or fails, at the last expiry) running jobs whose lease has expired.
-  int expire_leases(SqlTx& tx, int64_t now_ms);
 
   std::mutex& upload_lock(const std::string& upload_id);
   // Cuts uncommitted bytes off part files no one is writing, and removes left-over files.
   void recover_uploads(int64_t stale_file_age_s);
   void discard_upload(const std::string& upload_id);
 
-  std::unique_ptr<Sql> sql_;
+  ChangeHub changes_;  // outlives sql_, which may deliver changes from a thread of its own
   Clock clock_;
   BlobStore blobs_;
   UploadArea uploads_;
   std::array<std::mutex, 64> upload_locks_;
-  ChangeHub changes_;
+  std::unique_ptr<Sql> sql_;
 };
 
 }  // namespace keel::storage

@@ -1,17 +1,49 @@
 // SqlStore: reprocess batches (one transaction for any number of missions) and the queue
 // summary behind GET /v1/queue.
+#include <map>
 #include <unordered_set>
 
 #include "storage/ids.h"
 #include "storage/sql_queries.h"
 #include "storage/sql_store.h"
-#include "storage/store_rules.h"
 
 namespace keel::storage {
 
-using namespace rules;
-
 namespace {
+
+// A worker that called the worker protocol this recently is alive (docs/api.md).
+constexpr int64_t kWorkerAliveMs = 60'000;
+constexpr int64_t kHourMs = 3'600'000;
+// The jobs table's text of a comparison job's stages: such a job is never "the job a
+// reprocess job reprocesses".
+constexpr const char* kCompareOnlyStages = "[\"compare\"]";
+
+// A job's stages and options as the jobs table holds them (JSON text).
+struct Pipeline {
+  std::string stages, options;
+};
+
+// A reprocess job that also compares with the job it reprocesses (ReprocessRequest::compare):
+// its stages with `compare` last, and its options with options.compare.job_a = `earlier_job`.
+Pipeline with_compare(std::vector<std::string> stages, nlohmann::json options,
+                      const std::string& earlier_job) {
+  stages.push_back("compare");
+  if (!options.is_object()) options = nlohmann::json::object();
+  if (!options.contains("compare") || !options["compare"].is_object())
+    options["compare"] = nlohmann::json::object();
+  options["compare"]["job_a"] = earlier_job;  // job_b: the job itself (compare_stage.h)
+  return {nlohmann::json(stages).dump(), options.dump()};
+}
+
+// Every job state with a count of 0.
+std::map<std::string, int64_t> zero_counts() {
+  std::map<std::string, int64_t> counts;
+  for (auto state :
+       {proto::JobState::kQueued, proto::JobState::kRunning, proto::JobState::kSucceeded,
+        proto::JobState::kFailed, proto::JobState::kCanceled})
+    counts[proto::to_string(state)] = 0;
+  return counts;
+}
 
 // The missions a batch runs on, oldest first (or as listed), all of `project`.
 std::vector<std::string> batch_missions(SqlTx& tx, const proto::ReprocessRequest& request,
@@ -51,7 +83,7 @@ proto::Batch SqlStore::create_batch(const proto::ReprocessRequest& request) {
   if (!request.mission_ids.empty() && !request.name_prefix.empty())
     throw Invalid("give either mission_ids or name_prefix, not both");
   require_pipeline(request.stages, request.options);
-  const BatchJobPipeline plain{nlohmann::json(request.stages).dump(), request.options.dump()};
+  const Pipeline plain{nlohmann::json(request.stages).dump(), request.options.dump()};
   return write([&](SqlTx& tx) {
     proto::Batch batch;
     batch.id = new_id(kBatchPrefix);
@@ -59,7 +91,7 @@ proto::Batch SqlStore::create_batch(const proto::ReprocessRequest& request) {
     batch.created_at_ms = clock_();
     const std::vector<std::string> missions = batch_missions(tx, request, batch.project);
     for (const std::string& mission_id : missions) {
-      BatchJobPipeline pipeline = plain;
+      Pipeline pipeline = plain;
       if (request.compare) {
         const std::string earlier = earlier_job(tx, mission_id, batch.project);
         if (!earlier.empty()) {

@@ -6,13 +6,33 @@
 #include "storage/ids.h"
 #include "storage/sql_queries.h"
 #include "storage/sql_store.h"
-#include "storage/store_rules.h"
 
 namespace keel::storage {
 
-using namespace rules;
-
 namespace {
+
+// After this many expired leases a job fails instead of being leased again (docs/api.md).
+constexpr int kMaxLeaseExpiries = 3;
+constexpr int kMaxListLimit = 10000;
+
+LeaseLost lease_lost(const std::string& job_id, const std::string& lease_id) {
+  return LeaseLost("job " + job_id + ": lease " + lease_id +
+                   " is not the job's current lease (it expired and the job was queued "
+                   "again, or the job finished or was retried)");
+}
+
+// Invalid unless `stage` is one of the job's stages.
+void require_stage_of(const proto::Job& job, const std::string& stage, const std::string& field) {
+  if (pipeline_index(job.stages, stage) == job.stages.size())
+    throw Invalid(field + ": job " + job.id + " has no stage '" + stage +
+                  "' (its stages: " + nlohmann::json(job.stages).dump() + ")");
+}
+
+void require_list_limit(int limit) {
+  if (limit < 1 || limit > kMaxListLimit)
+    throw Invalid("limit: expected 1.." + std::to_string(kMaxListLimit) + ", got " +
+                  std::to_string(limit));
+}
 
 std::vector<std::string> parse_stages(const std::string& json) {
   return nlohmann::json::parse(json).get<std::vector<std::string>>();
@@ -57,6 +77,78 @@ void release_worker(SqlTx& tx, const std::string& worker, const std::string& job
           {worker, job_id, now_ms});
 }
 
+// In a write: the job's row changed (its project and state are read).
+void note_job(SqlTx& tx, const std::string& job_id) {
+  auto row = tx.row("SELECT project, state FROM jobs WHERE id = ?1", {job_id});
+  if (!row) return;
+  Change change;
+  change.job_id = job_id;
+  change.project = row->text(0);
+  change.state = proto::job_state_from_string(row->text(1));
+  tx.changes.push_back(std::move(change));
+}
+
+// The worker called the worker protocol now, holding `job_id` ("" = none).
+void note_worker(SqlTx& tx, const std::string& worker, const std::string& job_id, int64_t now_ms) {
+  if (worker.empty()) return;
+  tx.exec(
+      "INSERT INTO workers (id, job_id, last_seen_ms) VALUES (?1, ?2, ?3) "
+      "ON CONFLICT (id) DO UPDATE SET job_id = excluded.job_id, "
+      "last_seen_ms = excluded.last_seen_ms",
+      {worker, job_id, now_ms});
+}
+
+// Appends lines to the job's log. The caller's transaction holds the job's row (changed it or
+// read it {for_update}), so concurrent writers of one log never pick the same number.
+void insert_log_lines(SqlTx& tx, const std::string& job_id, const std::vector<std::string>& lines,
+                      int64_t now_ms) {
+  if (lines.empty()) return;
+  auto next = tx.row(
+      "SELECT (SELECT COALESCE(MAX(seq) + 1, 0) FROM job_logs WHERE job_id = ?1), project "
+      "FROM jobs WHERE id = ?1",
+      {job_id});
+  if (!next) throw job_not_found(job_id);
+  int64_t seq = next->int64(0);
+  for (const std::string& line : lines)
+    tx.exec("INSERT INTO job_logs (job_id, seq, t_ms, text) VALUES (?1, ?2, ?3, ?4)",
+            {job_id, seq++, now_ms, line});
+  Change change;
+  change.kind = Change::Kind::kLog;
+  change.job_id = job_id;
+  change.project = next->text(1);
+  tx.changes.push_back(std::move(change));
+}
+
+// Requeues (or fails, at the last expiry) running jobs whose lease has expired.
+int expire_leases(SqlTx& tx, int64_t now_ms) {
+  // {skip_locked}: a row another transaction holds (a heartbeat arriving right now, another
+  // replica's requeue) is left to it.
+  const SqlRows expired = tx.query(
+      "SELECT id, lease_id, worker, lease_expiries + 1 FROM jobs "
+      "WHERE state = 'running' AND lease_expires_at_ms <= ?1 "
+      "ORDER BY lease_expires_at_ms{skip_locked}",
+      {now_ms});
+  for (const SqlRow& job : expired) {
+    const int64_t expiries = job.int64(3);
+    const bool give_up = expiries >= kMaxLeaseExpiries;
+    const std::string worker = job.text(2);
+    tx.exec(
+        "UPDATE jobs SET state = ?2, lease_expiries = ?3, error = ?4, finished_at_ms = ?5, "
+        "lease_id = NULL, lease_expires_at_ms = NULL, stage = '', progress = 0 WHERE id = ?1",
+        {job.text(0), give_up ? "failed" : "queued", expiries,
+         give_up
+             ? "lease expired " + std::to_string(expiries) + " times (last worker: " + worker + ")"
+             : "",
+         give_up ? now_ms : 0});
+    insert_log_lines(tx, job.text(0),
+                     {"lease " + job.text(1) + " of worker " + worker + " expired" +
+                      (give_up ? "; the job failed" : "; the job is queued again")},
+                     now_ms);
+    note_job(tx, job.text(0));
+  }
+  return static_cast<int>(expired.size());
+}
+
 // A compare job's inputs: options.compare.job_a, and job_b unless a reprocess job with
 // `"compare": true` compares job_a with its own products (it runs other stages first and
 // names no job_b); each with its record and artifacts. A job that is missing or of another
@@ -85,12 +177,13 @@ void add_compare_inputs(SqlTx& tx, proto::Lease& lease) {
 proto::Job SqlStore::create_job(const proto::JobRequest& request,
                                 const std::string& idempotency_key, bool* created) {
   require_pipeline(request.stages, request.options);
-  require_idempotency_key(idempotency_key);
+  if (idempotency_key.size() > 255) throw Invalid("Idempotency-Key: expected at most 255 bytes");
   auto first_job_of_key = [&](SqlTx& tx) -> std::optional<proto::Job> {
     auto row = tx.row("SELECT id FROM jobs WHERE idempotency_key = ?1", {idempotency_key});
     if (!row) return std::nullopt;
     proto::Job job = require_job(tx, row->text(0));
-    if (!same_request(job, request))
+    if (job.mission_id != request.mission_id || job.stages != request.stages ||
+        job.options != request.options)
       throw Conflict("Idempotency-Key '" + idempotency_key + "' was used for job " + job.id +
                      " with a different request");
     if (created) *created = false;
@@ -164,35 +257,13 @@ proto::Job SqlStore::retry_job(const std::string& job_id) {
 
 // --- worker protocol ---
 
-int SqlStore::expire_leases(SqlTx& tx, int64_t now_ms) {
-  // {skip_locked}: a row another transaction holds (a heartbeat arriving right now, another
-  // replica's requeue) is left to it.
-  const SqlRows expired = tx.query(
-      "SELECT id, lease_id, worker, lease_expiries + 1 FROM jobs "
-      "WHERE state = 'running' AND lease_expires_at_ms <= ?1 "
-      "ORDER BY lease_expires_at_ms{skip_locked}",
-      {now_ms});
-  for (const SqlRow& job : expired) {
-    const int expiries = static_cast<int>(job.int64(3));
-    const bool give_up = expiries >= kMaxLeaseExpiries;
-    tx.exec(
-        "UPDATE jobs SET state = ?2, lease_expiries = ?3, error = ?4, finished_at_ms = ?5, "
-        "lease_id = NULL, lease_expires_at_ms = NULL, stage = '', progress = 0 WHERE id = ?1",
-        {job.text(0), give_up ? "failed" : "queued", int64_t{expiries},
-         give_up ? expired_lease_error(expiries, job.text(2)) : "", give_up ? now_ms : 0});
-    insert_log_lines(tx, job.text(0), {expired_lease_line(job.text(1), job.text(2), give_up)},
-                     now_ms);
-    note_job(tx, job.text(0));
-  }
-  return static_cast<int>(expired.size());
-}
-
 int SqlStore::requeue_expired_leases() {
   return write([&](SqlTx& tx) { return expire_leases(tx, clock_()); });
 }
 
 std::optional<proto::Lease> SqlStore::lease_job(const proto::LeaseRequest& request) {
-  require_lease_seconds(request.lease_seconds);
+  if (request.lease_seconds < 1)
+    throw Invalid("lease_seconds: expected >= 1, got " + std::to_string(request.lease_seconds));
   const std::string project = request.project == proto::kAllProjects ? "" : request.project;
   return write([&](SqlTx& tx) -> std::optional<proto::Lease> {
     const int64_t now_ms = clock_();
@@ -242,7 +313,10 @@ proto::Job SqlStore::release_job(const std::string& job_id, const std::string& l
         "RETURNING worker",
         {job_id, lease_id});
     if (!released) fence_failure(tx, job_id, lease_id);
-    insert_log_lines(tx, job_id, {released_lease_line(released->text(0), lease_id)}, now_ms);
+    insert_log_lines(tx, job_id,
+                     {"worker " + released->text(0) + " gave lease " + lease_id +
+                      " back; the job is queued again"},
+                     now_ms);
     release_worker(tx, released->text(0), job_id, now_ms);
     note_job(tx, job_id);
     return require_job(tx, job_id);
@@ -250,7 +324,8 @@ proto::Job SqlStore::release_job(const std::string& job_id, const std::string& l
 }
 
 proto::HeartbeatReply SqlStore::heartbeat(const std::string& job_id, const proto::Heartbeat& beat) {
-  require_progress(beat.progress);
+  if (!(beat.progress >= 0.0 && beat.progress <= 1.0))
+    throw Invalid("progress: expected a fraction in [0, 1]");
   return write([&](SqlTx& tx) {
     const int64_t now_ms = clock_();
     proto::HeartbeatReply reply;
@@ -286,7 +361,14 @@ proto::HeartbeatReply SqlStore::heartbeat(const std::string& job_id, const proto
 
 proto::Artifact SqlStore::add_artifact(const std::string& job_id,
                                        const proto::ArtifactRegistration& registration) {
-  require_artifact_name(registration.name);
+  // Artifact names become download file names: one plain path component.
+  const std::string& name = registration.name;
+  if (name.empty() || name.size() > 255 || name == "." || name == "..")
+    throw Invalid("name: expected a file name of 1..255 bytes, got '" + name + "'");
+  for (char c : name)
+    if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20)
+      throw Invalid("name: artifact name '" + name +
+                    "' must not contain '/', '\\' or control characters");
   require_sha256(registration.blob, "blob");
   return write([&](SqlTx& tx) {
     const proto::Job job = lock_leased_job(tx, job_id, registration.lease_id);
@@ -333,6 +415,9 @@ void SqlStore::complete_stage(const std::string& job_id, const std::string& stag
 
 proto::Job SqlStore::finish_job(const std::string& job_id, const proto::JobFinish& finish,
                                 bool succeeded) {
+  std::string error;
+  if (!succeeded)
+    error = finish.error.empty() ? "the worker failed without a message" : finish.error;
   return write([&](SqlTx& tx) {
     const int64_t now_ms = clock_();
     auto finished = tx.row(
@@ -340,8 +425,7 @@ proto::Job SqlStore::finish_job(const std::string& job_id, const proto::JobFinis
         "progress = CASE WHEN ?3 = 'succeeded' THEN 1 ELSE progress END, "
         "lease_id = NULL, lease_expires_at_ms = NULL "
         "WHERE id = ?1 AND lease_id = ?2 AND state = 'running' RETURNING worker",
-        {job_id, finish.lease_id, succeeded ? "succeeded" : "failed",
-         finish_error(finish, succeeded), now_ms});
+        {job_id, finish.lease_id, succeeded ? "succeeded" : "failed", error, now_ms});
     if (!finished) fence_failure(tx, job_id, finish.lease_id);
     release_worker(tx, finished->text(0), job_id, now_ms);
     note_job(tx, job_id);
@@ -362,25 +446,6 @@ proto::Artifact SqlStore::get_artifact(const std::string& artifact_id) {
   auto artifact = read([&](SqlTx& tx) { return find_artifact(tx, artifact_id); });
   if (!artifact) throw NotFound("artifact " + artifact_id + " not found");
   return *artifact;
-}
-
-void SqlStore::insert_log_lines(SqlTx& tx, const std::string& job_id,
-                                const std::vector<std::string>& lines, int64_t now_ms) {
-  if (lines.empty()) return;
-  auto next = tx.row(
-      "SELECT (SELECT COALESCE(MAX(seq) + 1, 0) FROM job_logs WHERE job_id = ?1), project "
-      "FROM jobs WHERE id = ?1",
-      {job_id});
-  if (!next) throw job_not_found(job_id);
-  int64_t seq = next->int64(0);
-  for (const std::string& line : lines)
-    tx.exec("INSERT INTO job_logs (job_id, seq, t_ms, text) VALUES (?1, ?2, ?3, ?4)",
-            {job_id, seq++, now_ms, line});
-  Change change;
-  change.kind = Change::Kind::kLog;
-  change.job_id = job_id;
-  change.project = next->text(1);
-  tx.changes.push_back(std::move(change));
 }
 
 void SqlStore::append_log(const std::string& job_id, const std::vector<std::string>& lines) {

@@ -45,18 +45,10 @@ class SqliteTx : public SqlTx {
       while (statement.step()) {
         std::vector<SqlRow::Cell> cells(statement.column_count());
         for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
-          switch (statement.column_type(i)) {
-            case SQLITE_NULL:
-              break;
-            case SQLITE_INTEGER:
-              cells[i] = statement.column_int64(i);
-              break;
-            case SQLITE_FLOAT:
-              cells[i] = statement.column_double(i);
-              break;
-            default:
-              cells[i] = statement.column_text(i);
-          }
+          const int type = statement.column_type(i);
+          if (type == SQLITE_INTEGER) cells[i] = statement.column_int64(i);
+          if (type == SQLITE_FLOAT) cells[i] = statement.column_double(i);
+          if (type == SQLITE_TEXT || type == SQLITE_BLOB) cells[i] = statement.column_text(i);
         }
         rows.emplace_back(std::move(cells));
       }
@@ -153,7 +145,7 @@ class SqliteSql : public Sql {
         throw StorageFull(std::string("no space left for the database: ") + error.what());
       throw;
     }
-    committed(changes);  // outside the lock: listeners may call the store
+    changed(changes);  // outside the lock: listeners may call the store
   }
 
  private:
