@@ -94,7 +94,9 @@ std::string Statement::column_text(int column) const {
                      static_cast<size_t>(sqlite3_column_bytes(stmt_, column)));
 }
 
-bool Statement::column_is_null(int column) const { return column_type(column) == SQLITE_NULL; }
+bool Statement::column_is_null(int column) const {
+  return sqlite3_column_type(stmt_, column) == SQLITE_NULL;
+}
 
 void Statement::reset() {
   sqlite3_reset(stmt_);

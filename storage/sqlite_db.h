@@ -24,7 +24,7 @@ class SqliteError : public std::runtime_error {
  public:
   SqliteError(const std::string& message, int code);
   int code() const { return code_; }  // the SQLite (extended) result code
-  bool disk_full() const;             // SQLITE_FULL: the database file could not grow
+  bool disk_full() const;              // SQLITE_FULL: the database file could not grow
 
  private:
   int code_;
