@@ -90,20 +90,33 @@ proto::Batch SqlStore::create_batch(const proto::ReprocessRequest& request) {
     batch.project = project_of_request(tx, request.project);
     batch.created_at_ms = clock_();
     const std::vector<std::string> missions = batch_missions(tx, request, batch.project);
-    for (const std::string& mission_id : missions) {
-      Pipeline pipeline = plain;
-      if (request.compare) {
-        const std::string earlier = earlier_job(tx, mission_id, batch.project);
-        if (!earlier.empty()) {
-          pipeline = with_compare(request.stages, request.options, earlier);
-          ++batch.compared;
-        }
-      }
-      tx.exec(
+    // One INSERT of up to kRowsPerInsert jobs at a time (and the rest in halving chunks, so a
+    // connection prepares only a few statements): a batch of thousands of missions is a few
+    // dozen statements, in the missions' order (their seq follows it).
+    constexpr size_t kRowsPerInsert = 128;
+    for (size_t first = 0, rows = kRowsPerInsert; first < missions.size(); first += rows) {
+      while (rows > missions.size() - first) rows /= 2;
+      std::string sql =
           "INSERT INTO jobs (id, mission_id, state, stages, options, created_at_ms, project, "
-          "batch_id) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, ?7)",
-          {new_id(kJobPrefix), mission_id, pipeline.stages, pipeline.options, batch.created_at_ms,
-           batch.project, batch.id});
+          "batch_id) VALUES ";
+      std::vector<SqlValue> params = {batch.created_at_ms, batch.project, batch.id};
+      for (size_t i = first; i < first + rows; ++i) {
+        Pipeline pipeline = plain;
+        if (request.compare) {
+          const std::string earlier = earlier_job(tx, missions[i], batch.project);
+          if (!earlier.empty()) {
+            pipeline = with_compare(request.stages, request.options, earlier);
+            ++batch.compared;
+          }
+        }
+        const size_t at = params.size();
+        sql += std::string(i > first ? ", " : "") + "(?" + std::to_string(at + 1) + ", ?" +
+               std::to_string(at + 2) + ", 'queued', ?" + std::to_string(at + 3) + ", ?" +
+               std::to_string(at + 4) + ", ?1, ?2, ?3)";
+        params.insert(params.end(),
+                      {new_id(kJobPrefix), missions[i], pipeline.stages, pipeline.options});
+      }
+      tx.exec(sql, params);
     }
     batch.jobs = static_cast<int64_t>(missions.size());
     tx.exec("INSERT INTO batches (id, project, jobs, created_at_ms) VALUES (?1, ?2, ?3, ?4)",

@@ -77,15 +77,21 @@ void release_worker(SqlTx& tx, const std::string& worker, const std::string& job
           {worker, job_id, now_ms});
 }
 
-// In a write: the job's row changed (its project and state are read).
-void note_job(SqlTx& tx, const std::string& job_id) {
-  auto row = tx.row("SELECT project, state FROM jobs WHERE id = ?1", {job_id});
-  if (!row) return;
+// In a write: the job's row changed; `state` is its state now.
+void note_job(SqlTx& tx, const std::string& job_id, const std::string& project,
+              proto::JobState state) {
   Change change;
   change.job_id = job_id;
-  change.project = row->text(0);
-  change.state = proto::job_state_from_string(row->text(1));
+  change.project = project;
+  change.state = state;
   tx.changes.push_back(std::move(change));
+}
+
+// In a write: the job as the write left it, its change noted.
+proto::Job changed_job(SqlTx& tx, const std::string& job_id) {
+  proto::Job job = require_job(tx, job_id);
+  note_job(tx, job.id, job.project, job.state);
+  return job;
 }
 
 // The worker called the worker protocol now, holding `job_id` ("" = none).
@@ -124,7 +130,7 @@ int expire_leases(SqlTx& tx, int64_t now_ms) {
   // {skip_locked}: a row another transaction holds (a heartbeat arriving right now, another
   // replica's requeue) is left to it.
   const SqlRows expired = tx.query(
-      "SELECT id, lease_id, worker, lease_expiries + 1 FROM jobs "
+      "SELECT id, lease_id, worker, lease_expiries + 1, project FROM jobs "
       "WHERE state = 'running' AND lease_expires_at_ms <= ?1 "
       "ORDER BY lease_expires_at_ms{skip_locked}",
       {now_ms});
@@ -144,7 +150,8 @@ int expire_leases(SqlTx& tx, int64_t now_ms) {
                      {"lease " + job.text(1) + " of worker " + worker + " expired" +
                       (give_up ? "; the job failed" : "; the job is queued again")},
                      now_ms);
-    note_job(tx, job.text(0));
+    note_job(tx, job.text(0), job.text(4),
+             give_up ? proto::JobState::kFailed : proto::JobState::kQueued);
   }
   return static_cast<int>(expired.size());
 }
@@ -207,8 +214,7 @@ proto::Job SqlStore::create_job(const proto::JobRequest& request,
             .empty())
       return *first_job_of_key(tx);
     if (created) *created = true;
-    note_job(tx, job_id);
-    return require_job(tx, job_id);
+    return changed_job(tx, job_id);
   });
 }
 
@@ -231,8 +237,7 @@ proto::Job SqlStore::cancel_job(const std::string& job_id) {
     // The lease stays, so the worker's next heartbeat is answered "canceled".
     tx.exec("UPDATE jobs SET state = 'canceled', finished_at_ms = ?2 WHERE id = ?1",
             {job_id, clock_()});
-    note_job(tx, job_id);
-    return require_job(tx, job_id);
+    return changed_job(tx, job_id);
   });
 }
 
@@ -250,8 +255,7 @@ proto::Job SqlStore::retry_job(const std::string& job_id) {
         "lease_id = NULL, lease_expires_at_ms = NULL, lease_expiries = 0, worker = '', "
         "started_at_ms = 0, finished_at_ms = 0 WHERE id = ?1",
         {job_id});
-    note_job(tx, job_id);
-    return require_job(tx, job_id);
+    return changed_job(tx, job_id);
   });
 }
 
@@ -268,29 +272,23 @@ std::optional<proto::Lease> SqlStore::lease_job(const proto::LeaseRequest& reque
   return write([&](SqlTx& tx) -> std::optional<proto::Lease> {
     const int64_t now_ms = clock_();
     expire_leases(tx, now_ms);
-    // {skip_locked}: concurrent leases take the next job instead of waiting for this one.
-    auto next = tx.row(
-        "SELECT id FROM jobs WHERE state = 'queued' AND (?1 = '' OR project = ?1) "
-        "ORDER BY seq LIMIT 1{skip_locked}",
-        {project});
-    if (!next) {
-      note_worker(tx, request.worker, "", now_ms);
-      return std::nullopt;
-    }
-    const std::string job_id = next->text(0);
     proto::Lease lease;
     lease.lease_id = new_id(kLeasePrefix);
     const int64_t lease_ms = int64_t{request.lease_seconds} * 1000;
     lease.expires_at_ms = now_ms + lease_ms;
-    tx.exec(
+    // The oldest queued job, taken in one statement. {skip_locked}: concurrent leases take
+    // the next job instead of waiting for this one.
+    auto taken = tx.row(
         "UPDATE jobs SET state = 'running', attempts = attempts + 1, lease_id = ?2, "
         "lease_expires_at_ms = ?3, lease_ms = ?4, worker = ?5, stage = '', progress = 0, "
         "started_at_ms = CASE WHEN started_at_ms = 0 THEN ?6 ELSE started_at_ms END "
-        "WHERE id = ?1",
-        {job_id, lease.lease_id, lease.expires_at_ms, lease_ms, request.worker, now_ms});
-    note_worker(tx, request.worker, job_id, now_ms);
-    note_job(tx, job_id);
-    lease.job = require_job(tx, job_id);
+        "WHERE id = (SELECT id FROM jobs WHERE state = 'queued' AND (?1 = '' OR project = ?1) "
+        "ORDER BY seq LIMIT 1{skip_locked}) RETURNING id",
+        {project, lease.lease_id, lease.expires_at_ms, lease_ms, request.worker, now_ms});
+    note_worker(tx, request.worker, taken ? taken->text(0) : "", now_ms);
+    if (!taken) return std::nullopt;
+    const std::string job_id = taken->text(0);
+    lease.job = changed_job(tx, job_id);
     auto mission = find_mission(tx, lease.job.mission_id);
     if (!mission) throw NotFound("mission " + lease.job.mission_id + " of job " + job_id);
     lease.mission = *mission;
@@ -318,8 +316,7 @@ proto::Job SqlStore::release_job(const std::string& job_id, const std::string& l
                       " back; the job is queued again"},
                      now_ms);
     release_worker(tx, released->text(0), job_id, now_ms);
-    note_job(tx, job_id);
-    return require_job(tx, job_id);
+    return changed_job(tx, job_id);
   });
 }
 
@@ -332,7 +329,7 @@ proto::HeartbeatReply SqlStore::heartbeat(const std::string& job_id, const proto
     auto beaten = tx.row(
         "UPDATE jobs SET lease_expires_at_ms = ?3 + lease_ms, stage = ?4, progress = ?5 "
         "WHERE id = ?1 AND lease_id = ?2 AND state = 'running' "
-        "RETURNING lease_expires_at_ms, stages",
+        "RETURNING lease_expires_at_ms, stages, project",
         {job_id, beat.lease_id, now_ms, beat.stage, beat.progress});
     if (!beaten) {
       // A canceled job keeps its lease until the worker hears "canceled" here.
@@ -353,7 +350,7 @@ proto::HeartbeatReply SqlStore::heartbeat(const std::string& job_id, const proto
       require_stage_of(job, beat.stage, "stage");  // rolls the update back
     }
     insert_log_lines(tx, job_id, beat.log, now_ms);
-    note_job(tx, job_id);
+    note_job(tx, job_id, beaten->text(2), proto::JobState::kRunning);
     touch_worker_of(tx, job_id, now_ms);
     return reply;
   });
@@ -402,14 +399,15 @@ void SqlStore::complete_stage(const std::string& job_id, const std::string& stag
   if (!std::isfinite(completion.seconds) || completion.seconds < 0)
     throw Invalid("seconds: expected a finite duration >= 0");
   write([&](SqlTx& tx) {
-    require_stage_of(lock_leased_job(tx, job_id, completion.lease_id), stage, "stage");
+    const proto::Job job = lock_leased_job(tx, job_id, completion.lease_id);
+    require_stage_of(job, stage, "stage");
     tx.exec(
         "INSERT INTO stage_outputs (job_id, stage, report, seconds, completed_at_ms) "
         "VALUES (?1, ?2, ?3, ?4, ?5) ON CONFLICT (job_id, stage) DO UPDATE SET "
         "report = excluded.report, seconds = excluded.seconds, "
         "completed_at_ms = excluded.completed_at_ms",
         {job_id, stage, completion.report.dump(), completion.seconds, clock_()});
-    note_job(tx, job_id);
+    note_job(tx, job_id, job.project, proto::JobState::kRunning);
   });
 }
 
@@ -428,8 +426,7 @@ proto::Job SqlStore::finish_job(const std::string& job_id, const proto::JobFinis
         {job_id, finish.lease_id, succeeded ? "succeeded" : "failed", error, now_ms});
     if (!finished) fence_failure(tx, job_id, finish.lease_id);
     release_worker(tx, finished->text(0), job_id, now_ms);
-    note_job(tx, job_id);
-    return require_job(tx, job_id);
+    return changed_job(tx, job_id);
   });
 }
 
