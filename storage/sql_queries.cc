@@ -71,13 +71,6 @@ proto::Artifact read_artifact(const SqlRow& row) {
 }
 
 template <typename Read>
-auto read_rows(SqlTx& tx, const std::string& sql, const std::vector<SqlValue>& params, Read read) {
-  std::vector<decltype(read(std::declval<const SqlRow&>()))> out;
-  for (const SqlRow& row : tx.query(sql, params)) out.push_back(read(row));
-  return out;
-}
-
-template <typename Read>
 auto find_one(SqlTx& tx, const std::string& sql, const std::string& key, Read read)
     -> std::optional<decltype(read(std::declval<const SqlRow&>()))> {
   auto row = tx.row(sql, {key});

@@ -16,6 +16,14 @@
 namespace keel::storage {
 
 // `lock`: hold the row until the commit ({for_update}).
+// Each row `sql` returns, turned into its type by `read`.
+template <typename Read>
+auto read_rows(SqlTx& tx, const std::string& sql, const std::vector<SqlValue>& params, Read read) {
+  std::vector<decltype(read(std::declval<const SqlRow&>()))> out;
+  for (const SqlRow& row : tx.query(sql, params)) out.push_back(read(row));
+  return out;
+}
+
 std::optional<proto::Upload> find_upload(SqlTx& tx, const std::string& upload_id,
                                          bool lock = false);
 std::optional<proto::Mission> find_mission(SqlTx& tx, const std::string& mission_id);

@@ -370,10 +370,7 @@ std::optional<proto::TokenInfo> SqlStore::check_token(const std::string& token) 
 
 std::vector<proto::TokenInfo> SqlStore::list_tokens() {
   return read([&](SqlTx& tx) {
-    std::vector<proto::TokenInfo> tokens;
-    for (const SqlRow& row : tx.query(kTokenSelect + " ORDER BY created_at_ms, {rowid}"))
-      tokens.push_back(read_token(row));
-    return tokens;
+    return read_rows(tx, kTokenSelect + " ORDER BY created_at_ms, {rowid}", {}, read_token);
   });
 }
 
@@ -395,10 +392,7 @@ int64_t SqlStore::token_count() {
 
 std::vector<proto::Project> SqlStore::list_projects() {
   return read([&](SqlTx& tx) {
-    std::vector<proto::Project> projects;
-    for (const SqlRow& row : tx.query(kProjectSelect + " ORDER BY name"))
-      projects.push_back(read_project(row));
-    return projects;
+    return read_rows(tx, kProjectSelect + " ORDER BY name", {}, read_project);
   });
 }
 
