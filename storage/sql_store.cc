@@ -232,8 +232,8 @@ std::string SqlStore::complete_upload(const std::string& upload_id, const std::s
           return;
         }
         blobs_.adopt(part, sha256);
-        // The upload's row goes last: a crash before it leaves an upload to resume, never
-        // a missing blob row.
+        // The upload's row goes last: after a crash in between, the upload is still open and
+        // is sent again, and the blob file already in place is kept.
         insert_blob(tx, sha256, upload->size, clock_());
         note_blob_ref(tx, upload->project, sha256);
         tx.exec("DELETE FROM uploads WHERE id = ?1", {upload_id});
