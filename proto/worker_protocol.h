@@ -58,7 +58,7 @@ struct Lease {
   Job job;
   Mission mission;
   std::vector<StageOutput> completed;  // stages finished by earlier attempts, in order
-  std::vector<LeaseInput> inputs;      // a compare job's jobs A then B; absent otherwise
+  std::vector<LeaseInput> inputs;      // a compare job's jobs A then B (the store fills them)
 
   nlohmann::json to_json() const;
   static Lease from_json(const nlohmann::json& body, const std::string& path = "");

@@ -1,15 +1,13 @@
 #include "server/lease_wait.h"
 
-#include "server/routes.h"
-
 #include "server/api_response.h"
 
 namespace keel::server {
 
 std::optional<Response> try_lease(storage::Store& store, const proto::LeaseRequest& request) {
+  // The store's lease is complete: a compare job's jobs A and B come with it.
   std::optional<proto::Lease> lease = store.lease_job(request);
   if (!lease) return std::nullopt;
-  routes::compare_lease_inputs(store, &*lease);  // a compare job's jobs A and B
   return json_response(200, lease->to_json());
 }
 

@@ -61,8 +61,6 @@ Response queue_summary(const Call& call);
 
 // routes_comparisons.cc (issue 16)
 Response create_comparison(const Call& call);
-// A leased compare job's inputs: jobs A and B (options.compare.job_a/job_b) with artifacts.
-void compare_lease_inputs(storage::Store& store, proto::Lease* lease);
 // The request's Idempotency-Key (routes_jobs.cc); 400 when too long or not visible ASCII.
 std::string idempotency_key(const Request& request);
 

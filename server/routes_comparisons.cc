@@ -3,13 +3,10 @@
 // instead of becoming a failed job: an unknown (or another project's) job 404, a job not
 // succeeded, jobs of two projects, a map job against a hull job 409 `not_comparable`. The job
 // runs on B's mission with stages ["compare"] and options {"compare": {...options, "job_a",
-// "job_b"}}; the lease gives the worker both jobs' records and artifacts
-// (compare_lease_inputs). A reprocess job made with "compare": true has options.compare.job_a
+// "job_b"}}; the store's lease gives the worker both jobs' records and artifacts
+// (Lease::inputs). A reprocess job made with "compare": true has options.compare.job_a
 // alone: its lease gives job A, and the stage compares A with the job's own products.
-#include <algorithm>
-
 #include "proto/job.h"
-#include "proto/worker_protocol.h"
 #include "server/api_response.h"
 #include "server/routes.h"
 
@@ -81,28 +78,6 @@ Response create_comparison(const Call& call) {
   bool created = true;
   const proto::Job made = call.store.create_job(job, key, &created);
   return json_response(created ? 201 : 200, made.to_json());
-}
-
-void compare_lease_inputs(storage::Store& store, proto::Lease* lease) {
-  const proto::Job& job = lease->job;
-  if (std::find(job.stages.begin(), job.stages.end(), "compare") == job.stages.end()) return;
-  if (!job.options.contains("compare") || !job.options["compare"].is_object()) return;
-  const nlohmann::json& o = job.options["compare"];
-  // A reprocess job with `"compare": true` runs its stages, then compares job_a with itself
-  // (its own products: no job_b); a comparison job names both.
-  const bool with_itself = job.stages.size() > 1 && !o.contains("job_b");
-  std::vector<const char*> keys = {"job_a"};
-  if (!with_itself) keys.push_back("job_b");
-  for (const char* key : keys) {
-    if (!o.contains(key) || !o[key].is_string()) return;  // the stage says what is missing
-  }
-  for (const char* key : keys) {
-    proto::LeaseInput input;
-    input.job = store.get_job(o[key].get<std::string>());
-    if (input.job.project != job.project) return;  // never hand out another project's job
-    input.artifacts = store.list_artifacts(input.job.id);
-    lease->inputs.push_back(std::move(input));
-  }
 }
 
 }  // namespace keel::server::routes

@@ -23,15 +23,4 @@ std::string random_hex(size_t bytes) {
 
 std::string new_id(const std::string& prefix) { return prefix + random_hex(8); }
 
-bool is_id(const std::string& text, const std::string& prefix) {
-  if (text.size() < prefix.size() || text.compare(0, prefix.size(), prefix) != 0) return false;
-  const size_t digits = text.size() - prefix.size();
-  if (digits < 16 || digits > 64) return false;
-  for (size_t i = prefix.size(); i < text.size(); ++i) {
-    const char c = text[i];
-    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
-  }
-  return true;
-}
-
 }  // namespace keel::storage

@@ -20,7 +20,5 @@ inline constexpr const char* kBatchPrefix = "b_";
 std::string random_hex(size_t bytes);
 // prefix + 16 random hex digits, e.g. "j_3f9a0c1e7b2d4a65".
 std::string new_id(const std::string& prefix);
-// True for prefix + 16..64 lowercase hex digits: ids safe to use in file names.
-bool is_id(const std::string& text, const std::string& prefix);
 
 }  // namespace keel::storage

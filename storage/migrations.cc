@@ -168,6 +168,26 @@ const std::vector<Migration>& sqlite_migrations() {
   return migrations;
 }
 
+void require_applicable(const std::vector<Migration>& migrations, const std::string& where,
+                        int version) {
+  for (size_t i = 0; i < migrations.size(); ++i)
+    if (migrations[i].version != static_cast<int>(i + 1))
+      throw std::logic_error("migration '" + migrations[i].name + "' has version " +
+                             std::to_string(migrations[i].version) + ", expected " +
+                             std::to_string(i + 1));
+  const int newest = static_cast<int>(migrations.size());
+  if (version > newest)
+    throw SchemaTooNew(where + ": schema version " + std::to_string(version) +
+                       " is newer than this program knows (" + std::to_string(newest) +
+                       "); use a newer keel-server");
+}
+
+std::runtime_error migration_failed(const std::string& where, const Migration& migration,
+                                    const std::exception& error) {
+  return std::runtime_error(where + ": migration " + std::to_string(migration.version) + " (" +
+                            migration.name + ") failed: " + error.what());
+}
+
 int schema_version(Database& db) {
   auto exists =
       db.cached("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'schema_version'");
@@ -177,11 +197,6 @@ int schema_version(Database& db) {
 }
 
 int apply_migrations(Database& db, const std::vector<Migration>& migrations) {
-  for (size_t i = 0; i < migrations.size(); ++i)
-    if (migrations[i].version != static_cast<int>(i + 1))
-      throw std::logic_error("migration '" + migrations[i].name + "' has version " +
-                             std::to_string(migrations[i].version) + ", expected " +
-                             std::to_string(i + 1));
   {
     Transaction transaction(db);
     db.exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)");
@@ -189,11 +204,7 @@ int apply_migrations(Database& db, const std::vector<Migration>& migrations) {
     transaction.commit();
   }
   int version = schema_version(db);
-  const int newest = static_cast<int>(migrations.size());
-  if (version > newest)
-    throw SchemaTooNew(db.file().string() + ": schema version " + std::to_string(version) +
-                       " is newer than this program knows (" + std::to_string(newest) +
-                       "); use a newer keel-server");
+  require_applicable(migrations, db.file().string(), version);
   for (const Migration& migration : migrations) {
     if (migration.version <= version) continue;
     Transaction transaction(db);
@@ -202,9 +213,7 @@ int apply_migrations(Database& db, const std::vector<Migration>& migrations) {
     try {
       db.exec(migration.sql);
     } catch (const std::exception& error) {
-      throw std::runtime_error(db.file().string() + ": migration " +
-                               std::to_string(migration.version) + " (" + migration.name +
-                               ") failed: " + error.what());
+      throw migration_failed(db.file().string(), migration, error);
     }
     record_version(db, migration.version);
     transaction.commit();

@@ -23,6 +23,15 @@ struct Migration {
   std::string sql;   // one or more statements
 };
 
+// What applying migrations checks first, the same way for each database: the list is
+// numbered 1, 2, 3, ... (std::logic_error) and the database `where` names, at `version`, is
+// not newer than the list (SchemaTooNew).
+void require_applicable(const std::vector<Migration>& migrations, const std::string& where,
+                        int version);
+// The error of a migration that failed, naming the database, the migration and why.
+std::runtime_error migration_failed(const std::string& where, const Migration& migration,
+                                    const std::exception& error);
+
 // Keel's migrations, oldest first.
 const std::vector<Migration>& sqlite_migrations();
 

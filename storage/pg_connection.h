@@ -35,16 +35,16 @@ class PgConnection {
   std::unordered_map<std::string, std::string> names_;  // SQL text -> statement name
 };
 
-// A transaction on a pooled connection (or, for PgPool::autocommit, a connection whose
-// every statement commits alone): exec() runs a statement prepared once per connection.
+// A transaction on a pooled connection: statements are prepared once per connection.
 class PgTx {
  public:
   PgTx(PgConnection& connection, pqxx::transaction_base& work)
       : connection_(connection), work_(work) {}
 
-  template <typename... Args>
-  pqxx::result exec(const std::string& sql, Args&&... args) {
-    return work_.exec_prepared(connection_.statement(sql), std::forward<Args>(args)...);
+  // `sql` with $1, $2, ... bound to `values` (nullptr: NULL).
+  pqxx::result exec_params(const std::string& sql, const std::vector<const char*>& values) {
+    return work_.exec_prepared(connection_.statement(sql),
+                               pqxx::prepare::make_dynamic_params(values));
   }
   pqxx::transaction_base& work() { return work_; }
 
@@ -68,11 +68,11 @@ class PgPool {
   auto transact(Work&& work) {
     return run<pqxx::work>(std::forward<Work>(work));
   }
-  // The same without BEGIN/COMMIT: each statement `work` runs commits by itself (one round
-  // trip for a one-statement operation). `work` must be safe to run again from the start.
+  // The same in a read-only REPEATABLE READ transaction: every statement of `work` sees one
+  // snapshot, as in SQLite's read transactions.
   template <typename Work>
-  auto autocommit(Work&& work) {
-    return run<pqxx::nontransaction>(std::forward<Work>(work));
+  auto snapshot(Work&& work) {
+    return run<pqxx::transaction<pqxx::repeatable_read, pqxx::read_only>>(std::forward<Work>(work));
   }
 
   const std::string& url() const { return url_; }

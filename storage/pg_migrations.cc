@@ -176,21 +176,9 @@ int pg_schema_version(PgPool& pool) {
 }
 
 int apply_pg_migrations(PgPool& pool, const std::vector<Migration>& migrations) {
-  for (size_t i = 0; i < migrations.size(); ++i)
-    if (migrations[i].version != static_cast<int>(i + 1))
-      throw std::logic_error("migration '" + migrations[i].name + "' has version " +
-                             std::to_string(migrations[i].version) + ", expected " +
-                             std::to_string(i + 1));
   const std::string where = redact_database_url(pool.url());
-  const int newest = static_cast<int>(migrations.size());
-  auto refuse_if_newer = [&](int version) {
-    if (version > newest)
-      throw SchemaTooNew(where + ": schema version " + std::to_string(version) +
-                         " is newer than this program knows (" + std::to_string(newest) +
-                         "); use a newer keel-server");
-  };
   int version = pg_schema_version(pool);
-  refuse_if_newer(version);
+  require_applicable(migrations, where, version);
   for (const Migration& migration : migrations) {
     if (migration.version <= version) continue;
     version = pool.transact([&](PgTx& tx) {
@@ -198,13 +186,12 @@ int apply_pg_migrations(PgPool& pool, const std::vector<Migration>& migrations) 
       tx.work().exec("CREATE TABLE IF NOT EXISTS schema_version (version integer NOT NULL)");
       // Re-read under the lock: another replica may have migrated meanwhile.
       const int now = read_version(tx);
-      refuse_if_newer(now);
+      require_applicable(migrations, where, now);
       if (now >= migration.version) return now;
       try {
         tx.work().exec(migration.sql);
       } catch (const pqxx::sql_error& error) {
-        throw std::runtime_error(where + ": migration " + std::to_string(migration.version) + " (" +
-                                 migration.name + ") failed: " + error.what());
+        throw migration_failed(where, migration, error);
       }
       tx.work().exec("DELETE FROM schema_version");
       tx.work().exec("INSERT INTO schema_version (version) VALUES (" +

@@ -79,6 +79,10 @@ void Statement::run() {
   }
 }
 
+int Statement::column_count() const { return sqlite3_column_count(stmt_); }
+
+int Statement::column_type(int column) const { return sqlite3_column_type(stmt_, column); }
+
 int64_t Statement::column_int64(int column) const { return sqlite3_column_int64(stmt_, column); }
 
 double Statement::column_double(int column) const { return sqlite3_column_double(stmt_, column); }

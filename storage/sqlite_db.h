@@ -50,6 +50,9 @@ class Statement {
   // Runs a statement that returns no rows (INSERT/UPDATE/DELETE).
   void run();
 
+  int column_count() const;
+  // SQLITE_INTEGER, SQLITE_FLOAT, SQLITE_TEXT, SQLITE_BLOB or SQLITE_NULL (sqlite3.h).
+  int column_type(int column) const;
   int64_t column_int64(int column) const;
   double column_double(int column) const;
   std::string column_text(int column) const;  // "" for NULL

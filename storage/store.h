@@ -174,12 +174,14 @@ class Store {
   // Takes the oldest queued job of request.project ("" or "*" = any project), after
   // requeueing expired leases (attempts counts every lease). Never waits: the server's long
   // poll waits for a kJob change to kQueued and calls again. Records the worker as seen.
+  // The lease is complete: the job, its mission, the stages earlier attempts finished, and a
+  // compare job's input jobs (options.compare.job_a, job_b) with their artifacts.
   virtual std::optional<proto::Lease> lease_job(const proto::LeaseRequest& request) = 0;
   // The worker gives its lease back (SIGTERM, shutdown): running -> queued at once, keeping
   // completed stages; this lease is not counted as an expiry. LeaseLost as for heartbeats.
   virtual proto::Job release_job(const std::string& job_id, const std::string& lease_id) = 0;
-  // Requeues (or fails, at the third expiry) every running job whose lease expired, in one
-  // statement any replica may run at any time. Returns how many jobs it changed.
+  // Requeues (or fails, at the third expiry) every running job whose lease expired; any
+  // replica may run it at any time. Returns how many jobs it changed.
   virtual int requeue_expired_leases() = 0;
   // Conflict when the lease is not the job's current one or has expired and was re-leased.
   virtual proto::HeartbeatReply heartbeat(const std::string& job_id, const proto::Heartbeat& beat) = 0;
