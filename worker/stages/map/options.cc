@@ -156,16 +156,9 @@ const OptionTable<MapStageOptions>& map_option_table() {
               "draco_compression_level", &Options::draco_compression_level, int_in_range(0, 10),
               doc("",
                   "0 (fast) .. 10 (small); Draco codes the kd-tree's bits directly at 0-1 and "
-                  "through rANS from 2. On the 220 s bridge (quiet machine, 2 cores, `farm-bench "
-                  "-n 4` paired medians of the whole process, 2026-11-27, after the session's "
-                  "deskew and tile-binning work) the stage takes 13.35 s at 1 (2.05 M input "
-                  "points/s) against 13.79 s at 5 (1.99 M/s), for files 0.15 % larger (combined "
-                  "map 48.56 vs 48.49 MB: its lossless float intensity, not the kd-tree's "
-                  "positions, is most of the bytes); `draco_decoder` reads the combined map 18 % "
-                  "faster at 1 (median ratio 0.82 of 5 paired runs; 2.46 s at 5, with its PLY "
-                  "output). 0 is Draco's sequential encoding, which keeps the points' order, for "
-                  "files 18 % (combined map, 57.4 vs 48.5 MB) to 49 % (lidar_v, 23.8 vs 16.0 MB) "
-                  "larger. 7 cost 25 % more encoding CPU than 5 for files 1 % smaller.",
+                  "through rANS from 2; 0 is Draco's sequential encoding, which keeps the "
+                  "points' order. Why 1: [map-filters.md](map-filters.md#throughput-and-memory-"
+                  "issue-5-targets)",
                   "beyond the paper", kFiles)),
           option("write_ply", &Options::write_ply,
                  doc("", "also write `map_<sensor>.ply`", "", kFiles)),
