@@ -152,14 +152,13 @@ const OptionTable<MapStageOptions>& map_option_table() {
                      "Draco position quantization: error <= sqrt(3)/2 * extent / (2^18 - 1), "
                      "0.66 mm on a 200 m map",
                      "beyond the paper", kFiles)),
-          option(
-              "draco_compression_level", &Options::draco_compression_level, int_in_range(0, 10),
-              doc("",
-                  "0 (fast) .. 10 (small); Draco codes the kd-tree's bits directly at 0-1 and "
-                  "through rANS from 2; 0 is Draco's sequential encoding, which keeps the "
-                  "points' order. Why 1: [map-filters.md](map-filters.md#throughput-and-memory-"
-                  "issue-5-targets)",
-                  "beyond the paper", kFiles)),
+          option("draco_compression_level", &Options::draco_compression_level, int_in_range(0, 10),
+                 doc("",
+                     "0 (fast) .. 10 (small); Draco codes the kd-tree's bits directly at 0-1 and "
+                     "through rANS from 2; 0 is Draco's sequential encoding, which keeps the "
+                     "points' order. Why 1: [map-filters.md](map-filters.md#throughput-and-memory-"
+                     "issue-5-targets)",
+                     "beyond the paper", kFiles)),
           option("write_ply", &Options::write_ply,
                  doc("", "also write `map_<sensor>.ply`", "", kFiles)),
           option(

@@ -110,12 +110,11 @@ std::vector<OutputTask> OutputPlan::sensor_tasks(const std::string& name) {
   const size_t n = scans_.map_points(name);
   if (n == 0) return tasks;
   TiledMaps& tiled = scans_.tiled();
-  const fs::path& dir = context_.work_dir;
   if (draco_bytes(n, options_) <= budget_bytes_) {
     tasks.push_back({"draco " + name, draco_seconds(n, kDracoSecondsPerPoint, options_),
-                     draco_bytes(n, options_), [this, &tiled, &dir, name, n] {
-                       write_sensor_draco(tiled, name, n, options_, dir, cancel_check(),
-                                          drc_.at(name), preview_.at(name));
+                     draco_bytes(n, options_), [this, &tiled, name, n] {
+                       write_sensor_draco(tiled, name, n, options_, context_.work_dir,
+                                          cancel_check(), drc_.at(name), preview_.at(name));
                      }});
   } else {
     drc_.at(name) = draco_not_written(n, draco_bytes(n, options_), budget_bytes_);

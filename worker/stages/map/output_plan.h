@@ -1,4 +1,4 @@
-// Steps 4 and 5 of the map stage as output tasks (OutputRunner): each sensor map's LOD tiles,
+// Steps 5 and 6 of the map stage as output tasks (OutputRunner): each sensor map's LOD tiles,
 // PLY file and Draco file (with its preview), the metrics of the SLAM map and of the SLAM
 // lidar's inspection map, and the same for the combined map (Eq. (21)), which is kept as its
 // parts, the sensor maps, never copied whole. A sensor's tasks start on one extra thread as

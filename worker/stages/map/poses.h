@@ -1,4 +1,4 @@
-// Step 2 of the map stage: the poses of Sec. VI-C (seed 000). Keyframes from
+// Step 3 of the map stage: the poses of Sec. VI-C (seed 000). Keyframes from
 // `trajectory_refined.tum` (an earlier `refine`) or the recorded `map` poses correct the
 // recorded high-rate `odometry` by Algorithm 2, so every scan between keyframes has a pose;
 // without odometry the keyframes are interpolated, without keyframes the odometry is used as

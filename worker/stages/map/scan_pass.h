@@ -1,4 +1,4 @@
-// Steps 2 and 3 of the map stage: every scan of every sensor through a MapBuilder of its own
+// Steps 3 and 4 of the map stage: every scan of every sensor through a MapBuilder of its own
 // (seed 000 Fig. 5: a sensor's map depends on its own scans only, so a sensor's outputs can
 // start once its last scan is in), `threads` scans at a time and committed in order
 // (MapBuilder::add_scans), on the TF tree W -> B -> S_i of the poses and extrinsics; the SLAM

@@ -1,4 +1,4 @@
-// Step 1 of the map stage: the scan sensors to map. Every lidar and sonar with scans unless
+// Step 2 of the map stage: the scan sensors to map. Every lidar and sonar with scans unless
 // `sensors` names them; a sensor on a servo tray (`mounted_on`) is skipped, because its
 // extrinsic varies with the tray angle and MapBuilder's TF tree holds static extrinsics.
 #pragma once
