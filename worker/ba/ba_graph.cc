@@ -90,6 +90,15 @@ class ParameterBuffer {
   std::vector<double> values_;  // sized once: Ceres keeps pointers into it
 };
 
+// Ceres's solves run on one thread. With more, each thread sums the cost and gradient of the
+// residual blocks it happened to take, and the Schur eliminator adds each landmark's share into
+// the reduced camera system under a lock, in the order the threads get there: the sums differ
+// in their last bits from run to run, and so did every BA output (1e-11 relative on keel-sim
+// hauv-hull). BaOptions::num_threads still splits the mesh queries (one slot per query) and
+// the covariance's columns (each solved on its own), which give the same bits on any number of
+// threads.
+constexpr int kCeresSolverThreads = 1;
+
 void set_pose_block(double* block, const Pose3& T) {
   const PoseBlock b = to_pose_block(T);
   std::copy(b.begin(), b.end(), block);
@@ -276,7 +285,7 @@ class BaGraph {
   ceres::Solver::Options solver_options() {
     ceres::Solver::Options s;
     s.max_num_iterations = options_.max_iterations;
-    s.num_threads = options_.num_threads;
+    s.num_threads = kCeresSolverThreads;
     s.function_tolerance = options_.function_tolerance;
     s.gradient_tolerance = options_.gradient_tolerance;
     s.parameter_tolerance = options_.parameter_tolerance;
@@ -410,7 +419,7 @@ class BaGraph {
     if (mode_ != BaMode::kNaive) {
       ceres::Solver::Options s;
       s.max_num_iterations = options_.max_iterations;
-      s.num_threads = options_.num_threads;
+      s.num_threads = kCeresSolverThreads;
       // The landmarks are independent problems summed: a relative tolerance on the sum would
       // stop while a feature whose depth few views constrain (each adds little cost) is still
       // far from its own minimum. Iterate until no landmark moves.
