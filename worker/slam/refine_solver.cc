@@ -17,6 +17,7 @@
 #include "worker/slam/prior_factors.h"
 #include "worker/slam/relative_pose_factor.h"
 #include "worker/slam/so3.h"
+#include "worker/slam/suitesparse_memory.h"
 
 namespace keel::slam {
 namespace {
@@ -524,6 +525,7 @@ Trajectory RefineResult::trajectory() const {
 
 RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) {
   const Clock::time_point t_start = Clock::now();
+  use_aligned_suitesparse_memory();  // the same bits wherever its fronts land
   RefineResult result;
   RefineSummary& summary = result.summary;
 
