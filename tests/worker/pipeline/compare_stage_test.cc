@@ -19,12 +19,12 @@
 #include "proto/contract_error.h"
 #include "tests/worker/compare/test_surfaces.h"
 #include "worker/io/draco/draco_codec.h"
+#include "worker/pipeline/draco_sidecar.h"
+#include "worker/pipeline/report.h"
 #include "worker/stages/ba/stage.h"
 #include "worker/stages/compare/compare_runs.h"
-#include "worker/pipeline/draco_sidecar.h"
 #include "worker/stages/inspect/stage.h"
 #include "worker/stages/map/stage.h"
-#include "worker/pipeline/report.h"
 
 namespace keel::pipeline {
 namespace {
