@@ -13,7 +13,6 @@
 #include "worker/mapping/map_metrics.h"
 #include "worker/pipeline/draco_sidecar.h"
 #include "worker/stages/compare/artifacts.h"
-#include "worker/stages/compare/hull_survey.h"
 
 namespace keel::pipeline {
 namespace {

@@ -17,8 +17,6 @@
 #include "worker/io/tum.h"
 #include "worker/pipeline/draco_sidecar.h"
 #include "worker/stages/compare/artifacts.h"
-#include "worker/stages/compare/map_alignment.h"
-#include "worker/stages/compare/map_change.h"
 #include "worker/stages/map/artifacts.h"
 
 namespace keel::pipeline {

@@ -1,4 +1,4 @@
-#include "worker/stages/compare/hull_survey.h"
+#include "worker/stages/compare/compare_hulls.h"
 
 #include <algorithm>
 #include <fstream>

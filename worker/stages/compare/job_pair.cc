@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "worker/pipeline/report.h"
-#include "worker/stages/compare/hull_survey.h"
+#include "worker/stages/compare/compare_hulls.h"
 #include "worker/stages/map/artifacts.h"
 
 namespace keel::pipeline {

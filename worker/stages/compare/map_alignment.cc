@@ -1,4 +1,4 @@
-#include "worker/stages/compare/map_alignment.h"
+#include "worker/stages/compare/compare_maps.h"
 
 #include <Eigen/Geometry>
 

@@ -1,4 +1,4 @@
-#include "worker/stages/compare/map_change.h"
+#include "worker/stages/compare/compare_maps.h"
 
 #include <algorithm>
 #include <cmath>
