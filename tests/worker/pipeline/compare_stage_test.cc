@@ -19,13 +19,12 @@
 #include "proto/contract_error.h"
 #include "tests/worker/compare/test_surfaces.h"
 #include "worker/io/draco/draco_codec.h"
-#include "worker/stages/ba/stage.h"
-#include "worker/stages/compare/compare_hulls.h"
-#include "worker/stages/compare/compare_runs.h"
 #include "worker/pipeline/draco_sidecar.h"
+#include "worker/pipeline/report.h"
+#include "worker/stages/ba/stage.h"
+#include "worker/stages/compare/compare_runs.h"
 #include "worker/stages/inspect/stage.h"
 #include "worker/stages/map/stage.h"
-#include "worker/pipeline/report.h"
 
 namespace keel::pipeline {
 namespace {
@@ -382,43 +381,6 @@ TEST_F(CompareStageTest, HullsComparedInTheModelFrame) {
     EXPECT_EQ(sidecar["attributes"][f.name]["min"].get<double>(), double(*lo)) << f.name;
     EXPECT_EQ(sidecar["attributes"][f.name]["max"].get<double>(), double(*hi)) << f.name;
   }
-}
-
-SurveyShape shape_at(double x, double y, double z, double radius_m = 0.1) {
-  SurveyShape s;
-  s.centroid_model = Eigen::Vector3d(x, y, z);
-  s.radius_m = radius_m;
-  return s;
-}
-
-TEST(RegisterShapes, PersistingShapesAgreeOnTheSurveysFrameOffset) {
-  // Three objects persist, seen 0.3 m further along the hull in B (x_gM loose along it) with
-  // centroid noise of a centimetre; A's fourth is gone, B's fourth is new.
-  const Eigen::Vector3d t(0.3, 0.0, 0.0);
-  const std::vector<SurveyShape> a = {shape_at(-3, -5, -1.2), shape_at(3, -4, -3.8),
-                                      shape_at(-1, -3, -3.9), shape_at(1.8, -5, -2.1)};
-  std::vector<SurveyShape> b = {shape_at(-3 + 0.31, -5.01, -1.2), shape_at(3 + 0.29, -4, -3.79),
-                                shape_at(-1 + 0.30, -2.99, -3.9), shape_at(0.5, -2.9, -3.9)};
-  // Where each survey's x_gM put them, no footprints overlap: three gone, four new.
-  int kept = 0;
-  for (const ShapeMatch& m : match_shapes(a, b)) kept += m.a >= 0 && m.b >= 0;
-  EXPECT_EQ(kept, 0);
-
-  const ShapeRegistration r = register_shapes(a, b, 1.0);
-  EXPECT_EQ(r.pairs, 3);
-  EXPECT_NEAR((r.translation_model - t).norm(), 0.0, 1e-9 + 0.01 / std::sqrt(3.0));
-  std::vector<SurveyShape> moved = a;
-  for (auto& s : moved) s.centroid_model += r.translation_model;
-  std::set<std::pair<int, int>> pairs;
-  for (const ShapeMatch& m : match_shapes(moved, b)) pairs.insert({m.a, m.b});
-  EXPECT_EQ(pairs, (std::set<std::pair<int, int>>{{0, 0}, {1, 1}, {2, 2}, {3, -1}, {-1, 3}}));
-
-  // Beyond max_offset_m, or a single persisting object: no offset is applied.
-  EXPECT_EQ(register_shapes(a, b, 0.2).pairs, 0);
-  EXPECT_EQ(register_shapes(a, b, 0.2).translation_model, Eigen::Vector3d::Zero());
-  const ShapeRegistration one = register_shapes({a[0]}, {b[0]}, 1.0);
-  EXPECT_EQ(one.pairs, 0);
-  EXPECT_EQ(one.translation_model, Eigen::Vector3d::Zero());
 }
 
 TEST(CompareRuns, OptionsAndFiguresThatDiffer) {
