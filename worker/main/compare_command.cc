@@ -69,6 +69,12 @@ int run_compare(const CompareArgs& args) {
   const fs::path report_path = spec.work_dir / pipeline::kReportFileName;
   fs::remove(report_path, ec);
 
+  spec.report_job = {{"id", "local"},
+                     {"stages", spec.stages},
+                     {"options", spec.options},
+                     {"job_a", args.a},
+                     {"job_b", args.b}};
+
   pipeline::JobHooks hooks;
   hooks.log = [](const std::string& line) { std::cout << line << std::endl; };
   hooks.canceled = stop_requested;
@@ -78,16 +84,10 @@ int run_compare(const CompareArgs& args) {
     std::cerr << "keel-worker compare: " << result.error << "\n";
     return kExitStageFailed;
   }
-  pipeline::ReportInput input;
-  input.job = {{"id", "local"},
-               {"stages", spec.stages},
-               {"options", spec.options},
-               {"job_a", args.a},
-               {"job_b", args.b}};
-  input.stage_order = spec.stages;
-  input.stages = result.reports;
-  input.stage_seconds = result.stage_seconds;
-  pipeline::write_json_atomically(report_path, pipeline::build_report(input));
+  if (!result.report_error.empty()) {
+    std::cerr << "keel-worker compare: " << result.report_error << "\n";
+    return kExitStageFailed;
+  }
   std::cout << "report: " << report_path.string() << std::endl;
   return kExitOk;
 }

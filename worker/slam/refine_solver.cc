@@ -6,7 +6,9 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <memory>
+#include <memory_resource>
 #include <stdexcept>
 #include <string>
 
@@ -29,10 +31,29 @@ double seconds_since(Clock::time_point t0) {
 }
 
 // The estimated states, in the IMU frame B (Eq. (2) plus b^v, s_d and R_B,Bo).
+// The estimated blocks of n keyframes, all in one buffer laid out in a fixed order. Ceres's
+// covariance orders the parameter blocks by their addresses, so blocks in separate allocations
+// would make the covariances (to the last bits) depend on where the allocator put them, which
+// changes with anything allocated before the solve.
+class StateMemory {
+ public:
+  explicit StateMemory(size_t n)
+      : buffer_(n * (sizeof(std::array<double, 7>) + 5 * sizeof(Vec3Block)) + 256),
+        resource_(buffer_.data(), buffer_.size(), std::pmr::null_memory_resource()) {}
+  std::pmr::memory_resource* get() { return &resource_; }
+
+ private:
+  std::vector<std::byte> buffer_;
+  std::pmr::monotonic_buffer_resource resource_;
+};
+
 struct States {
-  std::vector<std::array<double, 7>> pose;  // T_world_imu, manifolds.h layout
-  std::vector<Vec3Block> vel, bg, ba, bv;
-  std::vector<Vec3Block> drift;  // MAP drift (MapAnchorFactor), world frame
+  explicit States(size_t n) : memory(std::make_unique<StateMemory>(n)) {}
+  std::unique_ptr<StateMemory> memory;
+  std::pmr::vector<std::array<double, 7>> pose{memory->get()};  // T_world_imu, manifolds.h layout
+  std::pmr::vector<Vec3Block> vel{memory->get()}, bg{memory->get()}, ba{memory->get()},
+      bv{memory->get()};
+  std::pmr::vector<Vec3Block> drift{memory->get()};  // MAP drift (MapAnchorFactor), world frame
   double scale = 1.0;
   std::array<double, 4> q_imu_dvl{0, 0, 0, 1};
 };
@@ -187,7 +208,7 @@ States initial_states(const std::vector<Pose3>& T_world_imu, const std::vector<T
                       const std::vector<PseudoSample>& pseudo, const Pose3& T_imu_dvl,
                       const RefineOptions& opt) {
   const size_t n = T_world_imu.size();
-  States s;
+  States s(n);
   s.pose.resize(n);
   s.vel.assign(n, Vec3Block{0, 0, 0});
   s.bg = s.ba = s.bv = s.drift = s.vel;

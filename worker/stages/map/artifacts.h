@@ -12,8 +12,6 @@ inline constexpr const char* kCombinedMapName = "combined";
 inline std::string map_draco_file(const std::string& sensor) { return "map_" + sensor + ".drc"; }
 inline std::string map_ply_file(const std::string& sensor) { return "map_" + sensor + ".ply"; }
 // `tiles_<sensor>.tar`: the map's level-of-detail tileset (docs/artifacts.md).
-inline std::string map_tiles_file(const std::string& sensor) {
-  return "tiles_" + sensor + ".tar";
-}
+inline std::string map_tiles_file(const std::string& sensor) { return "tiles_" + sensor + ".tar"; }
 
 }  // namespace keel::pipeline

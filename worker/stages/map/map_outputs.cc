@@ -6,12 +6,57 @@
 #include <stdexcept>
 
 #include "worker/pipeline/draco_sidecar.h"
+#include "worker/stages/map/artifacts.h"
+#include "worker/stages/map/tiled_outputs.h"
 
 namespace keel::pipeline {
 
 namespace fs = std::filesystem;
 
+// Finest LOD tiles hold at most this many points (1.6 MB .pnts files).
+constexpr size_t kLodMaxPointsPerTile = 100000;
+
+void merge_output(MapOutput& into, const MapOutput& part) {
+  into.report.update(part.report);
+  into.artifacts.insert(into.artifacts.end(), part.artifacts.begin(), part.artifacts.end());
+}
+
+MapOutput write_tiled_map_ply(TiledMaps& tiled, const std::vector<std::string>& parts,
+                              const std::string& name, const fs::path& work_dir,
+                              const std::function<void()>& check_canceled) {
+  MapOutput out;
+  write_tiled_ply(tiled, parts, tiled.output_partition(parts), work_dir / map_ply_file(name),
+                  check_canceled);
+  out.artifacts.push_back(map_ply_file(name));
+  out.report["ply"] = {{"file", map_ply_file(name)},
+                       {"bytes", fs::file_size(work_dir / map_ply_file(name))}};
+  return out;
+}
+
+MapOutput write_map_tiles(TiledMaps& tiled, const std::vector<std::string>& parts,
+                          const std::string& name, const fs::path& work_dir,
+                          const std::function<void()>& check_canceled) {
+  mapping::LodOptions lod;
+  lod.max_points_per_tile = kLodMaxPointsPerTile;
+  lod.min_edge_m = tiled.output_grid().unit_m();
+  const MapTilesetResult result =
+      write_tiled_tileset(tiled, parts, tiled.output_partition(parts), name,
+                          work_dir / map_tiles_file(name), lod, check_canceled);
+  MapOutput out;
+  out.artifacts.push_back(map_tiles_file(name));
+  out.report["tiles"] = {
+      {"file", map_tiles_file(name)}, {"format", "3D Tiles 1.0, pnts (docs/artifacts.md)"},
+      {"tiles", result.tiles},        {"points", result.points},
+      {"bytes", result.bytes},        {"max_points_per_tile", lod.max_points_per_tile},
+      {"seconds", result.seconds}};
+  return out;
+}
+
 std::string map_preview_file(const std::string& sensor) { return "map_" + sensor + "_preview.drc"; }
+
+bool wants_preview(size_t points, size_t max_points) {
+  return max_points > 0 && points > max_points;
+}
 
 std::vector<size_t> even_thinning(size_t n, size_t m) {
   std::vector<size_t> out;
@@ -56,9 +101,21 @@ PointMetricFields point_metric_fields(const std::vector<Eigen::Vector3f>& xyz,
   return out;
 }
 
+void add_point_metric_fields(const std::vector<Eigen::Vector3f>& xyz,
+                             const mapping::MapMetricsOptions& options,
+                             io::PartsAttributes& attributes) {
+  PointMetricFields fields = point_metric_fields(xyz, options);
+  attributes.fields = std::move(fields.fields);
+  attributes.fields_no_data = std::move(fields.no_data);
+}
+
 nlohmann::json preview_entry(const std::string& sensor, size_t points, size_t max_points) {
-  if (max_points == 0 || points <= max_points) return nullptr;
+  if (!wants_preview(points, max_points)) return nullptr;
   return {{"file", map_preview_file(sensor)}, {"points", max_points}};
+}
+
+MapOutput preview_output(PreviewOutput preview) {
+  return {{{"preview", std::move(preview.report)}}, std::move(preview.artifacts)};
 }
 
 PreviewOutput write_map_preview(const std::vector<const PointCloud*>& parts,

@@ -27,6 +27,9 @@ constexpr size_t kNone = static_cast<size_t>(-1);
 
 double process_cpu_seconds() { return cpu_seconds(CLOCK_PROCESS_CPUTIME_ID); }
 double thread_cpu_seconds() { return cpu_seconds(CLOCK_THREAD_CPUTIME_ID); }
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return seconds_between(start, std::chrono::steady_clock::now());
+}
 
 // ---- TaskLog ------------------------------------------------------------------------------
 

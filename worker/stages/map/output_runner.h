@@ -21,6 +21,8 @@ namespace keel::pipeline {
 // CPU seconds of the whole process / of the calling thread (POSIX CPU-time clocks).
 double process_cpu_seconds();
 double thread_cpu_seconds();
+// Wall seconds from `start` to now (steady clock).
+double seconds_since(std::chrono::steady_clock::time_point start);
 
 // Runs tasks and keeps, per task, a line with its start (seconds after `origin`), wall and CPU
 // seconds, for the job log. CPU is the task's own thread's: helper threads a task starts are

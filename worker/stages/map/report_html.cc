@@ -6,6 +6,7 @@
 #include "worker/pipeline/html_text.h"
 #include "worker/pipeline/report_html_parts.h"
 #include "worker/pipeline/svg_plot.h"
+#include "worker/stages/map/stage.h"
 
 namespace keel::pipeline::report_html {
 
@@ -148,8 +149,6 @@ std::string timing(const Ref& timing) {
   return render(t);
 }
 
-}  // namespace
-
 std::string map_section(const Ref& stage) {
   std::string out;
   const Ref metrics = stage["metrics"];
@@ -175,4 +174,13 @@ std::string map_section(const Ref& stage) {
   return out;
 }
 
+}  // namespace
 }  // namespace keel::pipeline::report_html
+
+namespace keel::pipeline {
+
+std::string MapStage::report_html(const report_html::Ref& section, const ReportHtmlInputs&) const {
+  return report_html::map_section(section);
+}
+
+}  // namespace keel::pipeline

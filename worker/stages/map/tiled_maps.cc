@@ -5,8 +5,8 @@
 #include <set>
 #include <stdexcept>
 
-#include "worker/mapping/tiled_filter.h"
 #include "core/ordered_parallel.h"
+#include "worker/mapping/tiled_filter.h"
 
 namespace keel::pipeline {
 namespace {

@@ -5,9 +5,9 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "worker/io/cloud/ply_cloud_writer.h"
-#include "core/replaced_file.h"
 #include "core/ordered_parallel.h"
+#include "core/replaced_file.h"
+#include "worker/io/cloud/ply_cloud_writer.h"
 
 namespace keel::pipeline {
 namespace {
