@@ -18,6 +18,9 @@ find_package(spdlog REQUIRED)
 find_package(yaml-cpp REQUIRED)
 find_package(draco REQUIRED)
 find_package(Ceres REQUIRED)
+# SuiteSparse_config (libsuitesparse-dev, Ceres's own dependency): core/suitesparse_memory.h.
+find_path(SUITESPARSE_CONFIG_INCLUDE_DIR SuiteSparse_config.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig REQUIRED)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs features2d calib3d)
 find_package(CGAL REQUIRED)
 find_package(PCL 1.12 REQUIRED COMPONENTS common io filters kdtree search registration)
@@ -31,6 +34,10 @@ if(NOT TARGET yaml-cpp::yaml-cpp)
   add_library(yaml-cpp::yaml-cpp INTERFACE IMPORTED)
   set_target_properties(yaml-cpp::yaml-cpp PROPERTIES INTERFACE_LINK_LIBRARIES yaml-cpp)
 endif()
+
+add_library(keel_suitesparseconfig INTERFACE)
+target_include_directories(keel_suitesparseconfig SYSTEM INTERFACE ${SUITESPARSE_CONFIG_INCLUDE_DIR})
+target_link_libraries(keel_suitesparseconfig INTERFACE ${SUITESPARSE_CONFIG_LIBRARY})
 
 # PCL as one interface target (its variables are not target-based on Debian 12).
 add_library(keel_pcl INTERFACE)

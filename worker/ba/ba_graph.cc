@@ -43,6 +43,73 @@ class LabelFractionCallback : public ceres::IterationCallback {
   std::vector<double>& fractions_;
 };
 
+// Every parameter block of a BaGraph in one buffer, in the order the blocks are added to the
+// problem: per keyframe the pose x_gv_i (7) and the servo angle (1), then x_gM (7), x_sc_T (7)
+// and the landmarks (3 each). Ceres orders parameter blocks by their address where the problem
+// leaves it free: the Schur ordering's groups are std::set<double*> (the reduced camera
+// system's columns follow it) and Covariance sorts the blocks by pointer. Separate heap
+// allocations change their relative order from run to run, and with it the solution (1e-11)
+// and x_gM's sigma (1e-15); one buffer makes address order = insertion order.
+class ParameterBuffer {
+ public:
+  ParameterBuffer(size_t keyframes, size_t landmarks)
+      : num_keyframes_(keyframes),
+        num_landmarks_(landmarks),
+        values_(keyframes * kKeyframeStride + 2 * kPoseBlockSize + landmarks * 3, 0.0) {}
+
+  size_t keyframes() const { return num_keyframes_; }
+  size_t landmarks() const { return num_landmarks_; }
+  double* pose(size_t i) { return &values_[i * kKeyframeStride]; }
+  const double* pose(size_t i) const { return &values_[i * kKeyframeStride]; }
+  double* servo(size_t i) { return pose(i) + kPoseBlockSize; }
+  const double* servo(size_t i) const { return pose(i) + kPoseBlockSize; }
+  double* model() { return &values_[num_keyframes_ * kKeyframeStride]; }
+  const double* model() const { return &values_[num_keyframes_ * kKeyframeStride]; }
+  double* extrinsic() { return model() + kPoseBlockSize; }
+  const double* extrinsic() const { return model() + kPoseBlockSize; }
+  double* landmark(size_t k) { return extrinsic() + kPoseBlockSize + 3 * k; }
+  const double* landmark(size_t k) const { return extrinsic() + kPoseBlockSize + 3 * k; }
+
+  std::vector<double> servo_angles() const {
+    std::vector<double> out;
+    for (size_t i = 0; i < num_keyframes_; ++i) out.push_back(*servo(i));
+    return out;
+  }
+  std::vector<std::array<double, 3>> landmark_points() const {
+    std::vector<std::array<double, 3>> out;
+    for (size_t k = 0; k < num_landmarks_; ++k) {
+      const double* l = landmark(k);
+      out.push_back({l[0], l[1], l[2]});
+    }
+    return out;
+  }
+
+ private:
+  static constexpr size_t kKeyframeStride = kPoseBlockSize + 1;
+  size_t num_keyframes_, num_landmarks_;
+  std::vector<double> values_;  // sized once: Ceres keeps pointers into it
+};
+
+// Ceres's solves run on one thread. With more, each thread sums the cost and gradient of the
+// residual blocks it happened to take, and the Schur eliminator adds each landmark's share into
+// the reduced camera system under a lock, in the order the threads get there: the sums differ
+// in their last bits from run to run, and so did every BA output (1e-11 relative on keel-sim
+// hauv-hull). BaOptions::num_threads still splits the mesh queries (one slot per query) and
+// the covariance's columns (each solved on its own), which give the same bits on any number of
+// threads.
+constexpr int kCeresSolverThreads = 1;
+
+void set_pose_block(double* block, const Pose3& T) {
+  const PoseBlock b = to_pose_block(T);
+  std::copy(b.begin(), b.end(), block);
+}
+
+PoseBlock pose_block_at(const double* block) {
+  PoseBlock b;
+  std::copy(block, block + kPoseBlockSize, b.begin());
+  return b;
+}
+
 class BaGraph {
  public:
   // model_free: the online-SLAM graph (no x_gM, no DVL raycasts, no surface factors).
@@ -58,6 +125,7 @@ class BaGraph {
         pose_manifold_(make_pose_manifold()),
         reprojection_loss_(std::make_unique<ceres::HuberLoss>(options.reprojection_huber)),
         dvl_loss_(std::make_unique<ceres::HuberLoss>(options.dvl_huber)),
+        x_(initial.T_world_vehicle.size(), initial.landmarks_world.size()),
         ceres_problem_(problem_options()) {
     init_variables();
     add_priors();
@@ -109,28 +177,25 @@ class BaGraph {
     return o;
   }
 
-  void add_pose_block(PoseBlock& block) {
-    ceres_problem_.AddParameterBlock(block.data(), kPoseBlockSize, pose_manifold_.get());
+  void add_pose_block(double* block) {
+    ceres_problem_.AddParameterBlock(block, kPoseBlockSize, pose_manifold_.get());
   }
 
   void init_variables() {
-    const size_t n = initial_.T_world_vehicle.size();
-    poses_.resize(n);
-    servo_ = initial_.servo_angle_rad;
-    for (size_t i = 0; i < n; ++i) {
-      poses_[i] = to_pose_block(initial_.T_world_vehicle[i]);
-      add_pose_block(poses_[i]);
-      ceres_problem_.AddParameterBlock(&servo_[i], 1);
+    for (size_t i = 0; i < x_.keyframes(); ++i) {
+      set_pose_block(x_.pose(i), initial_.T_world_vehicle[i]);
+      add_pose_block(x_.pose(i));
+      *x_.servo(i) = initial_.servo_angle_rad[i];
+      ceres_problem_.AddParameterBlock(x_.servo(i), 1);
     }
-    model_ = to_pose_block(initial_.T_world_model);
-    extrinsic_ = to_pose_block(initial_.T_servo_camera);
-    if (!model_free_) add_pose_block(model_);
-    add_pose_block(extrinsic_);
-    landmarks_.resize(initial_.landmarks_world.size());
-    for (size_t k = 0; k < landmarks_.size(); ++k) {
+    set_pose_block(x_.model(), initial_.T_world_model);
+    set_pose_block(x_.extrinsic(), initial_.T_servo_camera);
+    if (!model_free_) add_pose_block(x_.model());
+    add_pose_block(x_.extrinsic());
+    for (size_t k = 0; k < x_.landmarks(); ++k) {
       const Eigen::Vector3d& l = initial_.landmarks_world[k];
-      landmarks_[k] = {l.x(), l.y(), l.z()};
-      ceres_problem_.AddParameterBlock(landmarks_[k].data(), 3);
+      std::copy(l.data(), l.data() + 3, x_.landmark(k));
+      ceres_problem_.AddParameterBlock(x_.landmark(k), 3);
     }
   }
 
@@ -141,25 +206,25 @@ class BaGraph {
       ceres_problem_.AddResidualBlock(
           make_pose_prior_factor(initial_.T_world_model, o.model_prior_sigma_m,
                                  o.model_prior_sigma_rad),
-          nullptr, model_.data());
+          nullptr, x_.model());
     }
     ceres_problem_.AddResidualBlock(
         make_pose_prior_factor(initial_.T_world_vehicle.front(), o.first_pose_prior_sigma_m,
                                o.first_pose_prior_sigma_rad),
-        nullptr, poses_.front().data());
+        nullptr, x_.pose(0));
     ceres_problem_.AddResidualBlock(
         make_pose_prior_factor(initial_.T_servo_camera, o.extrinsic_prior_sigma_m,
                                o.extrinsic_prior_sigma_rad),
-        nullptr, extrinsic_.data());
-    for (size_t i = 0; i < poses_.size(); ++i) {
+        nullptr, x_.extrinsic());
+    for (size_t i = 0; i < x_.keyframes(); ++i) {
       const BaKeyframe& k = problem_.keyframes[i];
       const DepthPitchRoll zpr =
           k.depth_pitch_roll ? *k.depth_pitch_roll : depth_pitch_roll_of(k.T_world_vehicle);
       ceres_problem_.AddResidualBlock(  // Eq. (9)
           make_depth_pitch_roll_factor(zpr, o.depth_sigma_m, o.pitch_sigma_rad, o.roll_sigma_rad),
-          nullptr, poses_[i].data());
+          nullptr, x_.pose(i));
       ceres_problem_.AddResidualBlock(  // Eq. (10)
-          make_servo_angle_factor(k.servo_angle_rad, o.servo_sigma_rad), nullptr, &servo_[i]);
+          make_servo_angle_factor(k.servo_angle_rad, o.servo_sigma_rad), nullptr, x_.servo(i));
     }
   }
 
@@ -171,7 +236,7 @@ class BaGraph {
           odometry_sigmas(dt_s, options_.odometry_sigma_m_per_s, options_.odometry_sigma_rad_per_s,
                           options_.odometry_min_sigma_m, options_.odometry_min_sigma_rad);
       ceres_problem_.AddResidualBlock(make_odometry_factor(odo.T_from_to, sigmas), nullptr,
-                                      poses_[odo.from].data(), poses_[odo.to].data());
+                                      x_.pose(odo.from), x_.pose(odo.to));
     }
   }
 
@@ -188,8 +253,8 @@ class BaGraph {
     for (size_t k = 0; k < initial_.tracks.size(); ++k) {
       for (const FeatureObservation& obs : initial_.tracks[k].observations) {
         ceres_problem_.AddResidualBlock(reprojection_factor(obs), reprojection_loss_.get(),
-                                        poses_[obs.keyframe].data(), &servo_[obs.keyframe],
-                                        extrinsic_.data(), landmarks_[k].data());
+                                        x_.pose(obs.keyframe), x_.servo(obs.keyframe),
+                                        x_.extrinsic(), x_.landmark(k));
       }
     }
   }
@@ -201,7 +266,7 @@ class BaGraph {
           make_dvl_raycast_factor(mesh_, mount_, initial_.beams[b], options_.dvl_sigma_m,
                                   options_.dvl_max_range_m, options_.dvl_gate_m,
                                   options_.dvl_range_normal),
-          dvl_loss_.get(), poses_[i].data(), &servo_[i], model_.data());
+          dvl_loss_.get(), x_.pose(i), x_.servo(i), x_.model());
     }
   }
 
@@ -209,18 +274,18 @@ class BaGraph {
     const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
     const SurfaceMode mode =
         mode_ == BaMode::kGeva ? SurfaceMode::kOnModel : SurfaceMode::kMaxMixture;
-    labels_.assign(landmarks_.size(), 0);
-    for (size_t k = 0; k < landmarks_.size(); ++k) {
+    labels_.assign(x_.landmarks(), 0);
+    for (size_t k = 0; k < x_.landmarks(); ++k) {
       ceres_problem_.AddResidualBlock(  // Eq. (4)-(7)
           make_surface_factor(mesh_, mixture, mode, options_.surface_offset_m, &labels_[k]),
-          nullptr, model_.data(), landmarks_[k].data());
+          nullptr, x_.model(), x_.landmark(k));
     }
   }
 
   ceres::Solver::Options solver_options() {
     ceres::Solver::Options s;
     s.max_num_iterations = options_.max_iterations;
-    s.num_threads = options_.num_threads;
+    s.num_threads = kCeresSolverThreads;
     s.function_tolerance = options_.function_tolerance;
     s.gradient_tolerance = options_.gradient_tolerance;
     s.parameter_tolerance = options_.parameter_tolerance;
@@ -240,13 +305,13 @@ class BaGraph {
     }
     // Schur elimination: landmarks first, then every other variable.
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (auto& l : landmarks_) ordering->AddElementToGroup(l.data(), 0);
-    for (size_t i = 0; i < poses_.size(); ++i) {
-      ordering->AddElementToGroup(poses_[i].data(), 1);
-      ordering->AddElementToGroup(&servo_[i], 1);
+    for (size_t k = 0; k < x_.landmarks(); ++k) ordering->AddElementToGroup(x_.landmark(k), 0);
+    for (size_t i = 0; i < x_.keyframes(); ++i) {
+      ordering->AddElementToGroup(x_.pose(i), 1);
+      ordering->AddElementToGroup(x_.servo(i), 1);
     }
-    if (!model_free_) ordering->AddElementToGroup(model_.data(), 1);
-    ordering->AddElementToGroup(extrinsic_.data(), 1);
+    if (!model_free_) ordering->AddElementToGroup(x_.model(), 1);
+    ordering->AddElementToGroup(x_.extrinsic(), 1);
     s.linear_solver_ordering = ordering;
     return s;
   }
@@ -257,11 +322,10 @@ class BaGraph {
     o.algorithm_type = ceres::SPARSE_QR;
     o.num_threads = options_.num_threads;
     ceres::Covariance covariance(o);
-    const std::vector<std::pair<const double*, const double*>> block = {
-        {model_.data(), model_.data()}};
+    const std::vector<std::pair<const double*, const double*>> block = {{x_.model(), x_.model()}};
     if (!covariance.Compute(block, &ceres_problem_)) return {};
     Eigen::Matrix<double, 6, 6, Eigen::RowMajor> tangent;
-    if (!covariance.GetCovarianceBlockInTangentSpace(model_.data(), model_.data(), tangent.data()))
+    if (!covariance.GetCovarianceBlockInTangentSpace(x_.model(), x_.model(), tangent.data()))
       return {};
     const Eigen::Vector3d sigma = translation_sigma_in_own_axes(tangent, T_world_model.linear());
     return {sigma.x(), sigma.y(), sigma.z()};
@@ -269,29 +333,30 @@ class BaGraph {
 
   std::vector<Pose3> current_poses() const {
     std::vector<Pose3> out;
-    for (const auto& p : poses_) out.push_back(from_pose_block(p.data()));
+    for (size_t i = 0; i < x_.keyframes(); ++i) out.push_back(from_pose_block(x_.pose(i)));
     return out;
   }
 
   std::vector<DvlBeamResidual> residuals_now() const {
     return dvl_range_residuals(mesh_, mount_, initial_.beams, initial_.beam_keyframe,
-                               current_poses(), servo_, from_pose_block(model_.data()),
+                               current_poses(), x_.servo_angles(), from_pose_block(x_.model()),
                                options_.dvl_max_range_m);
   }
 
   void read_back(BaModeResult& result) const {
     result.T_world_vehicle = current_poses();
-    result.servo_angle_rad = servo_;
-    result.T_world_model = from_pose_block(model_.data());
-    result.T_servo_camera = from_pose_block(extrinsic_.data());
-    for (size_t i = 0; i < poses_.size(); ++i) {
-      result.T_world_camera.push_back(
-          world_camera_pose(result.T_world_vehicle[i], servo_[i], mount_, result.T_servo_camera));
+    result.servo_angle_rad = x_.servo_angles();
+    result.T_world_model = from_pose_block(x_.model());
+    result.T_servo_camera = from_pose_block(x_.extrinsic());
+    for (size_t i = 0; i < x_.keyframes(); ++i) {
+      result.T_world_camera.push_back(world_camera_pose(result.T_world_vehicle[i], *x_.servo(i),
+                                                        mount_, result.T_servo_camera));
     }
     // h and lambda at the final state, Eq. (5) and (7).
     const Pose3 T_model_world = result.T_world_model.inverse();
+    const std::vector<std::array<double, 3>> landmarks = x_.landmark_points();
     std::vector<Eigen::Vector3d> in_model;
-    for (const auto& l : landmarks_)
+    for (const auto& l : landmarks)
       in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
     // The model-free initialisation has no x_gM yet: no h, no labels.
     const std::vector<double> h = model_free_
@@ -303,15 +368,15 @@ class BaGraph {
     for (const auto& l : vision)
       vision_in_model.push_back(T_model_world * Eigen::Vector3d(l[0], l[1], l[2]));
     const std::vector<double> vision_h =
-        vision == landmarks_ ? h : mesh_.signed_distances(vision_in_model, options_.num_threads);
+        vision == landmarks ? h : mesh_.signed_distances(vision_in_model, options_.num_threads);
     const MaxMixture mixture{options_.sigma0_m, options_.sigma1_m};
-    for (size_t k = 0; k < landmarks_.size(); ++k) {
+    for (size_t k = 0; k < landmarks.size(); ++k) {
       BaLandmark l;
       l.vision_position_world = Eigen::Vector3d(vision[k][0], vision[k][1], vision[k][2]);
       l.vision_signed_distance_m = vision_h[k];
       l.vision_sigma_m = vision_result.sigma_m[k];
       l.id = initial_.tracks[k].landmark_id;
-      l.position_world = Eigen::Vector3d(landmarks_[k][0], landmarks_[k][1], landmarks_[k][2]);
+      l.position_world = Eigen::Vector3d(landmarks[k][0], landmarks[k][1], landmarks[k][2]);
       l.signed_distance_m = h[k];
       l.lambda = mixture.label(options_.surface_offset_m - h[k]);
       for (const auto& obs : initial_.tracks[k].observations) l.keyframes.push_back(obs.keyframe);
@@ -327,11 +392,14 @@ class BaGraph {
     std::vector<double> sigma_m;
   };
   VisionLandmarks vision_only_landmarks() const {
-    VisionLandmarks out{landmarks_, std::vector<double>(landmarks_.size(), 0.0)};
+    VisionLandmarks out{x_.landmark_points(), std::vector<double>(x_.landmarks(), 0.0)};
     if (model_free_ || out.points.empty()) return out;
-    std::vector<PoseBlock> poses = poses_;  // copies: the solution stays as it is
-    std::vector<double> servo = servo_;
-    PoseBlock extrinsic = extrinsic_;
+    // Copies, the solution stays as it is. Only the landmarks vary here, and out.points is one
+    // buffer: their address order (ParameterBuffer) is their index order.
+    std::vector<PoseBlock> poses;
+    for (size_t i = 0; i < x_.keyframes(); ++i) poses.push_back(pose_block_at(x_.pose(i)));
+    std::vector<double> servo = x_.servo_angles();
+    PoseBlock extrinsic = pose_block_at(x_.extrinsic());
     ceres::Problem problem(problem_options());
     std::vector<std::vector<ceres::ResidualBlockId>> blocks(out.points.size());
     for (size_t k = 0; k < initial_.tracks.size(); ++k) {
@@ -351,7 +419,7 @@ class BaGraph {
     if (mode_ != BaMode::kNaive) {
       ceres::Solver::Options s;
       s.max_num_iterations = options_.max_iterations;
-      s.num_threads = options_.num_threads;
+      s.num_threads = kCeresSolverThreads;
       // The landmarks are independent problems summed: a relative tolerance on the sum would
       // stop while a feature whose depth few views constrain (each adds little cost) is still
       // far from its own minimum. Iterate until no landmark moves.
@@ -398,12 +466,7 @@ class BaGraph {
   std::unique_ptr<ceres::Manifold> pose_manifold_;
   std::unique_ptr<ceres::LossFunction> reprojection_loss_;
   std::unique_ptr<ceres::LossFunction> dvl_loss_;
-  // Parameter storage; Ceres keeps pointers into it, so sizes are fixed before any block.
-  std::vector<PoseBlock> poses_;
-  std::vector<double> servo_;
-  PoseBlock model_{};
-  PoseBlock extrinsic_{};
-  std::vector<std::array<double, 3>> landmarks_;
+  ParameterBuffer x_;  // the variables
   std::vector<uint8_t> labels_;
   ceres::Problem ceres_problem_;
 };

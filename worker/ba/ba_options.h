@@ -143,6 +143,8 @@ struct BaOptions {
   // camera system) is the paper's "sparse Cholesky" and the fastest at 1,000 keyframes.
   std::string linear_solver = "sparse_schur";  // | "iterative_schur" | "dense_schur"
   int max_iterations = 100;
+  // Threads of the mesh queries and of x_gM's covariance; Ceres solves on one thread
+  // (ba_graph.cc: its multithreaded sums follow the threads' timing, not a fixed order).
   int num_threads = 2;
   double function_tolerance = 1e-6;
   double gradient_tolerance = 1e-10;

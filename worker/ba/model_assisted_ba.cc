@@ -10,6 +10,7 @@
 #include "core/mesh_query.h"
 #include "worker/ba/rig_geometry.h"
 #include "worker/ba/triangulation.h"
+#include "core/suitesparse_memory.h"
 
 namespace keel::ba {
 namespace {
@@ -120,6 +121,7 @@ void gate_beams(const BaProblem& problem, const MeshQuery& mesh, const BaOptions
 BaResult run_model_assisted_ba(const BaProblem& problem, const BaOptions& options) {
   validate(options);  // step 1
   validate(problem);
+  use_aligned_suitesparse_memory();  // the same bits wherever its fronts land
   const MeshQuery mesh(problem.cad_mesh);
   BaResult result;
   BaInitialState state;

@@ -3,12 +3,10 @@
 #include <ceres/ceres.h>
 #include <ceres/normal_prior.h>
 
-#include <array>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstddef>
 #include <memory>
-#include <memory_resource>
 #include <stdexcept>
 #include <string>
 
@@ -19,44 +17,59 @@
 #include "worker/slam/prior_factors.h"
 #include "worker/slam/relative_pose_factor.h"
 #include "worker/slam/so3.h"
+#include "core/suitesparse_memory.h"
 
 namespace keel::slam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using Vec3Block = std::array<double, 3>;
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// The estimated states, in the IMU frame B (Eq. (2) plus b^v, s_d and R_B,Bo).
-// The estimated blocks of n keyframes, all in one buffer laid out in a fixed order. Ceres's
-// covariance orders the parameter blocks by their addresses, so blocks in separate allocations
-// would make the covariances (to the last bits) depend on where the allocator put them, which
-// changes with anything allocated before the solve.
-class StateMemory {
+// The estimated states, in the IMU frame B (Eq. (2) plus b^v, s_d and R_B,Bo): the Ceres
+// parameter blocks, all in one buffer. Per keyframe the pose T_world_imu (7, manifolds.h
+// layout), the velocity, the gyro, accelerometer and DVL biases and the MAP drift
+// (MapAnchorFactor, world frame), 3 each; then s_d (1) and R_B,Bo (4). Ceres's Covariance
+// orders the blocks by their address, and separate allocations land in an order that follows
+// the heap's history: the sigmas of s_d and R_B,Bo changed in their last digits with an
+// option of another stage or the number of cores. One buffer fixes that order.
+class States {
  public:
-  explicit StateMemory(size_t n)
-      : buffer_(n * (sizeof(std::array<double, 7>) + 5 * sizeof(Vec3Block)) + 256),
-        resource_(buffer_.data(), buffer_.size(), std::pmr::null_memory_resource()) {}
-  std::pmr::memory_resource* get() { return &resource_; }
+  explicit States(size_t keyframes)
+      : keyframes_(keyframes), values_(keyframes * kKeyframeStride + 5, 0.0) {
+    q_imu_dvl()[3] = 1.0;
+  }
+
+  size_t keyframes() const { return keyframes_; }
+  double* pose(size_t k) { return at(k, 0); }
+  const double* pose(size_t k) const { return at(k, 0); }
+  double* vel(size_t k) { return at(k, 7); }
+  const double* vel(size_t k) const { return at(k, 7); }
+  double* bg(size_t k) { return at(k, 10); }
+  const double* bg(size_t k) const { return at(k, 10); }
+  double* ba(size_t k) { return at(k, 13); }
+  const double* ba(size_t k) const { return at(k, 13); }
+  double* bv(size_t k) { return at(k, 16); }
+  const double* bv(size_t k) const { return at(k, 16); }
+  double* drift(size_t k) { return at(k, 19); }
+  const double* drift(size_t k) const { return at(k, 19); }
+  double* scale() { return &values_[keyframes_ * kKeyframeStride]; }
+  const double* scale() const { return &values_[keyframes_ * kKeyframeStride]; }
+  double* q_imu_dvl() { return scale() + 1; }
+  const double* q_imu_dvl() const { return scale() + 1; }
 
  private:
-  std::vector<std::byte> buffer_;
-  std::pmr::monotonic_buffer_resource resource_;
+  static constexpr size_t kKeyframeStride = 22;
+  double* at(size_t k, size_t offset) { return &values_[k * kKeyframeStride + offset]; }
+  const double* at(size_t k, size_t offset) const { return &values_[k * kKeyframeStride + offset]; }
+
+  size_t keyframes_;
+  std::vector<double> values_;  // sized once: Ceres keeps pointers into it
 };
 
-struct States {
-  explicit States(size_t n) : memory(std::make_unique<StateMemory>(n)) {}
-  std::unique_ptr<StateMemory> memory;
-  std::pmr::vector<std::array<double, 7>> pose{memory->get()};  // T_world_imu, manifolds.h layout
-  std::pmr::vector<Vec3Block> vel{memory->get()}, bg{memory->get()}, ba{memory->get()},
-      bv{memory->get()};
-  std::pmr::vector<Vec3Block> drift{memory->get()};  // MAP drift (MapAnchorFactor), world frame
-  double scale = 1.0;
-  std::array<double, 4> q_imu_dvl{0, 0, 0, 1};
-};
+void set_vec3(const Eigen::Vector3d& v, double* block) { std::copy(v.data(), v.data() + 3, block); }
 
 // A relative-pose constraint between keyframe indices, in the IMU frame.
 struct Edge {
@@ -209,30 +222,27 @@ States initial_states(const std::vector<Pose3>& T_world_imu, const std::vector<T
                       const RefineOptions& opt) {
   const size_t n = T_world_imu.size();
   States s(n);
-  s.pose.resize(n);
-  s.vel.assign(n, Vec3Block{0, 0, 0});
-  s.bg = s.ba = s.bv = s.drift = s.vel;
-  s.scale = opt.dvl_scale_initial;
-  set_rotation_block(T_imu_dvl.linear(), s.q_imu_dvl.data());
+  *s.scale() = opt.dvl_scale_initial;
+  set_rotation_block(T_imu_dvl.linear(), s.q_imu_dvl());
   for (size_t k = 0; k < n; ++k) {
-    set_pose_block(T_world_imu[k], s.pose[k].data());
+    set_pose_block(T_world_imu[k], s.pose(k));
     // Velocity: the DVL's (Eq. (8) inverted, lever arm neglected) where there is one, else the
     // central difference of the initial keyframe positions.
     Eigen::Vector3d v;
     const PseudoSample* p = nearest_pseudo(pseudo, t_ns[k], seconds_to_ns(0.1));
     if (p != nullptr) {
-      v = T_world_imu[k].linear() * T_imu_dvl.linear() * p->velocity_dvl_mps / s.scale;
+      v = T_world_imu[k].linear() * T_imu_dvl.linear() * p->velocity_dvl_mps / *s.scale();
     } else {
       const size_t a = k == 0 ? 0 : k - 1, b = k + 1 == n ? k : k + 1;
       v = (T_world_imu[b].translation() - T_world_imu[a].translation()) /
           ns_to_seconds(t_ns[b] - t_ns[a]);
     }
-    s.vel[k] = {v.x(), v.y(), v.z()};
+    set_vec3(v, s.vel(k));
   }
   return s;
 }
 
-Eigen::Vector3d vec(const Vec3Block& b) { return Eigen::Vector3d(b[0], b[1], b[2]); }
+Eigen::Vector3d vec(const double* b) { return Eigen::Vector3d(b[0], b[1], b[2]); }
 
 // ---- Step 5: preintegration and graph -------------------------------------------------------
 
@@ -243,10 +253,10 @@ std::vector<Interval> preintegrate(const RefineInput& in, const std::vector<Pseu
   summary->num_imu_intervals_skipped = summary->num_dvl_intervals_skipped = 0;
   const TimeNs imu_gap = seconds_to_ns(opt.max_imu_gap_s);
   const TimeNs pseudo_gap = seconds_to_ns(std::min(opt.max_imu_gap_s, opt.reconcile.max_dvl_gap_s));
-  const Eigen::Matrix3d R_imu_dvl = block_rotation(s.q_imu_dvl.data());
+  const Eigen::Matrix3d R_imu_dvl = block_rotation(s.q_imu_dvl());
   for (size_t k = 0; k + 1 < t_ns.size(); ++k) {
     if (opt.use_imu) {
-      auto pre = std::make_shared<ImuPreintegration>(vec(s.bg[k]), vec(s.ba[k]), opt.imu_noise);
+      auto pre = std::make_shared<ImuPreintegration>(vec(s.bg(k)), vec(s.ba(k)), opt.imu_noise);
       const bool ok = for_each_hold_segment(
           in.imu, t_ns[k], t_ns[k + 1], imu_gap,
           [&](const ImuSample& m, double dt) { pre->integrate(m.gyro_radps, m.accel_mps2, dt); });
@@ -257,7 +267,7 @@ std::vector<Interval> preintegrate(const RefineInput& in, const std::vector<Pseu
     }
     if (opt.use_dvl && !in.dvl.empty()) {
       auto pre =
-          std::make_shared<DvlPreintegration>(vec(s.bg[k]), vec(s.bv[k]), s.scale, R_imu_dvl,
+          std::make_shared<DvlPreintegration>(vec(s.bg(k)), vec(s.bv(k)), *s.scale(), R_imu_dvl,
                                               opt.dvl_noise, opt.imu_noise.gyro_noise_density);
       const bool ok = for_each_hold_segment(
           pseudo, t_ns[k], t_ns[k + 1], pseudo_gap, [&](const PseudoSample& m, double dt) {
@@ -284,33 +294,33 @@ class GraphBuilder {
   ceres::Problem& problem() { return *problem_; }
 
   void add_blocks() {
-    for (size_t k = 0; k < s_->pose.size(); ++k) {
-      problem_->AddParameterBlock(s_->pose[k].data(), 7, &pose_manifold_);
-      for (auto* b : {&s_->vel[k], &s_->bg[k], &s_->ba[k], &s_->bv[k]}) {
-        problem_->AddParameterBlock(b->data(), 3);
+    for (size_t k = 0; k < s_->keyframes(); ++k) {
+      problem_->AddParameterBlock(s_->pose(k), 7, &pose_manifold_);
+      for (double* b : {s_->vel(k), s_->bg(k), s_->ba(k), s_->bv(k)}) {
+        problem_->AddParameterBlock(b, 3);
       }
     }
     if (opt_.use_map_anchors) {
-      for (auto& d : s_->drift) problem_->AddParameterBlock(d.data(), 3);
-      problem_->SetParameterBlockConstant(s_->drift[0].data());  // keyframe 0 is the gauge
+      for (size_t k = 0; k < s_->keyframes(); ++k) problem_->AddParameterBlock(s_->drift(k), 3);
+      problem_->SetParameterBlockConstant(s_->drift(0));  // keyframe 0 is the gauge
     }
-    problem_->AddParameterBlock(&s_->scale, 1);
-    problem_->AddParameterBlock(s_->q_imu_dvl.data(), 4, &rotation_manifold_);
+    problem_->AddParameterBlock(s_->scale(), 1);
+    problem_->AddParameterBlock(s_->q_imu_dvl(), 4, &rotation_manifold_);
   }
 
   // r_0 of Eq. (3): the first keyframe's pose (the gauge), velocity and biases. With MAP
   // anchors the pose part is the first keyframe's anchor instead (add_map_anchors): its
   // recorded pose is as noisy as the others, and the anchors together fix the gauge.
   void add_prior(const Pose3& T0) {
-    add_vector_prior(&s_->vel[0], opt_.prior_sigma_velocity_mps);
-    add_vector_prior(&s_->bg[0], opt_.prior_sigma_gyro_bias_radps);
-    add_vector_prior(&s_->ba[0], opt_.prior_sigma_accel_bias_mps2);
-    add_vector_prior(&s_->bv[0], opt_.prior_sigma_dvl_bias_mps);
+    add_vector_prior(s_->vel(0), opt_.prior_sigma_velocity_mps);
+    add_vector_prior(s_->bg(0), opt_.prior_sigma_gyro_bias_radps);
+    add_vector_prior(s_->ba(0), opt_.prior_sigma_accel_bias_mps2);
+    add_vector_prior(s_->bv(0), opt_.prior_sigma_dvl_bias_mps);
     if (opt_.use_map_anchors) return;
     Matrix6d S = Matrix6d::Zero();
     S.diagonal().head<3>().setConstant(1.0 / opt_.prior_sigma_position_m);
     S.diagonal().tail<3>().setConstant(1.0 / opt_.prior_sigma_rotation_rad);
-    problem_->AddResidualBlock(new PosePriorFactor(T0, S), nullptr, s_->pose[0].data());
+    problem_->AddResidualBlock(new PosePriorFactor(T0, S), nullptr, s_->pose(0));
   }
 
   // Loop closures are robustified (a wrong one must not wreck the map); odometry is not.
@@ -320,8 +330,8 @@ class GraphBuilder {
       if (robust && opt_.loop_closure_cauchy_scale > 0) {
         loss = new ceres::CauchyLoss(opt_.loop_closure_cauchy_scale);
       }
-      problem_->AddResidualBlock(new RelativePoseFactor(e.T_i_j, e.sqrt_info), loss,
-                                 s_->pose[e.i].data(), s_->pose[e.j].data());
+      problem_->AddResidualBlock(new RelativePoseFactor(e.T_i_j, e.sqrt_info), loss, s_->pose(e.i),
+                                 s_->pose(e.j));
     }
   }
 
@@ -342,15 +352,14 @@ class GraphBuilder {
     for (size_t k = 0; k < T_map.size(); ++k) {
       ceres::LossFunction* loss = nullptr;
       if (opt_.map_anchor_huber_scale > 0) loss = new ceres::HuberLoss(opt_.map_anchor_huber_scale);
-      problem_->AddResidualBlock(new MapAnchorFactor(T_map[k], S), loss, s_->pose[k].data(),
-                                 s_->drift[k].data());
+      problem_->AddResidualBlock(new MapAnchorFactor(T_map[k], S), loss, s_->pose(k), s_->drift(k));
       if (k == 0) continue;
       // A keyframe that did not move still gets a finite step (1 mm of path).
       const double step_m = std::max(1e-3, path_m[k] - path_m[k - 1]);
       const Eigen::Matrix3d Q = walks[k] ? noise.drift_covariance_per_m : floor;
       problem_->AddResidualBlock(
           new VectorRandomWalkFactor(sqrt_information_from_covariance(Q * step_m)), nullptr,
-          s_->drift[k - 1].data(), s_->drift[k].data());
+          s_->drift(k - 1), s_->drift(k));
     }
   }
 
@@ -365,26 +374,24 @@ class GraphBuilder {
       const bool with_position = !(iv.dvl && drop_position);
       problem_->AddResidualBlock(
           new ImuFactor(iv.imu, g, imu_sqrt_information(*iv.imu, with_position)), nullptr,
-          s_->pose[k].data(), s_->vel[k].data(), s_->bg[k].data(), s_->ba[k].data(),
-          s_->pose[j].data(), s_->vel[j].data());
+          s_->pose(k), s_->vel(k), s_->bg(k), s_->ba(k), s_->pose(j), s_->vel(j));
       vel_used_[k] = vel_used_[j] = true;
     }
     if (iv.dvl) {
       problem_->AddResidualBlock(
           new DvlFactor(iv.dvl, t_imu_dvl_,
                         sqrt_information_from_covariance(iv.dvl->position_covariance())),
-          nullptr, s_->pose[k].data(), s_->bg[k].data(), s_->bv[k].data(), s_->pose[j].data(),
-          &s_->scale, s_->q_imu_dvl.data());
+          nullptr, s_->pose(k), s_->bg(k), s_->bv(k), s_->pose(j), s_->scale(), s_->q_imu_dvl());
       ++num_dvl_;
     }
     problem_->AddResidualBlock(new BiasRandomWalkFactor(opt_.imu_noise.gyro_random_walk, dt_s),
-                               nullptr, s_->bg[k].data(), s_->bg[j].data());
+                               nullptr, s_->bg(k), s_->bg(j));
     problem_->AddResidualBlock(new BiasRandomWalkFactor(opt_.imu_noise.accel_random_walk, dt_s),
-                               nullptr, s_->ba[k].data(), s_->ba[j].data());
+                               nullptr, s_->ba(k), s_->ba(j));
     const double speed = iv.dvl ? iv.dvl->mean_speed_mps() : 0.0;
     problem_->AddResidualBlock(
-        new BiasRandomWalkFactor(opt_.dvl_noise.bias_random_walk(speed), dt_s), nullptr,
-        s_->bv[k].data(), s_->bv[j].data());
+        new BiasRandomWalkFactor(opt_.dvl_noise.bias_random_walk(speed), dt_s), nullptr, s_->bv(k),
+        s_->bv(j));
     return iv.imu && iv.dvl && !drop_position;
   }
 
@@ -395,25 +402,25 @@ class GraphBuilder {
     A(0, 0) = 1.0 / opt_.dvl_scale_prior_sigma;
     Eigen::VectorXd b(1);
     b(0) = opt_.dvl_scale_initial;
-    p.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, &s_->scale);
+    p.AddResidualBlock(new ceres::NormalPrior(A, b), nullptr, s_->scale());
     p.AddResidualBlock(
         new RotationPriorFactor(R_imu_dvl_prior,
                                 Eigen::Matrix3d::Identity() / opt_.dvl_rotation_prior_sigma_rad),
-        nullptr, s_->q_imu_dvl.data());
+        nullptr, s_->q_imu_dvl());
     if (!opt_.estimate_dvl_scale || num_dvl_ == 0)
-      p.SetParameterBlockConstant(&s_->scale);
+      p.SetParameterBlockConstant(s_->scale());
     else
-      p.SetParameterLowerBound(&s_->scale, 0, 0.5);
+      p.SetParameterLowerBound(s_->scale(), 0, 0.5);
     if (!opt_.estimate_dvl_rotation || num_dvl_ == 0) {
-      p.SetParameterBlockConstant(s_->q_imu_dvl.data());
+      p.SetParameterBlockConstant(s_->q_imu_dvl());
     }
     for (size_t k = 0; k < kf.size(); ++k) {
-      if (!vel_used_[k]) p.SetParameterBlockConstant(s_->vel[k].data());
-      if (!opt_.use_imu) p.SetParameterBlockConstant(s_->ba[k].data());
-      if (!opt_.use_imu && num_dvl_ == 0) p.SetParameterBlockConstant(s_->bg[k].data());
-      if (num_dvl_ == 0) p.SetParameterBlockConstant(s_->bv[k].data());
+      if (!vel_used_[k]) p.SetParameterBlockConstant(s_->vel(k));
+      if (!opt_.use_imu) p.SetParameterBlockConstant(s_->ba(k));
+      if (!opt_.use_imu && num_dvl_ == 0) p.SetParameterBlockConstant(s_->bg(k));
+      if (num_dvl_ == 0) p.SetParameterBlockConstant(s_->bv(k));
       if (kf[k].biases_zeroed) {  // Sec. IV-B: unobservable during degeneracy, set to zero
-        for (auto* b : {&s_->bg[k], &s_->ba[k], &s_->bv[k]}) p.SetParameterBlockConstant(b->data());
+        for (double* b : {s_->bg(k), s_->ba(k), s_->bv(k)}) p.SetParameterBlockConstant(b);
       }
     }
   }
@@ -426,10 +433,10 @@ class GraphBuilder {
   int num_dvl() const { return num_dvl_; }
 
  private:
-  void add_vector_prior(Vec3Block* b, double sigma) {
+  void add_vector_prior(double* b, double sigma) {
     const Eigen::Matrix3d A = Eigen::Matrix3d::Identity() / sigma;
-    const Eigen::VectorXd mean = vec(*b);
-    problem_->AddResidualBlock(new ceres::NormalPrior(A, mean), nullptr, b->data());
+    const Eigen::VectorXd mean = vec(b);
+    problem_->AddResidualBlock(new ceres::NormalPrior(A, mean), nullptr, b);
   }
 
   States* s_;
@@ -453,7 +460,7 @@ struct Covariances {
 
 bool compute_covariances(ceres::Problem& problem, States& s, bool keyframes, int num_threads,
                          Covariances* out) {
-  const size_t n = s.pose.size();
+  const size_t n = s.keyframes();
   out->pose.assign(n, Matrix6d::Zero());
   out->bg.assign(n, Eigen::Matrix3d::Zero());
   out->ba = out->bv = out->bg;
@@ -462,13 +469,13 @@ bool compute_covariances(ceres::Problem& problem, States& s, bool keyframes, int
     if (!problem.IsParameterBlockConstant(const_cast<double*>(b))) blocks.emplace_back(b, b);
   };
   for (size_t k = 0; k < n && keyframes; ++k) {
-    want(s.pose[k].data());
-    want(s.bg[k].data());
-    want(s.ba[k].data());
-    want(s.bv[k].data());
+    want(s.pose(k));
+    want(s.bg(k));
+    want(s.ba(k));
+    want(s.bv(k));
   }
-  want(&s.scale);
-  want(s.q_imu_dvl.data());
+  want(s.scale());
+  want(s.q_imu_dvl());
   ceres::Covariance::Options co;
   co.num_threads = num_threads;
   co.algorithm_type = ceres::SPARSE_QR;
@@ -481,19 +488,19 @@ bool compute_covariances(ceres::Problem& problem, States& s, bool keyframes, int
     *m = r;
   };
   for (size_t k = 0; k < n && keyframes; ++k) {
-    if (!problem.IsParameterBlockConstant(s.pose[k].data())) {
+    if (!problem.IsParameterBlockConstant(s.pose(k))) {
       Eigen::Matrix<double, 6, 6, Eigen::RowMajor> r;
-      cov.GetCovarianceBlockInTangentSpace(s.pose[k].data(), s.pose[k].data(), r.data());
+      cov.GetCovarianceBlockInTangentSpace(s.pose(k), s.pose(k), r.data());
       out->pose[k] = r;
     }
-    get3(s.bg[k].data(), &out->bg[k]);
-    get3(s.ba[k].data(), &out->ba[k]);
-    get3(s.bv[k].data(), &out->bv[k]);
+    get3(s.bg(k), &out->bg[k]);
+    get3(s.ba(k), &out->ba[k]);
+    get3(s.bv(k), &out->bv[k]);
   }
-  if (!problem.IsParameterBlockConstant(&s.scale)) {
-    cov.GetCovarianceBlockInTangentSpace(&s.scale, &s.scale, &out->scale_var);
+  if (!problem.IsParameterBlockConstant(s.scale())) {
+    cov.GetCovarianceBlockInTangentSpace(s.scale(), s.scale(), &out->scale_var);
   }
-  get3(s.q_imu_dvl.data(), &out->rotation);
+  get3(s.q_imu_dvl(), &out->rotation);
   return true;
 }
 
@@ -518,6 +525,7 @@ Trajectory RefineResult::trajectory() const {
 
 RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) {
   const Clock::time_point t_start = Clock::now();
+  use_aligned_suitesparse_memory();  // the same bits wherever its fronts land
   RefineResult result;
   RefineSummary& summary = result.summary;
 
@@ -586,7 +594,8 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   const int passes = std::max(1, opt.relinearization_passes);
   for (int pass = 0; pass < passes; ++pass) {
     for (size_t k = 0; k < n; ++k) {
-      if (kf[k].biases_zeroed) s.bg[k] = s.ba[k] = s.bv[k] = Vec3Block{0, 0, 0};
+      if (kf[k].biases_zeroed)
+        for (double* b : {s.bg(k), s.ba(k), s.bv(k)}) std::fill(b, b + 3, 0.0);
     }
     const std::vector<Interval> intervals = preintegrate(in, pseudo, t_ns, s, opt, &summary);
     graph = std::make_unique<GraphBuilder>(&s, opt);
@@ -616,7 +625,10 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
     so.max_num_iterations = opt.max_iterations;
-    so.num_threads = opt.num_threads;
+    // One thread: on more, Ceres sums the residual blocks' cost and gradient per thread, in
+    // the order the threads take them, so the reported costs (and, near a tolerance, the
+    // iterations) would change with the thread count and the machine's load.
+    so.num_threads = 1;
     so.logging_type = ceres::SILENT;
     ceres::Solver::Summary ceres_summary;
     const Clock::time_point t_solve = Clock::now();
@@ -629,7 +641,7 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
     summary.ceres_report = ceres_summary.BriefReport();
     if (opt.use_map_anchors && opt.estimate_map_noise && pass + 1 < passes) {
       std::vector<Pose3> estimate(n);
-      for (size_t k = 0; k < n; ++k) estimate[k] = get_pose_block(s.pose[k].data());
+      for (size_t k = 0; k < n; ++k) estimate[k] = get_pose_block(s.pose(k));
       std::vector<double> drift_path(n);
       for (size_t k = 0; k < n; ++k) drift_path[k] = kf[k].map_drift_path_m;
       map_noise =
@@ -657,12 +669,12 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   // 7. Back to the body frame.
   const Pose3 T_imu_body = in.T_body_imu.inverse();
   for (size_t k = 0; k < n; ++k) {
-    const Pose3 T_wi = get_pose_block(s.pose[k].data());
+    const Pose3 T_wi = get_pose_block(s.pose(k));
     kf[k].T_world_body = T_wi * T_imu_body;
-    kf[k].velocity_imu_world_mps = vec(s.vel[k]);
-    kf[k].bias_gyro_radps = vec(s.bg[k]);
-    kf[k].bias_accel_mps2 = vec(s.ba[k]);
-    kf[k].bias_dvl_mps = vec(s.bv[k]);
+    kf[k].velocity_imu_world_mps = vec(s.vel(k));
+    kf[k].bias_gyro_radps = vec(s.bg(k));
+    kf[k].bias_accel_mps2 = vec(s.ba(k));
+    kf[k].bias_dvl_mps = vec(s.bv(k));
     if (summary.covariance_ok && opt.covariances == CovarianceScope::kAll) {
       kf[k].pose_covariance = body_pose_covariance(cov.pose[k], T_wi, T_imu_body);
       kf[k].bias_gyro_covariance = cov.bg[k];
@@ -670,10 +682,9 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
       kf[k].bias_dvl_covariance = cov.bv[k];
     }
   }
-  result.dvl_scale = s.scale;
+  result.dvl_scale = *s.scale();
   result.dvl_scale_sigma = std::sqrt(std::max(0.0, cov.scale_var));
-  result.q_body_dvl =
-      Eigen::Quaterniond(in.T_body_imu.linear() * block_rotation(s.q_imu_dvl.data()));
+  result.q_body_dvl = Eigen::Quaterniond(in.T_body_imu.linear() * block_rotation(s.q_imu_dvl()));
   result.dvl_rotation_covariance = cov.rotation;  // R_body_imu R Exp(d) = R_body_dvl Exp(d)
   summary.total_time_s = seconds_since(t_start);
   return result;

@@ -128,6 +128,7 @@ struct RefineOptions {
 
   // Solver.
   int max_iterations = 50;
+  // Threads of the covariance's columns; the solve runs on one thread (refine_solver.cc).
   int num_threads = 2;
   // Solve, re-preintegrate at the new biases / s_d / extrinsic, solve again: keeps the
   // first-order corrections of Eq. (27) and [27] Eq. (44) small.

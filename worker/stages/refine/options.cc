@@ -220,7 +220,13 @@ const OptionTable<O>& table() {
                      "keeps the first-order corrections (Eq. (27), [27] Eq. (44)) small",
                      "", kSolver)),
           option("threads", &O::threads, int_in_range(1, 256),
-                 doc("", "in [1, 256]: Ceres threads", "", kSolver)),
+                 doc("",
+                     "in [1, 256]: threads of the covariances' columns; the Ceres solve runs on "
+                     "one thread whatever this is (on several, Ceres sums the residual blocks in "
+                     "the order its threads take them and the reported costs changed with the "
+                     "thread count), so the outputs are the same to the bit on any number of "
+                     "threads",
+                     "", kSolver)),
           option("compare_without_dvl", &O::compare_without_dvl,
                  doc("",
                      "with `dvl` and ground truth, solve a second time without DVL so the report "
