@@ -50,7 +50,6 @@ std::string figure(const std::string& svg, const std::string& caption);
 
 // The stage sections; each returns an <section> element.
 std::string ingest_section(const Ref& stage);
-std::string refine_section(const Ref& stage, const nlohmann::json& trajectories);
 std::string ba_section(const Ref& stage);
 std::string inspect_section(const Ref& stage);
 std::string compare_section(const Ref& stage);

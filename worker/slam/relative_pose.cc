@@ -9,16 +9,19 @@
 
 namespace keel::slam {
 
+Matrix6d isotropic_information(double sigma_translation_m, double sigma_rotation_rad) {
+  Matrix6d info = Matrix6d::Zero();
+  info.diagonal().head<3>().setConstant(1.0 / (sigma_translation_m * sigma_translation_m));
+  info.diagonal().tail<3>().setConstant(1.0 / (sigma_rotation_rad * sigma_rotation_rad));
+  return info;
+}
+
 Matrix6d OdometryNoise::information(const Pose3& T_i_j) const {
   const double dist = T_i_j.translation().norm();
   const double angle = so3_log(T_i_j.linear()).norm();
-  const double s_t = sigma_translation_m + sigma_translation_per_m * dist;
-  const double s_r =
-      sigma_rotation_rad + sigma_rotation_per_rad * angle + sigma_rotation_per_m * dist;
-  Matrix6d info = Matrix6d::Zero();
-  info.diagonal().head<3>().setConstant(1.0 / (s_t * s_t));
-  info.diagonal().tail<3>().setConstant(1.0 / (s_r * s_r));
-  return info;
+  return isotropic_information(
+      sigma_translation_m + sigma_translation_per_m * dist,
+      sigma_rotation_rad + sigma_rotation_per_rad * angle + sigma_rotation_per_m * dist);
 }
 
 Pose3 interpolate_pose(const Trajectory& trajectory, TimeNs t_ns) {

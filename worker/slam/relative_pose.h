@@ -22,6 +22,10 @@ struct RelativePoseMeasurement {
   Matrix6d information = Matrix6d::Identity();
 };
 
+// The information of independent errors with the same sigma on every translation axis (m) and
+// on every rotation axis (rad): diag(1/sigma_t^2 I_3, 1/sigma_r^2 I_3).
+Matrix6d isotropic_information(double sigma_translation_m, double sigma_rotation_rad);
+
 // Default noise of a recorded odometry increment, which carries no covariance of its own:
 // sigma = base + per_metre * |t_ij| (and + per_radian * |phi_ij| for rotation). Not in the
 // paper (LVI-SAM takes its covariances from scan matching); an engineering choice for a

@@ -1,6 +1,8 @@
 // report.html, stage `refine`: Table II of seed 000 (ATE and RPE of the MAP poses and of the
 // refinement without and with DVL, side by side), ATE over time (trajectories.json), the DVL
 // scale s_d and the DVL-IMU rotation with their sigma, the solver and its inputs.
+#include "worker/stages/refine/stage.h"
+
 #include <cmath>
 
 #include "worker/pipeline/html_text.h"
@@ -191,8 +193,6 @@ std::string solver(const Ref& stage) {
   return out;
 }
 
-}  // namespace
-
 std::string refine_section(const Ref& stage, const nlohmann::json& trajectories) {
   std::string out;
   const Ref evaluation = stage["evaluation"];
@@ -216,4 +216,15 @@ std::string refine_section(const Ref& stage, const nlohmann::json& trajectories)
   return out + string_list(stage["warnings"], "Warnings");
 }
 
+}  // namespace
+
 }  // namespace keel::pipeline::report_html
+
+namespace keel::pipeline {
+
+std::string RefineStage::report_html(const report_html::Ref& section,
+                                     const ReportHtmlInputs& inputs) const {
+  return report_html::refine_section(section, inputs.trajectories);
+}
+
+}  // namespace keel::pipeline
