@@ -24,13 +24,15 @@ void require(bool ok, const std::string& path, const std::string& expected) {
 
 Check<double> greater_than(double bound) {
   return [bound](const double& v) {
-    return v > bound ? std::string() : "expected a number > " + number_text(bound);
+    return std::isfinite(v) && v > bound ? std::string()
+                                         : "expected a number > " + number_text(bound);
   };
 }
 
 Check<double> at_least(double bound) {
   return [bound](const double& v) {
-    return v >= bound ? std::string() : "expected a number >= " + number_text(bound);
+    return std::isfinite(v) && v >= bound ? std::string()
+                                          : "expected a number >= " + number_text(bound);
   };
 }
 
@@ -81,9 +83,12 @@ namespace {
 std::string cell(std::string text) {
   std::string out;
   for (char c : text) {
-    if (c == '|') out += "\\|";
-    else if (c == '\n') out += ' ';
-    else out += c;
+    if (c == '|')
+      out += "\\|";
+    else if (c == '\n')
+      out += ' ';
+    else
+      out += c;
   }
   return out;
 }

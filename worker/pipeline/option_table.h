@@ -7,7 +7,8 @@
 //   const OptionTable<InspectOptions>& inspect_option_table() {
 //     static const OptionTable<InspectOptions> table("inspect", {
 //       number("tau_m", &InspectOptions::tau_m, at_least(0.0),
-//              {"m", "tau of Algorithm 1: features farther than this from the model", "seed 001 Sec. 3.1"}),
+//              {"m", "tau of Algorithm 1: features farther than this from the model", "seed 001
+//              Sec. 3.1"}),
 //       ...});
 //     return table;
 //   }
@@ -34,11 +35,12 @@ std::string join_names(const std::vector<std::string>& names);
 
 // What docs/stage-options.md says of one option, besides its name.
 struct OptionDoc {
-  std::string unit;     // "m", "s", "deg", "" for none
-  std::string meaning;  // one paragraph (Markdown)
-  std::string source;   // where the default comes from: "seed 000 Table IV", "beyond the paper: ..."
-  std::string group;    // the docs' sub-table this row is listed in ("" = the stage's first)
-  std::string default_text;  // overrides the default shown (else the JSON of Options{})
+  // Initialised in place, so a row may name only its first fields: OptionDoc{"m", "..."}.
+  std::string unit{};     // "m", "s", "deg", "" for none
+  std::string meaning{};  // one paragraph (Markdown)
+  std::string source{};   // where the default comes from: "seed 000 Table IV", "beyond the paper"
+  std::string group{};    // the docs' sub-table this row is listed in ("" = the stage's first)
+  std::string default_text{};  // overrides the default shown (else the JSON of Options{})
 };
 
 // A row's check beyond the JSON type: "" when `value` is acceptable, else the words that follow
@@ -50,12 +52,12 @@ template <typename T>
 Check<T> any_value() {
   return [](const T&) { return std::string(); };
 }
-Check<double> greater_than(double bound);           // "expected a number > bound"
-Check<double> at_least(double bound);               // "expected a number >= bound"
-Check<double> in_range(double low, double high);    // "expected a number in [low, high]"
-Check<double> in_open_range(double low, double high);  // "expected a number in (low, high)"
-Check<int> int_at_least(int bound);                 // "expected an integer >= bound"
-Check<int> int_in_range(int low, int high);         // "expected an integer in [low, high]"
+Check<double> greater_than(double bound);                   // "expected a number > bound"
+Check<double> at_least(double bound);                       // "expected a number >= bound"
+Check<double> in_range(double low, double high);            // "expected a number in [low, high]"
+Check<double> in_open_range(double low, double high);       // "expected a number in (low, high)"
+Check<int> int_at_least(int bound);                         // "expected an integer >= bound"
+Check<int> int_in_range(int low, int high);                 // "expected an integer in [low, high]"
 Check<std::string> one_of(std::vector<std::string> words);  // "expected a, b or c, got 'x'"
 
 // The text of a number as the docs and messages print it: 0.25, 1e-06, 2.
@@ -80,12 +82,18 @@ template <typename Options, typename T>
 OptionRow<Options> option(const char* name, T Options::*field, Check<T> check, OptionDoc doc) {
   OptionRow<Options> row;
   row.name = name;
-  if constexpr (std::is_same_v<T, bool>) row.type = "bool";
-  else if constexpr (std::is_integral_v<T>) row.type = "integer";
-  else if constexpr (std::is_floating_point_v<T>) row.type = "number";
-  else if constexpr (std::is_same_v<T, std::string>) row.type = "string";
-  else if constexpr (std::is_same_v<T, std::vector<std::string>>) row.type = "array of strings";
-  else row.type = "JSON";
+  if constexpr (std::is_same_v<T, bool>)
+    row.type = "bool";
+  else if constexpr (std::is_integral_v<T>)
+    row.type = "integer";
+  else if constexpr (std::is_floating_point_v<T>)
+    row.type = "number";
+  else if constexpr (std::is_same_v<T, std::string>)
+    row.type = "string";
+  else if constexpr (std::is_same_v<T, std::vector<std::string>>)
+    row.type = "array of strings";
+  else
+    row.type = "JSON";
   row.doc = std::move(doc);
   row.read = [field, check](Options& options, const nlohmann::json& value,
                             const std::string& path) {
@@ -149,8 +157,8 @@ class OptionTable : public OptionsSchema {
     for (const auto& item : options.items()) {
       const OptionRow<Options>* row = find(item.key());
       if (!row)
-        throw proto::ContractError(path + "." + item.key() + ": unknown option (known: " +
-                                   join_names(names()) + ")");
+        throw proto::ContractError(path + "." + item.key() +
+                                   ": unknown option (known: " + join_names(names()) + ")");
     }
     // In the table's order, so the first wrong option named is the same whatever the JSON's.
     for (const auto& row : rows_)
@@ -171,7 +179,8 @@ class OptionTable : public OptionsSchema {
   std::string markdown() const override {
     std::vector<OptionMarkdownRow> rows;
     const Options defaults{};
-    for (const auto& row : rows_) rows.push_back({row.name, row.type, row.doc, row.write(defaults)});
+    for (const auto& row : rows_)
+      rows.push_back({row.name, row.type, row.doc, row.write(defaults)});
     return render_option_markdown(rows);
   }
 
