@@ -50,8 +50,6 @@ std::string figure(const std::string& svg, const std::string& caption);
 
 // The stage sections; each returns an <section> element.
 std::string ingest_section(const Ref& stage);
-std::string ba_section(const Ref& stage);
-std::string inspect_section(const Ref& stage);
 std::string compare_section(const Ref& stage);
 // Every leaf of report.json as a table row (pointer, value).
 std::string all_figures(const Ref& report);
