@@ -9,8 +9,8 @@ namespace {
 
 using O = BaStageOptions;
 
-// In the order the stage asked for them before the table, which is the order of the "known"
-// list of an unknown option's error.
+// The rows' order is that of the docs' table and of the "known" list in an unknown option's
+// error.
 const OptionTable<O>& table() {
   static const OptionTable<O> table(
       "ba",

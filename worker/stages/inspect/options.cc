@@ -21,8 +21,8 @@ OptionRow<O> algorithm(const char* name, T Algorithm::*field, Check<T> check, Op
           [write = row.write](const O& o) { return write(o.inspect); }};
 }
 
-// In the order the stage asked for them before the table, which is the order of the "known"
-// list of an unknown option's error.
+// The rows' order is that of the docs' table and of the "known" list in an unknown option's
+// error.
 const OptionTable<O>& table() {
   static const OptionTable<O> table(
       "inspect",
