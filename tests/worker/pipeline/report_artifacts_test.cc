@@ -28,6 +28,7 @@
 #include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/mission.h"
 #include "worker/io/cloud/scan_file.h"
+#include "worker/pipeline/pose_json.h"
 #include "worker/io/tum.h"
 #include "worker/stages/ba/stage.h"
 #include "worker/pipeline/job_runner.h"
