@@ -4,6 +4,13 @@
     same_outputs.py manifest BIN_DIR WORK_DIR > manifest.txt
     same_outputs.py check BIN_DIR WORK_DIR MANIFEST
 
+tests/deploy/demo_outputs.sha256 is the manifest of main before issue 29's restructuring (plus
+the compare page that `keel-worker compare` now writes); CTest `deploy/same_outputs` checks it.
+A change that alters outputs on purpose regenerates it and says why in its commit.
+glibc picks libm's code paths by CPU features (FMA, AVX2), which may move a last bit: the
+manifest records the features of the machine that made it, and `check` skips (exit 77),
+saying so, on a machine whose features differ.
+
 Runs keel-sim and `keel-worker run` (the pipeline without a server) on the README demo's
 missions: usv-bridge (ingest, refine, map), hauv-hull (ingest, refine, ba, inspect), and a
 compare of two usv-bridge surveys, then hashes every artifact. A refactoring that keeps
@@ -127,11 +134,32 @@ def manifest(bin_dir, work):
     return lines
 
 
+# The CPU features that select glibc's libm and Eigen/BLAS code paths.
+PATH_FEATURES = ("fma", "avx2", "avx512f")
+
+
+def cpu_features():
+    flags = set()
+    for line in open("/proc/cpuinfo"):
+        if line.startswith("flags"):
+            flags = set(line.split(":", 1)[1].split())
+            break
+    return " ".join(f for f in PATH_FEATURES if f in flags) or "none"
+
+
 def main():
     if len(sys.argv) < 4 or sys.argv[1] not in ("manifest", "check"):
         raise SystemExit(__doc__)
+    if sys.argv[1] == "check":
+        recorded = [l for l in open(sys.argv[4]).read().splitlines() if l.startswith("# cpu: ")]
+        here = cpu_features()
+        if recorded and recorded[0][len("# cpu: "):] != here:
+            print(f"skipped: {sys.argv[4]} was made on a CPU with [{recorded[0][7:]}], this one "
+                  f"has [{here}]: libm's code paths may differ in the last bit")
+            return 77
     lines = manifest(sys.argv[2], sys.argv[3])
     if sys.argv[1] == "manifest":
+        print(f"# cpu: {cpu_features()}")
         print("\n".join(lines))
         return 0
     expected = [l for l in open(sys.argv[4]).read().splitlines() if l and not l.startswith("#")]
