@@ -45,7 +45,7 @@ target_include_directories(keel_pcl SYSTEM INTERFACE ${PCL_INCLUDE_DIRS})
 target_link_libraries(keel_pcl INTERFACE ${PCL_LIBRARIES})
 target_compile_definitions(keel_pcl INTERFACE ${PCL_DEFINITIONS})
 
-# ROS1 bags without ROS (PLATFORM-NOTES.md): `pkg-config rosbag_storage` is broken on
+# ROS1 bags without ROS (Debian 12 packages the rosbag C++ library alone): `pkg-config rosbag_storage` is broken on
 # Debian 12, so the include dirs and libraries are listed by hand.
 add_library(keel_rosbag INTERFACE)
 target_include_directories(keel_rosbag SYSTEM INTERFACE

@@ -1,4 +1,4 @@
-// Time: int64 nanoseconds at rest, double seconds in math (DESIGN.md conventions).
+// Time: int64 nanoseconds at rest, double seconds in math (docs/design.md "Conventions").
 #pragma once
 
 #include <cstdint>

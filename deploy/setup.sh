@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config git clang-format
-  # product libraries (see DESIGN.md "Layers")
+  # product libraries (see docs/design.md "Layers")
   libboost-dev libboost-system-dev libboost-filesystem-dev libboost-regex-dev
   libboost-iostreams-dev libboost-program-options-dev libboost-thread-dev
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev libnanoflann-dev
@@ -18,7 +18,7 @@ packages=(
   systemd nginx-light
   # single-node Slurm for deploy/slurm_workers; iproute2 for the multi-host test's namespaces
   slurm-wlm munge iproute2
-  # ROS1 bags without ROS (PLATFORM-NOTES.md)
+  # ROS1 bags without ROS: Debian 12 packages the rosbag C++ library and the messages alone
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev libstd-msgs-dev
   # their bz2 and lz4 chunks, decompressed by Keel to check them before rosbag reads them

@@ -1,4 +1,4 @@
-// Who may do what (DESIGN.md "Who may do what"): API tokens carry a role and a project.
+// Who may do what (docs/design.md "Who may do what"): API tokens carry a role and a project.
 // Every mission, job, upload, artifact and batch belongs to one project; a token reaches
 // only its project's objects (an admin or worker token may hold every project, "*").
 #pragma once

@@ -39,7 +39,7 @@ runuser -u munge -- munged --key-file="$tmp/munge/munge.key" --socket="$tmp/mung
   --seed-file="$tmp/munge/seed" || fail "munged did not start"
 cp "$tmp/munge/munged.pid" "$tmp/munged.pid"
 
-# --- slurm.conf (PLATFORM-NOTES.md) ---
+# --- slurm.conf: one node, no accounting, munge keys in the test folder ---
 host="$(hostname -s)"
 cpus="$(nproc)"
 mkdir -p "$tmp/state" "$tmp/spool" "$tmp/out"

@@ -1,4 +1,4 @@
-// keel-sim: writes a synthetic mission bundle with ground truth (DESIGN.md, issue 3).
+// keel-sim: writes a synthetic mission bundle with ground truth (docs/design.md "Processes").
 //   keel-sim --scenario usv-bridge|usv-corridor|hauv-hull --seed N --out DIR [--duration S]
 //            [--sensors imu,dvl,lidar_h,lidar_v,sonar,camera,depth] [--dvl-scale 1.02]
 //            [--dvl-dropout-rate R] [--bag] [--bag2 mcap,sqlite3] [--survey N]
