@@ -20,7 +20,13 @@
 #include <type_traits>
 #include <vector>
 
+#include "server/api_response.h"
+#include "server/file_region_body.h"
+
 namespace keel::server {
+
+namespace beast = boost::beast;
+namespace http = boost::beast::http;
 
 namespace {
 
@@ -425,6 +431,7 @@ class Session : public SessionBase, public std::enable_shared_from_this<Session<
   bool stream_dirty_ = false;
   bool stream_final_ = false;
 };
+
 void start_session(ServerCore& core, tcp::socket socket, net::ssl::context* tls) {
   if (tls)
     std::make_shared<Session<TlsStream>>(core, std::move(socket), *tls)->start();

@@ -20,11 +20,10 @@
 namespace keel::server {
 
 namespace net = boost::asio;
-namespace beast = boost::beast;
-namespace http = boost::beast::http;
 using tcp = net::ip::tcp;
-using error_code = boost::system::error_code;  // What the server keeps of a session, whatever its
-                                               // stream (plain TCP or TLS).
+using error_code = boost::system::error_code;
+
+// What the server keeps of a session, whatever its stream (plain TCP or TLS).
 class SessionBase {
  public:
   virtual ~SessionBase() = default;
@@ -47,6 +46,7 @@ struct ServerCore {
 
   ServerCore(HttpHandler& h, ServerOptions o) : handler(h), options(std::move(o)) {}
 };
+
 // Starts serving `socket` (on its strand) over TLS when `tls` is set, plain HTTP otherwise. The
 // session registers itself in core.sessions and lives as long as the connection.
 void start_session(ServerCore& core, tcp::socket socket, net::ssl::context* tls);

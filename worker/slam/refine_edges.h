@@ -19,6 +19,7 @@ struct KeyframeEdge {
   Pose3 T_i_j = Pose3::Identity();
   Matrix6d sqrt_info = Matrix6d::Zero();
 };
+
 // Throws std::invalid_argument naming the keyframe: fewer than 2, a pose not finite, a stamp not
 // after the previous one.
 void validate_keyframes(const Trajectory& keyframes);

@@ -72,6 +72,7 @@ double max_nearest_distance(const std::vector<Vector>& originals, const std::vec
   }
   return max_error;
 }
+
 template <typename Vector>
 PositionBounds bounds_of(const std::vector<Vector>& positions) {
   PositionBounds bounds;
@@ -99,6 +100,7 @@ void measure_error(const std::vector<Vector>& originals, const std::vector<bool>
   result->max_position_error_m = max_nearest_distance(originals, used, decoded, step, tolerance);
   result->error_method = "nearest_decoded";
 }
+
 template void measure_error(const std::vector<Eigen::Vector3f>&, const std::vector<bool>*,
                             const std::vector<Eigen::Vector3f>&, const DracoOptions&,
                             DracoEncoded*);
@@ -112,6 +114,7 @@ PositionBounds position_bounds(const PositionParts& parts) {
     for (const Eigen::Vector3f& p : *part) bounds.add(p);
   return bounds;
 }
+
 namespace {
 
 // The position Draco's decoder returns for each input position, computed with Draco's own
