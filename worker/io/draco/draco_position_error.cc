@@ -209,7 +209,7 @@ bool measure_error_by_replica(const PositionParts& originals, const PositionBoun
     }
   } else {
     for (draco::PointIndex i(0); i < decoded.num_points(); ++i) {
-      Eigen::Vector3f p;
+      Eigen::Vector3f p = Eigen::Vector3f::Zero();  // kept when a value does not convert
       position->ConvertValue<float>(position->mapped_index(i), 3, p.data());
       actual.add(p);
     }
