@@ -10,14 +10,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/suitesparse_memory.h"
 #include "worker/slam/dvl_factor.h"
 #include "worker/slam/imu_factor.h"
 #include "worker/slam/information.h"
 #include "worker/slam/manifolds.h"
 #include "worker/slam/prior_factors.h"
+#include "worker/slam/refine_edges.h"
 #include "worker/slam/relative_pose_factor.h"
 #include "worker/slam/so3.h"
-#include "core/suitesparse_memory.h"
 
 namespace keel::slam {
 namespace {
@@ -71,136 +72,12 @@ class States {
 
 void set_vec3(const Eigen::Vector3d& v, double* block) { std::copy(v.data(), v.data() + 3, block); }
 
-// A relative-pose constraint between keyframe indices, in the IMU frame.
-struct Edge {
-  int i = 0, j = 0;
-  Pose3 T_i_j = Pose3::Identity();
-  Matrix6d sqrt_info = Matrix6d::Zero();
-};
-
 struct Interval {
   std::shared_ptr<const ImuPreintegration> imu;  // null: no I_ij
   std::shared_ptr<const DvlPreintegration> dvl;  // null: no D_ij
 };
 
-// ---- Step 1: inputs -------------------------------------------------------------------------
-
-void validate_keyframes(const Trajectory& keyframes) {
-  if (keyframes.size() < 2) {
-    throw std::invalid_argument("keyframes: expected at least 2, got " +
-                                std::to_string(keyframes.size()));
-  }
-  for (size_t k = 0; k < keyframes.size(); ++k) {
-    const Pose3& T = keyframes[k].T_world_body;
-    if (!T.matrix().allFinite()) {
-      throw std::invalid_argument("keyframes[" + std::to_string(k) + "]: pose is not finite");
-    }
-    if (k > 0 && keyframes[k].t_ns <= keyframes[k - 1].t_ns) {
-      throw std::invalid_argument("keyframes[" + std::to_string(k) +
-                                  "]: timestamp not after the previous keyframe's");
-    }
-  }
-}
-
-int keyframe_index(const std::vector<TimeNs>& t_ns, TimeNs query, TimeNs tolerance_ns,
-                   const std::string& what) {
-  auto it = std::lower_bound(t_ns.begin(), t_ns.end(), query);
-  int best = -1;
-  TimeNs best_diff = 0;
-  for (auto c : {it, it == t_ns.begin() ? it : it - 1}) {
-    if (c == t_ns.end()) continue;
-    const TimeNs diff = std::abs(*c - query);
-    if (best < 0 || diff < best_diff) {
-      best = static_cast<int>(c - t_ns.begin());
-      best_diff = diff;
-    }
-  }
-  if (best < 0 || best_diff > tolerance_ns) {
-    throw std::invalid_argument(what + ": stamp " + format_seconds(query) +
-                                " s matches no keyframe within the tolerance");
-  }
-  return best;
-}
-
-// Information of a body-frame relative pose expressed for the IMU-frame relative pose
-// X^-1 T X (X = T_body_imu), to first order: delta_imu = J delta_body with
-// J = [R_X^T, -R_X^T R_ij (t_X)^; 0, R_X^T].
-Matrix6d information_in_imu_frame(const Matrix6d& info_body, const Pose3& T_i_j_body,
-                                  const Pose3& T_body_imu) {
-  const Eigen::Matrix3d RXt = T_body_imu.linear().transpose();
-  Matrix6d J = Matrix6d::Zero();
-  J.block<3, 3>(0, 0) = RXt;
-  J.block<3, 3>(0, 3) = -RXt * T_i_j_body.linear() * hat(T_body_imu.translation());
-  J.block<3, 3>(3, 3) = RXt;
-  const Matrix6d J_inv = J.inverse();
-  return J_inv.transpose() * info_body * J_inv;
-}
-
-Edge make_edge(const RelativePoseMeasurement& m, const Matrix6d& info_body, int i, int j,
-               const Pose3& T_body_imu) {
-  Edge e;
-  e.i = i;
-  e.j = j;
-  e.T_i_j = T_body_imu.inverse() * m.T_i_j * T_body_imu;
-  e.sqrt_info = sqrt_information(information_in_imu_frame(info_body, m.T_i_j, T_body_imu));
-  return e;
-}
-
-void check_measurement(const RelativePoseMeasurement& m, const std::string& what) {
-  if (!m.T_i_j.matrix().allFinite() || !m.information.allFinite()) {
-    throw std::invalid_argument(what + ": pose or information is not finite");
-  }
-}
-
-// Step 2: odometry edges and per-keyframe degeneracy (Sec. IV-B).
-std::vector<Edge> odometry_edges(const RefineInput& in, const RefineOptions& opt,
-                                 const std::vector<TimeNs>& t_ns,
-                                 std::vector<KeyframeEstimate>* kf) {
-  std::vector<Edge> edges;
-  if (!opt.use_odometry) return edges;
-  const TimeNs tol = seconds_to_ns(opt.measurement_time_tolerance_s);
-  for (size_t n = 0; n < in.odometry.size(); ++n) {
-    const RelativePoseMeasurement& m = in.odometry[n];
-    const std::string what = "odometry[" + std::to_string(n) + "]";
-    check_measurement(m, what);
-    const int i = keyframe_index(t_ns, m.t_i_ns, tol, what + ".t_i");
-    const int j = keyframe_index(t_ns, m.t_j_ns, tol, what + ".t_j");
-    if (i == j)
-      throw std::invalid_argument(what + ": both stamps match keyframe " + std::to_string(i));
-    const DegeneracyReport report = analyze_degeneracy(m.information, opt.degeneracy);
-    KeyframeEstimate& target = (*kf)[std::max(i, j)];
-    target.odometry_degeneracy = report;
-    target.degenerate = target.degenerate || report.degenerate;
-    Matrix6d info = m.information;
-    if (report.degenerate) {
-      if (opt.degeneracy_handling == DegeneracyHandling::kDropFactor) continue;
-      if (opt.degeneracy_handling == DegeneracyHandling::kKeepWellConditioned) {
-        info = report.well_conditioned_information;
-      }
-    }
-    edges.push_back(make_edge(m, info, i, j, in.T_body_imu));
-    target.has_odometry_factor = true;
-  }
-  return edges;
-}
-
-std::vector<Edge> loop_edges(const RefineInput& in, const RefineOptions& opt,
-                             const std::vector<TimeNs>& t_ns) {
-  std::vector<Edge> edges;
-  if (!opt.use_loop_closures) return edges;
-  const TimeNs tol = seconds_to_ns(opt.measurement_time_tolerance_s);
-  for (size_t n = 0; n < in.loop_closures.size(); ++n) {
-    const RelativePoseMeasurement& m = in.loop_closures[n];
-    const std::string what = "loop_closures[" + std::to_string(n) + "]";
-    check_measurement(m, what);
-    const int i = keyframe_index(t_ns, m.t_i_ns, tol, what + ".t_i");
-    const int j = keyframe_index(t_ns, m.t_j_ns, tol, what + ".t_j");
-    if (i == j)
-      throw std::invalid_argument(what + ": both stamps match keyframe " + std::to_string(i));
-    edges.push_back(make_edge(m, m.information, i, j, in.T_body_imu));
-  }
-  return edges;
-}
+// ---- Steps 1-2: inputs and edges: refine_edges.cc --------------------------------------------
 
 // ---- Step 4: initial states -----------------------------------------------------------------
 
@@ -324,8 +201,8 @@ class GraphBuilder {
   }
 
   // Loop closures are robustified (a wrong one must not wreck the map); odometry is not.
-  void add_edges(const std::vector<Edge>& edges, bool robust) {
-    for (const Edge& e : edges) {
+  void add_edges(const std::vector<KeyframeEdge>& edges, bool robust) {
+    for (const KeyframeEdge& e : edges) {
       ceres::LossFunction* loss = nullptr;
       if (robust && opt_.loop_closure_cauchy_scale > 0) {
         loss = new ceres::CauchyLoss(opt_.loop_closure_cauchy_scale);
@@ -548,8 +425,8 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
   const Pose3 T_imu_dvl = in.T_body_imu.inverse() * in.T_body_dvl;
 
   // 2. Odometry edges with per-keyframe degeneracy, and loop closures.
-  const std::vector<Edge> odometry = odometry_edges(in, opt, t_ns, &kf);
-  const std::vector<Edge> loops = loop_edges(in, opt, t_ns);
+  const std::vector<KeyframeEdge> odometry = odometry_edges(in, opt, t_ns, &kf);
+  const std::vector<KeyframeEdge> loops = loop_edges(in, opt, t_ns);
   // Biases are unobservable in degeneracy unless I_ij's position residual ties the velocity
   // states to the DVL there (imu_position_when_degenerate).
   // MAP anchors observe every keyframe's position, which makes them observable as well.

@@ -27,6 +27,8 @@ import {Scene3d} from '../viewer/scene.js';
 import {ShapesLayer, validateShapes} from '../viewer/shapes_layer.js';
 import {TrajectoryLayer, validateTrajectories} from '../viewer/trajectory_layer.js';
 import {setupChanges} from './viewer_changes.js';
+import {layerRow, updateLayerUi} from './viewer_layer_rows.js';
+import {setupMeasure} from './viewer_measure.js';
 
 const DEFAULT_BUDGET = 3000000;
 
@@ -108,46 +110,6 @@ export function mount(container, {id, query}) {
     sections[key] = h('div', {class: 'panel-section', id: `panel-${key}`}, h('h3', null, title));
     aside.append(sections[key]);
     return sections[key];
-  }
-
-  function layerRow(layer, {checked, onToggle, extra = []}) {
-    const box = h('input', {type: 'checkbox', checked, dataset: {layer: layer.name}, on: {change: () => onToggle(box.checked)}});
-    const count = h('span', {class: 'count'});
-    const status = h('div', {class: 'layer-status muted'});
-    const row = h('div', {class: 'layer-entry', dataset: {layer: layer.name}},
-                  h('label', {class: 'layer'}, h('span', null, box, ' ', layer.name), count), status, extra);
-    layer.ui = {row, box, count, status};
-    return row;
-  }
-
-  function updateLayerUi(layer) {
-    if (!layer.ui) return;
-    const {count, status, row} = layer.ui;
-    row.dataset.status = layer.status;
-    if (layer.isTiles) {
-      count.textContent = layer.decodedPoints ? `${formatNumber(layer.drawnPoints)} / ${formatNumber(layer.decodedPoints)} pts` : '';
-      row.dataset.points = String(layer.decodedPoints);
-      row.dataset.drawn = String(layer.drawnPoints);
-      row.dataset.level = layer.level;
-      row.dataset.tiles = String(layer.tilesShown);
-    } else if (layer instanceof PointCloudLayer) {
-      count.textContent = layer.decodedPoints ? `${formatNumber(layer.drawnPoints)} / ${formatNumber(layer.decodedPoints)} pts` : '';
-      row.dataset.points = String(layer.decodedPoints);
-      row.dataset.drawn = String(layer.drawnPoints);
-      row.dataset.level = layer.level;
-      const full = layer.ui.fullButton;
-      if (full) {
-        full.hidden = !layer.hasPreview() || layer.level === 'full' || layer.status === 'idle';
-        full.disabled = layer.status === 'loading';
-      }
-    } else if (layer instanceof MeshLayer) {
-      count.textContent = layer.vertices ? `${formatNumber(layer.vertices)} vertices` : '';
-      row.dataset.vertices = String(layer.vertices);
-      row.dataset.faces = String(layer.faces);
-    }
-    status.replaceChildren(layer.status === 'loading'
-        ? [layer.message, layer.progress ? ` ${Math.round(layer.progress * 100)} %` : '']
-        : layer.status === 'error' ? h('span', {class: 'error'}, layer.message) : '');
   }
 
   // Redrawn only when a legend changed (tiles report every tile they load; a repaint of the
@@ -559,105 +521,7 @@ export function mount(container, {id, query}) {
     }
   }
 
-  // ---- measurement ----------------------------------------------------------------------
-  function setupMeasure() {
-    const el = section('measure', 'Measure');
-    const results = h('ol', {id: 'measurements'});
-    const mode = (name, label) => h('button', {type: 'button', class: 'measure-mode', dataset: {mode: name}, on: {click: () => {
-      state.measure = state.measure?.mode === name ? null : {mode: name, first: null};
-      for (const b of el.querySelectorAll('button.measure-mode')) b.classList.toggle('active', b.dataset.mode === state.measure?.mode);
-      readout.hidden = !state.measure;
-      readout.textContent = state.measure ? (name === 'distance' ? 'Click the first point' : 'Click a point to measure its distance to the CAD model') : '';
-    }}}, label);
-    el.append(h('div', {class: 'toolbar'}, mode('distance', 'Point to point'),
-                layers.has('cad_model') ? mode('cad', 'Point to CAD') : null,
-                h('button', {type: 'button', on: {click: () => {
-                  measureGroup.clear();
-                  results.replaceChildren();
-                  state.measurements = [];
-                  scene.requestRender();
-                }}}, 'Clear')), results);
-    let down = null;
-    canvas.addEventListener('pointerdown', (e) => { down = {x: e.clientX, y: e.clientY}; });
-    canvas.addEventListener('pointerup', (e) => {
-      if (!state.measure || !down || Math.hypot(e.clientX - down.x, e.clientY - down.y) > 4) return;
-      measureAt(e.clientX, e.clientY, results);
-    });
-  }
-
-  function marker(point, color) {
-    const m = new THREE.Mesh(new THREE.SphereGeometry(1, 12, 8), new THREE.MeshBasicMaterial({color}));
-    const scale = scene.camera.position.distanceTo(scene.controls.target) / 150;
-    m.scale.setScalar(scale);
-    m.position.copy(point);
-    measureGroup.add(m);
-  }
-
-  function segment(a, b, color) {
-    const geometry = new THREE.BufferGeometry().setFromPoints([a, b]);
-    const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({color, depthTest: false}));
-    line.renderOrder = 10;
-    measureGroup.add(line);
-  }
-
-  // Picks the point under the cursor on the visible maps, hull and trajectories.
-  function pickAt(x, y) {
-    const objects = [];
-    for (const layer of layers.values()) {
-      if (!layer.object3d.visible || layer.status !== 'shown') continue;
-      if (layer instanceof PointCloudLayer && layer.coarse)
-        objects.push(...(state.interacting || !layer.details.length ? [layer.coarse] : layer.details));
-      if (layer.isTiles && layer.tiles) objects.push(layer.tiles.group);
-      if (layer instanceof MeshLayer && layer.mesh && layer.kind !== 'cad') objects.push(layer.mesh);
-      if (layer instanceof ResidualLayer) objects.push(layer.points);
-    }
-    const threshold = scene.camera.position.distanceTo(scene.controls.target) / 300;
-    return scene.pick(x, y, objects, threshold);
-  }
-
-  async function measureAt(x, y, results) {
-    const hit = pickAt(x, y);
-    if (!hit) {
-      readout.textContent = 'No point there: click on a map or the hull';
-      return;
-    }
-    const p = hit.point.clone();
-    if (state.measure.mode === 'distance') {
-      if (!state.measure.first) {
-        state.measure.first = p;
-        marker(p, 0xffeb3b);
-        readout.textContent = 'Click the second point';
-      } else {
-        const a = state.measure.first;
-        marker(p, 0xffeb3b);
-        segment(a, p, 0xffeb3b);
-        const d = a.distanceTo(p);
-        const text = `${formatNumber(d, 4)} m (Δ ${formatNumber(p.x - a.x, 3)}, ${formatNumber(p.y - a.y, 3)}, ${formatNumber(p.z - a.z, 3)})`;
-        state.measurements.push({kind: 'distance', metres: d, from: a.toArray(), to: p.toArray()});
-        results.append(h('li', {dataset: {kind: 'distance', metres: String(d)}}, `point to point: ${text}`));
-        readout.textContent = text;
-        state.measure.first = null;
-      }
-    } else {
-      const cad = layers.get('cad_model');
-      if (cad.status === 'idle') {
-        readout.textContent = 'Loading the CAD model…';
-        await cad.load();
-      }
-      if (cad.status !== 'shown') {
-        readout.textContent = `The CAD model cannot be used: ${cad.message}`;
-        return;
-      }
-      const closest = cad.closestPoint(p);
-      marker(p, 0x00e5ff);
-      segment(p, closest.point, 0x00e5ff);
-      const text = `${formatNumber(closest.distance, 4)} m to the CAD surface`;
-      state.measurements.push({kind: 'cad', metres: closest.distance, from: p.toArray(), to: closest.point.toArray()});
-      results.append(h('li', {dataset: {kind: 'cad', metres: String(closest.distance)}}, text));
-      readout.textContent = text;
-    }
-    scene.requestRender();
-  }
+  // ---- measurement: viewer_measure.js ----------------------------------------------------
 
   // ---- start ----------------------------------------------------------------------------
   async function start() {
@@ -683,7 +547,7 @@ export function mount(container, {id, query}) {
     if (layers.size === 0) {
       notice('info', 'Nothing to show in 3D', 'This job has no map, mesh, trajectory or shape yet (the map, refine, ba and inspect stages write them; a compare job its change maps and hull).');
     } else {
-      setupMeasure();
+      setupMeasure({section, layers, state, scene, canvas, readout, measureGroup});
     }
     state.started = true;
     if (!state.cameraFromUrl) fitView();
