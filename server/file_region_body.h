@@ -1,7 +1,7 @@
 // A Beast Body that streams bytes [offset, offset + length) of an open file with pread(),
 // 64 KiB at a time, so a 1 GiB artifact or a Range of it is never loaded whole. Beast 1.74's
 // file_body always starts at the beginning of the file, hence this body.
-// Included only by http_server.cc (Beast is heavy).
+// Included only by http_server.cc and http_session.cc (Beast is heavy).
 #pragma once
 
 #include <boost/asio/buffer.hpp>

@@ -1,7 +1,7 @@
 // The server's own small HTTP request/response types. The pure handler (http_handler.h and
 // the route files) works on these instead of Beast's message types so that it, its tests and
 // everything that includes it compile without Beast/Asio (the heavy headers stay in the
-// socket-side files: http_server.cc and file_region_body.h).
+// socket-side files: http_server.cc, http_session.cc and file_region_body.h).
 #pragma once
 
 #include <chrono>
