@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 
+#include "tests/error_of.h"
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
 
@@ -172,12 +173,7 @@ TEST(MotionLaps, DerivativesMatchNumericalDifferencesAcrossTheJoint) {
 }
 
 std::string error_of(const std::function<void()>& run) {
-  try {
-    run();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
+  return keel::testing::error_of<std::invalid_argument>(run);
 }
 
 TEST(MotionLaps, RejectsLapsOutOfRangeAndScenariosWithoutATurnAround) {
