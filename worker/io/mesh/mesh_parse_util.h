@@ -34,6 +34,7 @@ class LineCursor {
   // Number of the line next() returned last.
   size_t line_number() const { return next_line_number_ - 1; }
   size_t offset() const { return offset_; }
+  bool at_end() const { return offset_ >= text_.size(); }
 
  private:
   std::string_view text_;
