@@ -7,7 +7,6 @@
 #include <functional>
 #include <string>
 
-#include "tests/error_of.h"
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
 
@@ -173,7 +172,12 @@ TEST(MotionLaps, DerivativesMatchNumericalDifferencesAcrossTheJoint) {
 }
 
 std::string error_of(const std::function<void()>& run) {
-  return keel::testing::error_of<std::invalid_argument>(run);
+  try {
+    run();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
 }
 
 TEST(MotionLaps, RejectsLapsOutOfRangeAndScenariosWithoutATurnAround) {

@@ -1,5 +1,4 @@
 #include "tests/sim/simulator.h"
-#include "tests/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
@@ -15,10 +14,13 @@ namespace keel::sim {
 namespace {
 namespace fs = std::filesystem;
 
-using keel::testing::read_file;
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
 
 size_t count_lines(const fs::path& path) {
-  const std::string text = read_file(path);
+  const std::string text = slurp(path);
   return std::count(text.begin(), text.end(), '\n');
 }
 
@@ -52,14 +54,14 @@ TEST_F(SimulatorTest, SameSeedSameBytesOtherSeedOtherBytes) {
     if (!entry.is_regular_file()) continue;
     const fs::path rel = fs::relative(entry.path(), root_ / "a");
     ASSERT_TRUE(fs::exists(root_ / "b" / rel)) << rel;
-    EXPECT_EQ(read_file(entry.path()), read_file(root_ / "b" / rel)) << rel;
+    EXPECT_EQ(slurp(entry.path()), slurp(root_ / "b" / rel)) << rel;
     ++files;
   }
   EXPECT_GT(files, 50u);
-  EXPECT_NE(read_file(root_ / "a" / "imu.csv"), read_file(root_ / "c" / "imu.csv"));
-  EXPECT_NE(read_file(root_ / "a" / "lidar_h" / "000005.pcd"),
-            read_file(root_ / "c" / "lidar_h" / "000005.pcd"));
-  EXPECT_NE(read_file(root_ / "a" / "odometry.tum"), read_file(root_ / "c" / "odometry.tum"));
+  EXPECT_NE(slurp(root_ / "a" / "imu.csv"), slurp(root_ / "c" / "imu.csv"));
+  EXPECT_NE(slurp(root_ / "a" / "lidar_h" / "000005.pcd"),
+            slurp(root_ / "c" / "lidar_h" / "000005.pcd"));
+  EXPECT_NE(slurp(root_ / "a" / "odometry.tum"), slurp(root_ / "c" / "odometry.tum"));
 }
 
 TEST_F(SimulatorTest, ManifestNamesFilesThatExist) {
