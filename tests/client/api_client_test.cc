@@ -12,7 +12,7 @@
 
 #include "fake_http_server.h"
 #include "core/sha256.h"
-#include "temp_dir.h"
+#include "tests/temp_dir.h"
 
 namespace keel::client {
 namespace {
@@ -22,9 +22,9 @@ using testing::FakeHttpServer;
 using testing::FakeReply;
 using testing::FakeRequest;
 using testing::http_reply;
-using testing::read_file;
-using testing::TempDir;
-using testing::write_file;
+using keel::testing::read_file;
+using keel::testing::TempDir;
+using keel::testing::write_file;
 
 std::string random_bytes(size_t n, uint32_t seed) {
   std::mt19937 rng(seed);

@@ -7,15 +7,15 @@
 
 #include <chrono>
 
-#include "temp_dir.h"
+#include "tests/temp_dir.h"
 
 namespace keel::client {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::read_file;
-using testing::TempDir;
-using testing::write_file;
+using keel::testing::read_file;
+using keel::testing::TempDir;
+using keel::testing::write_file;
 
 struct TarItem {
   std::string name;

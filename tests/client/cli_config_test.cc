@@ -7,13 +7,13 @@
 
 #include "client/cli_context.h"
 #include "client/local_file_error.h"
-#include "temp_dir.h"
+#include "tests/temp_dir.h"
 
 namespace keel::client {
 namespace {
 
-using testing::TempDir;
-using testing::write_file;
+using keel::testing::TempDir;
+using keel::testing::write_file;
 
 struct FakeEnv {
   std::map<std::string, std::string> vars;

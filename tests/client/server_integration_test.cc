@@ -12,16 +12,16 @@
 #include "client/submit.h"
 #include "server_process.h"
 #include "core/sha256.h"
-#include "temp_dir.h"
+#include "tests/temp_dir.h"
 
 namespace keel::client {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::read_file;
+using keel::testing::read_file;
 using testing::ServerProcess;
-using testing::TempDir;
-using testing::write_file;
+using keel::testing::TempDir;
+using keel::testing::write_file;
 
 #ifdef KEEL_SERVER_BINARY
 constexpr const char* kServerBinary = KEEL_SERVER_BINARY;

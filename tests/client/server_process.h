@@ -2,11 +2,7 @@
 // and stops it (SIGTERM, then SIGKILL after 10 s) when destroyed.
 #pragma once
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -14,49 +10,35 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
-#include <vector>
 
-extern char** environ;
+#include "tests/child_process.h"
 
 namespace keel::client::testing {
 
 class ServerProcess {
  public:
   ServerProcess(const std::filesystem::path& binary, const std::filesystem::path& data_dir)
-      : data_dir_(data_dir) {
-    std::filesystem::create_directories(data_dir);
-    const std::string log = (data_dir.parent_path() / "server.log").string();
-    std::vector<std::string> args = {
-        binary.string(), "--data-dir", data_dir.string(), "--listen", "127.0.0.1:0",
-        "--workers",     "0"};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    const int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) throw std::runtime_error("cannot start " + binary.string());
-    wait_until_listening(log);
+      : data_dir_(created(data_dir)),
+        log_(data_dir.parent_path() / "server.log"),
+        child_(binary,
+               {"--data-dir", data_dir.string(), "--listen", "127.0.0.1:0", "--workers", "0"}, log_,
+               log_) {
+    wait_until_listening();
   }
   ~ServerProcess() {
-    ::kill(pid_, SIGTERM);
-    for (int i = 0; i < 100; ++i) {
-      if (::waitpid(pid_, nullptr, WNOHANG) == pid_) return;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, nullptr, 0);
+    child_.signal(SIGTERM);
+    child_.wait(std::chrono::seconds(10));  // else the Child's destructor SIGKILLs it
   }
-  ServerProcess(const ServerProcess&) = delete;
-  ServerProcess& operator=(const ServerProcess&) = delete;
 
   const std::string& url() const { return url_; }
   const std::string& token() const { return token_; }
 
  private:
+  static const std::filesystem::path& created(const std::filesystem::path& dir) {
+    std::filesystem::create_directories(dir);
+    return dir;
+  }
+
   static std::string first_line(const std::filesystem::path& file) {
     std::ifstream in(file);
     std::string line;
@@ -65,22 +47,23 @@ class ServerProcess {
     return line;
   }
 
-  void wait_until_listening(const std::string& log) {
+  void wait_until_listening() {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
     while (std::chrono::steady_clock::now() < deadline) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_)
-        throw std::runtime_error("keel-server exited early; see " + log);
+      if (child_.wait(std::chrono::milliseconds(0)) >= 0)
+        throw std::runtime_error("keel-server exited early; see " + log_.string());
       url_ = first_line(data_dir_ / "server.url");
       token_ = first_line(data_dir_ / "token");
       if (!url_.empty() && !token_.empty()) return;
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
-    throw std::runtime_error("keel-server did not write server.url within 20 s; see " + log);
+    throw std::runtime_error("keel-server did not write server.url within 20 s; see " +
+                             log_.string());
   }
 
   std::filesystem::path data_dir_;
-  pid_t pid_ = -1;
+  std::filesystem::path log_;
+  keel::testing::Child child_;
   std::string url_;
   std::string token_;
 };

@@ -15,17 +15,6 @@ namespace keel::e2e {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-TempDir::TempDir() {
-  std::string pattern = (fs::temp_directory_path() / "keel-e2e-XXXXXX").string();
-  if (!::mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-  path_ = pattern;
-}
-
-TempDir::~TempDir() {
-  std::error_code ec;
-  if (!std::getenv("KEEL_KEEP_TEST_DIRS")) fs::remove_all(path_, ec);
-}
-
 Cluster::Cluster(const fs::path& root, int workers, int port, std::vector<std::string> server_args)
     : root_(root), workers_(workers), port_(port), server_args_(std::move(server_args)) {
   fs::create_directories(data_dir());

@@ -9,6 +9,7 @@
 
 #include "client/api_client.h"
 #include "tests/e2e/process.h"
+#include "tests/temp_dir.h"
 
 namespace keel::e2e {
 
@@ -19,16 +20,7 @@ struct Programs {
   std::filesystem::path sim = KEEL_SIM_BIN;
 };
 
-// A fresh temporary folder, removed when the object dies.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using keel::testing::TempDir;
 
 class Cluster {
  public:
@@ -63,7 +55,8 @@ class Cluster {
 // A free loopback TCP port (bound and released; fine for tests on one machine).
 int free_port();
 // Writes a usv-bridge mission with keel-sim; `sensors` as keel-sim's --sensors.
-void simulate_mission(const std::filesystem::path& out, double duration_s, const std::string& sensors);
+void simulate_mission(const std::filesystem::path& out, double duration_s,
+                      const std::string& sensors);
 // Polls GET /v1/jobs/{id} until `done(job)` or the timeout; returns the last job seen.
 proto::Job wait_job(client::ApiClient& api, const std::string& job_id,
                     const std::function<bool(const proto::Job&)>& done, double timeout_s);

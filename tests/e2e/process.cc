@@ -7,8 +7,6 @@
 #include <unistd.h>
 
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -85,13 +83,6 @@ std::optional<int> Process::wait_for(std::chrono::milliseconds timeout) {
 }
 
 bool Process::running() { return !wait_for(std::chrono::milliseconds(0)).has_value(); }
-
-std::string read_file(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
 
 RunResult run_command(const std::vector<std::string>& argv, std::chrono::seconds timeout,
                       const std::vector<std::string>& extra_env) {

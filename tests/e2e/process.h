@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/temp_dir.h"
+
 namespace keel::e2e {
 
 class Process {
@@ -40,7 +42,7 @@ struct RunResult {
 RunResult run_command(const std::vector<std::string>& argv, std::chrono::seconds timeout,
                       const std::vector<std::string>& extra_env = {});
 
-std::string read_file(const std::filesystem::path& file);
+using keel::testing::read_file;
 // Polls until `file` exists and is non-empty, or the timeout passes.
 bool wait_for_file(const std::filesystem::path& file, std::chrono::milliseconds timeout);
 

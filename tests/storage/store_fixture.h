@@ -18,29 +18,15 @@
 #include "storage/sqlite_db.h"
 #include "storage/store.h"
 #include "tests/storage/pg_test_server.h"
+#include "tests/temp_dir.h"
 
 namespace keel::storage::testing {
 
 using keel::testing::PgTestServer;
 
-// A temporary folder removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device device;
-    path_ = std::filesystem::temp_directory_path() /
-            ("keel-storage-test-" + std::to_string(device()) + std::to_string(device()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
+using keel::testing::read_file;
+using keel::testing::TempDir;
+using keel::testing::write_file;
 
 // Time that only moves when the test says so.
 class FakeClock {
@@ -57,16 +43,6 @@ class FakeClock {
  private:
   std::shared_ptr<std::atomic<int64_t>> now_ms_;
 };
-
-inline std::string read_file(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-inline void write_file(const std::filesystem::path& file, const std::string& bytes) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
 
 // Deterministic pseudo-random bytes (different seeds give different content).
 inline std::string random_bytes(size_t size, unsigned seed) {

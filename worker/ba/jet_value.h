@@ -22,10 +22,4 @@ Eigen::Vector3d jet_value(const Eigen::Matrix<T, 3, 1>& v) {
   return Eigen::Vector3d(jet_value(v[0]), jet_value(v[1]), jet_value(v[2]));
 }
 
-// True when T carries derivatives, i.e. Ceres asked for Jacobians.
-template <typename T>
-constexpr bool is_jet() {
-  return !std::is_same_v<T, double>;
-}
-
 }  // namespace keel::ba

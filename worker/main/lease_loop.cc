@@ -150,7 +150,6 @@ int LeaseLoop::run(const std::function<bool()>& stop_requested) {
       break;
     }
     LeasedJob(api, heartbeat_api, blobs, *lease, job_options, factory_, stop_requested).run();
-    ++jobs_handled_;
     idle_since = Clock::now();
     if (options_.once) break;
   }

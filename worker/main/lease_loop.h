@@ -41,13 +41,10 @@ class LeaseLoop {
   // process exit code: 0, or 1 when the server rejects the token.
   int run(const std::function<bool()>& stop_requested);
 
-  int jobs_handled() const { return jobs_handled_; }
-
  private:
   client::ClientConfig config_;
   LeaseLoopOptions options_;
   pipeline::StageFactory factory_;
-  int jobs_handled_ = 0;
 };
 
 }  // namespace keel::worker

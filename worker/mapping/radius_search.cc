@@ -221,14 +221,4 @@ void RadiusSearch::within(const Eigen::Vector3f& query, double radius_m, std::ve
   impl_->tree.findNeighbors(result, query.data(), kUnsorted);
 }
 
-void RadiusSearch::points_within(const Eigen::Vector3f& query, double radius_m,
-                                 std::vector<Eigen::Vector3f>* points) const {
-  points->clear();
-  if (impl_->set.points.empty()) return;
-  const std::vector<Eigen::Vector3f>& stored = impl_->set.points;
-  auto add = [&](uint32_t i, float) { points->push_back(stored[i]); };
-  VisitResultSet<decltype(add)> result(static_cast<float>(radius_m * radius_m), add);
-  impl_->tree.findNeighbors(result, query.data(), kUnsorted);
-}
-
 }  // namespace keel::mapping

@@ -32,10 +32,6 @@ class RadiusSearch {
   // Indices (unsorted) of all indexed points with |p - query| < radius_m.
   void within(const Eigen::Vector3f& query, double radius_m, std::vector<int>* indices,
               std::vector<float>* squared_distances) const;
-  // The positions of all indexed points with |p - query| < radius_m (cheaper than indices
-  // when only positions are needed: no second, scattered read of the input).
-  void points_within(const Eigen::Vector3f& query, double radius_m,
-                     std::vector<Eigen::Vector3f>* points) const;
   // Input indices in the kd-tree's leaf order ("ranks"): queries issued in this order reuse
   // the cache.
   const std::vector<uint32_t>& spatial_order() const;

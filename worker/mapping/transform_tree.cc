@@ -18,10 +18,6 @@ void TransformTree::set_extrinsic(const std::string& sensor, const Pose3& T_body
   T_body_sensor_[sensor] = T_body_sensor;
 }
 
-bool TransformTree::has_sensor(const std::string& sensor) const {
-  return T_body_sensor_.count(sensor) > 0;
-}
-
 const Pose3& TransformTree::T_body_sensor(const std::string& sensor) const {
   const auto found = T_body_sensor_.find(sensor);
   if (found == T_body_sensor_.end()) {

@@ -19,7 +19,6 @@ class TransformTree {
 
   // Registers (or replaces) a sensor's extrinsic. Throws for a non-rigid or non-finite one.
   void set_extrinsic(const std::string& sensor, const Pose3& T_body_sensor);
-  bool has_sensor(const std::string& sensor) const;
   // Throws std::invalid_argument naming the sensor and the known ones when it is unknown.
   const Pose3& T_body_sensor(const std::string& sensor) const;
   std::vector<std::string> sensors() const;

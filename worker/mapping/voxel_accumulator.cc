@@ -221,11 +221,6 @@ size_t VoxelAccumulator::voxel_count(uint32_t min_hits) const {
   return kept;
 }
 
-size_t VoxelAccumulator::memory_bytes() const {
-  return slots_.capacity() * sizeof(uint32_t) +
-         chunks_.size() * (size_t{1} << kChunkBits) * sizeof(Entry);
-}
-
 void VoxelAccumulator::clear() {
   slots_ = std::vector<uint32_t>();
   chunks_.clear();

@@ -80,8 +80,6 @@ class VoxelAccumulator {
   double merge_radius_m() const { return merge_radius_m_; }
   // Points added to an empty voxel's occupied neighbour by the merge rule.
   uint64_t points_merged() const { return points_merged_; }
-  // Bytes held by the table (entries and slots), for reports.
-  size_t memory_bytes() const;
   void clear();
 
  private:

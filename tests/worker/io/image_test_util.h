@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/error_of.h"
 #include "worker/io/image_source.h"
 #include "worker/io/io_error.h"
 
@@ -20,12 +21,7 @@ inline std::vector<uint8_t> encode(const std::string& ext, const cv::Mat& mat,
 
 // decode_image's IoError message for `bytes` named `source`, or "" when they decode.
 inline std::string refusal(const std::vector<uint8_t>& bytes, const std::string& source) {
-  try {
-    decode_image(bytes, source);
-  } catch (const IoError& e) {
-    return e.what();
-  }
-  return "";
+  return keel::testing::error_of<IoError>([&] { decode_image(bytes, source); });
 }
 
 }  // namespace keel::io::image_testing

@@ -14,14 +14,16 @@
 #include <vector>
 
 #include "core/triangle_mesh.h"
+#include "tests/error_of.h"
+#include "tests/temp_dir.h"
 
 namespace keel::testing {
 
 // This process's scratch root, removed when the test program exits.
 inline const std::filesystem::path& scratch_root() {
   struct Root {
-    std::filesystem::path path = std::filesystem::temp_directory_path() /
-                                 ("keel_mesh_" + std::to_string(::getpid()));
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("keel_mesh_" + std::to_string(::getpid()));
     ~Root() {
       std::error_code ignored;
       std::filesystem::remove_all(path, ignored);
@@ -38,13 +40,6 @@ inline std::filesystem::path scratch_dir() {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
-}
-
-inline std::filesystem::path write_file(const std::filesystem::path& path,
-                                        const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  return path;
 }
 
 template <typename T>
@@ -74,17 +69,6 @@ inline std::vector<OrientedTriangle> canonical_triangles(const TriangleMesh& mes
   }
   std::sort(triangles.begin(), triangles.end());
   return triangles;
-}
-
-// Runs `read` and returns the MeshReadError message ("" if nothing was thrown).
-template <typename Function>
-std::string error_of(const Function& read) {
-  try {
-    read();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace keel::testing

@@ -7,6 +7,7 @@
 
 #include <string>
 
+#include "tests/error_of.h"
 #include "worker/io/io_error.h"
 
 namespace keel::io {
@@ -16,12 +17,7 @@ const std::string kFile = "scan.ply";
 
 // The IoError message of parsing `text` ("" when it parses).
 std::string error_of(const std::string& text) {
-  try {
-    parse_ply_header(text, kFile);
-  } catch (const IoError& e) {
-    return e.what();
-  }
-  return "";
+  return keel::testing::error_of<IoError>([&] { parse_ply_header(text, kFile); });
 }
 
 void expect_error(const std::string& text, const std::string& where, const std::string& what) {

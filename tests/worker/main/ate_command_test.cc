@@ -19,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using Output = keel::testing::ProgramOutput;
-using keel::testing::read_text;
+using keel::testing::read_file;
 
 class TrajectoryToolTest : public keel::testing::WorkerProgramTest {
  protected:

@@ -12,8 +12,9 @@
 #include <sstream>
 #include <thread>
 
-#include "child_process.h"
 #include "client/api_client.h"
+#include "tests/child_process.h"
+#include "tests/temp_dir.h"
 #include "tests/worker/pipeline/test_missions.h"
 
 namespace keel {
@@ -23,12 +24,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using testing::Child;
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using keel::testing::read_file;
 
 class LeaseLoopTest : public ::testing::Test {
  protected:
@@ -45,12 +41,12 @@ class LeaseLoopTest : public ::testing::Test {
         dir_ / "server.out", dir_ / "server.err");
     const fs::path url_file = dir_ / "data" / "server.url";
     for (int i = 0; i < 600 && !fs::exists(url_file); ++i) std::this_thread::sleep_for(50ms);
-    ASSERT_TRUE(fs::exists(url_file)) << read_text(dir_ / "server.err");
-    url_ = read_text(url_file);
+    ASSERT_TRUE(fs::exists(url_file)) << read_file(dir_ / "server.err");
+    url_ = read_file(url_file);
     while (!url_.empty() && std::isspace(static_cast<unsigned char>(url_.back()))) url_.pop_back();
     client::ClientConfig config;
     config.url = url_;
-    std::string token = read_text(dir_ / "data" / "token");
+    std::string token = read_file(dir_ / "data" / "token");
     config.token = token.substr(0, token.find_first_of(" \r\n"));
     api_ = std::make_unique<client::ApiClient>(config);
   }
@@ -97,7 +93,7 @@ class LeaseLoopTest : public ::testing::Test {
                                    dir_ / (name + ".err"));
   }
   std::string worker_log(const std::string& name) const {
-    return read_text(dir_ / (name + ".out")) + read_text(dir_ / (name + ".err"));
+    return read_file(dir_ / (name + ".out")) + read_file(dir_ / (name + ".err"));
   }
 
   // Polls the job until `done` holds (or 120 s pass).
@@ -148,11 +144,11 @@ TEST_F(LeaseLoopTest, JobSucceedsWithReportArtifact) {
     EXPECT_EQ(artifact.stage, "ingest");
     api_->download("/v1/artifacts/" + artifact.id, dir_ / artifact.name, artifact.sha256);
   }
-  const auto report = nlohmann::json::parse(read_text(dir_ / "report.json"));
+  const auto report = nlohmann::json::parse(read_file(dir_ / "report.json"));
   EXPECT_EQ(report["keel_report"], 1);
   EXPECT_EQ(report["job"]["id"], job.id);
   EXPECT_EQ(report["stages"]["ingest"]["sensors"]["imu"]["count"], 6);
-  EXPECT_NE(read_text(dir_ / "report.html").find(job.id), std::string::npos);
+  EXPECT_NE(read_file(dir_ / "report.html").find(job.id), std::string::npos);
 
   // The job log carries the worker's lines, delivered by heartbeats.
   std::string log;
@@ -179,7 +175,7 @@ TEST_F(LeaseLoopTest, StageErrorFailsTheJobAndTheWorkerTakesTheNext) {
   ASSERT_EQ(artifacts.size(), 2u);
   EXPECT_EQ(artifacts[0].name, "report.json");
   api_->download("/v1/artifacts/" + artifacts[0].id, dir_ / "failed.json", artifacts[0].sha256);
-  const auto report = nlohmann::json::parse(read_text(dir_ / "failed.json"));
+  const auto report = nlohmann::json::parse(read_file(dir_ / "failed.json"));
   EXPECT_EQ(report["failed"]["stage"], "ingest");
   EXPECT_EQ(report["failed"]["error"], failed.error);
 

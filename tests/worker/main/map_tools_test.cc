@@ -21,7 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using Output = keel::testing::ProgramOutput;
-using keel::testing::read_text;
+using keel::testing::read_file;
 
 class MapToolsTest : public keel::testing::WorkerProgramTest {
  protected:
@@ -124,7 +124,7 @@ TEST_F(MapToolsTest, MetricsOfAPlaneHaveClosedForms) {
                           (dir_ / "per_point.ply").string()});
   ASSERT_EQ(ply.code, 0) << ply.err;
   EXPECT_NE(ply.out.find("planarity       mean"), std::string::npos) << ply.out;
-  const std::string ply_text = read_text(dir_ / "per_point.ply");
+  const std::string ply_text = read_file(dir_ / "per_point.ply");
   for (const char* field : {"density", "roughness", "planarity"})
     EXPECT_NE(ply_text.find(std::string("property float ") + field), std::string::npos) << field;
   const Output bad = run({"metrics", "--in", (dir_ / "plane.ply").string(), "--out",

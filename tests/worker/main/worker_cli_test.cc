@@ -11,7 +11,8 @@
 #include <sstream>
 #include <thread>
 
-#include "child_process.h"
+#include "tests/child_process.h"
+#include "tests/temp_dir.h"
 #include "tests/worker/pipeline/test_missions.h"
 
 namespace {
@@ -21,12 +22,7 @@ using namespace std::chrono_literals;
 
 const fs::path kWorker = KEEL_WORKER_BIN;
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using keel::testing::read_file;
 
 // keel-worker with stdout and stderr in files.
 class Child : public keel::testing::Child {
@@ -57,7 +53,7 @@ class WorkerCliTest : public ::testing::Test {
     Child child(args, dir_ / "stdout.txt", dir_ / "stderr.txt");
     return child.wait(120s);
   }
-  std::string err() const { return read_text(dir_ / "stderr.txt"); }
+  std::string err() const { return read_file(dir_ / "stderr.txt"); }
 
   fs::path dir_;
 };
@@ -69,13 +65,13 @@ TEST_F(WorkerCliTest, RunWritesTheReportAndExitsZero) {
       run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out.string()}), 0)
       << err();
 
-  const auto report = nlohmann::json::parse(read_text(out / "report.json"));
+  const auto report = nlohmann::json::parse(read_file(out / "report.json"));
   EXPECT_EQ(report["keel_report"], 1);
   EXPECT_EQ(report["job"]["stages"], nlohmann::json::array({"ingest"}));
   EXPECT_EQ(report["stages"]["ingest"]["sensors"]["imu"]["count"], 6);
   EXPECT_EQ(report["stages"]["ingest"]["trajectories"]["odometry"]["count"], 4);
   EXPECT_GE(report["stage_seconds"]["ingest"].get<double>(), 0.0);
-  const std::string printed = read_text(dir_ / "stdout.txt");
+  const std::string printed = read_file(dir_ / "stdout.txt");
   EXPECT_NE(printed.find("[ingest] 100%"), std::string::npos) << printed;
 }
 
@@ -86,7 +82,7 @@ TEST_F(WorkerCliTest, RunAcceptsABundleTar) {
   const fs::path out = dir_ / "out";
   ASSERT_EQ(run({"run", "--mission", tar, "--stages", "ingest", "--out", out.string()}), 0)
       << err();
-  const auto report = nlohmann::json::parse(read_text(out / "report.json"));
+  const auto report = nlohmann::json::parse(read_file(out / "report.json"));
   EXPECT_EQ(report["stages"]["ingest"]["sensors"]["imu"]["count"], 6);
 }
 
@@ -99,11 +95,11 @@ TEST_F(WorkerCliTest, StageFailureExitsTwoWithTheStageMessage) {
   EXPECT_NE(err().find("ingest: "), std::string::npos) << err();
   EXPECT_NE(err().find("imu.csv"), std::string::npos) << err();
   // The report says which stage failed and why, with no section for it.
-  const auto report = nlohmann::json::parse(read_text(out / "report.json"));
+  const auto report = nlohmann::json::parse(read_file(out / "report.json"));
   EXPECT_EQ(report["failed"]["stage"], "ingest");
   EXPECT_NE(report["failed"]["error"].get<std::string>().find("imu.csv"), std::string::npos);
   EXPECT_TRUE(report["stages"].empty());
-  const std::string html = read_text(out / "report.html");
+  const std::string html = read_file(out / "report.html");
   EXPECT_NE(html.find("id=\"failure\""), std::string::npos);
   EXPECT_NE(html.find("imu.csv"), std::string::npos);
 }
@@ -142,7 +138,7 @@ TEST_F(WorkerCliTest, SigintDuringAStageExits130) {
               dir_ / "stdout.txt", dir_ / "stderr.txt");
   // Interrupt once the stage has started.
   for (int i = 0;
-       i < 24000 && read_text(dir_ / "stdout.txt").find("[ingest] 0%") == std::string::npos; ++i)
+       i < 24000 && read_file(dir_ / "stdout.txt").find("[ingest] 0%") == std::string::npos; ++i)
     std::this_thread::sleep_for(5ms);
   child.signal(SIGINT);
   const int code = child.wait(120s);
@@ -156,7 +152,7 @@ TEST_F(WorkerCliTest, ServeWithoutTokenExitsOne) {
   Child child({"--server", "http://127.0.0.1:9", "--cache-dir", (dir_ / "cache").string()},
               dir_ / "stdout.txt", dir_ / "stderr.txt", {"KEEL_TOKEN="});
   EXPECT_EQ(child.wait(30s), 1);
-  EXPECT_NE((read_text(dir_ / "stdout.txt") + err()).find("no token"), std::string::npos);
+  EXPECT_NE((read_file(dir_ / "stdout.txt") + err()).find("no token"), std::string::npos);
 }
 
 TEST_F(WorkerCliTest, ServeKeepsRetryingAnUnreachableServerAndStopsCleanlyOnSigterm) {
@@ -167,7 +163,7 @@ TEST_F(WorkerCliTest, ServeKeepsRetryingAnUnreachableServerAndStopsCleanlyOnSigt
   // Signal only once it has retried (its stop handlers are in place by then; a loaded machine
   // may take seconds to get there), and check it is still retrying after that.
   auto retried = [&] {
-    return (read_text(dir_ / "stdout.txt") + err()).find("lease failed") != std::string::npos;
+    return (read_file(dir_ / "stdout.txt") + err()).find("lease failed") != std::string::npos;
   };
   for (int i = 0; i < 6000 && !retried(); ++i) std::this_thread::sleep_for(10ms);
   ASSERT_TRUE(retried()) << "no retry logged within 60 s: " << err();

@@ -13,19 +13,14 @@
 #include <string>
 #include <vector>
 
+#include "tests/temp_dir.h"
+
 namespace keel::testing {
 
 struct ProgramOutput {
   int code = -1;
   std::string out, err;
 };
-
-inline std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class WorkerProgramTest : public ::testing::Test {
  protected:
@@ -47,8 +42,8 @@ class WorkerProgramTest : public ::testing::Test {
     ProgramOutput o;
     const int status = std::system(command.c_str());
     o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    o.out = read_text(dir_ / "out.txt");
-    o.err = read_text(dir_ / "err.txt");
+    o.out = read_file(dir_ / "out.txt");
+    o.err = read_file(dir_ / "err.txt");
     return o;
   }
 

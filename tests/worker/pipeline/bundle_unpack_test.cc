@@ -1,4 +1,5 @@
 #include "worker/pipeline/bundle_unpack.h"
+#include "tests/temp_dir.h"
 
 #include <archive.h>
 #include <archive_entry.h>
@@ -77,12 +78,7 @@ void write_tar(const fs::path& path, const std::vector<Member>& members, bool gz
   archive_write_free(a);
 }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using keel::testing::read_file;
 
 class BundleUnpackTest : public ::testing::Test {
  protected:
@@ -128,11 +124,11 @@ TEST_F(BundleUnpackTest, GoodBundleInATopFolder) {
   const fs::path root = unpack_bundle(tar_, destination_);
 
   EXPECT_EQ(root, fs::canonical(destination_) / "m");
-  EXPECT_EQ(read_text(root / "mission.yaml"), "keel_mission: 1\n");
-  EXPECT_EQ(read_text(root / "lidar" / "0001.pcd"), "PCD");
-  EXPECT_EQ(read_text(root / "latest.pcd"), "PCD");
+  EXPECT_EQ(read_file(root / "mission.yaml"), "keel_mission: 1\n");
+  EXPECT_EQ(read_file(root / "lidar" / "0001.pcd"), "PCD");
+  EXPECT_EQ(read_file(root / "latest.pcd"), "PCD");
   EXPECT_TRUE(fs::is_symlink(root / "latest.pcd"));
-  EXPECT_EQ(read_text(root / "copy.pcd"), "PCD");
+  EXPECT_EQ(read_file(root / "copy.pcd"), "PCD");
 }
 
 TEST_F(BundleUnpackTest, GoodBundleAtTheRootAndGzipped) {
@@ -140,7 +136,7 @@ TEST_F(BundleUnpackTest, GoodBundleAtTheRootAndGzipped) {
             /*gzip=*/true);
   const fs::path root = unpack_bundle(tar_, destination_);
   EXPECT_EQ(root, fs::canonical(destination_));
-  EXPECT_EQ(read_text(root / "a" / "b.csv"), "x");
+  EXPECT_EQ(read_file(root / "a" / "b.csv"), "x");
 }
 
 TEST_F(BundleUnpackTest, RejectsDotDot) {
@@ -263,7 +259,7 @@ TEST_F(BundleUnpackTest, NonEmptyDestinationIsRefused) {
   fs::create_directories(destination_);
   std::ofstream(destination_ / "keep.txt") << "mine";
   EXPECT_THROW(unpack_bundle(tar_, destination_), BundleError);
-  EXPECT_EQ(read_text(destination_ / "keep.txt"), "mine");
+  EXPECT_EQ(read_file(destination_ / "keep.txt"), "mine");
 }
 
 }  // namespace

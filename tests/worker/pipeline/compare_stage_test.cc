@@ -17,6 +17,7 @@
 #include <random>
 
 #include "proto/contract_error.h"
+#include "tests/error_of.h"
 #include "tests/worker/compare/test_surfaces.h"
 #include "worker/io/draco/draco_codec.h"
 #include "worker/pipeline/draco_sidecar.h"
@@ -101,12 +102,7 @@ class CompareStageTest : public ::testing::Test {
   }
 
   std::string refusal(std::vector<InputJob> jobs) {
-    try {
-      run(std::move(jobs));
-    } catch (const std::exception& e) {
-      return e.what();
-    }
-    return "";
+    return keel::testing::error_of([&] { run(std::move(jobs)); });
   }
 
   fs::path root_;

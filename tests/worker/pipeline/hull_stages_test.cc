@@ -18,9 +18,10 @@
 #include <sstream>
 #include <string>
 
-#include "tests/sim/simulator.h"
-#include "tests/worker/pipeline/stage_run.h"
 #include "core/mesh_query.h"
+#include "tests/error_of.h"
+#include "tests/worker/pipeline/sim_mission.h"
+#include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/draco/draco_codec.h"
 #include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/tum.h"
@@ -44,13 +45,7 @@ fs::path temp_root() {
 fs::path simulated_mission() {
   const fs::path dir = temp_root() / "hull";
   if (fs::exists(dir / "mission.yaml")) return dir;
-  sim::SimOptions o;
-  o.scenario = "hauv-hull";
-  o.seed = kSeed;
-  o.out_dir = dir.string();
-  o.duration_s = 20.0;
-  sim::run_simulation(o);
-  return dir;
+  return testing::simulate(dir, "hauv-hull", kSeed, 20.0);
 }
 
 StageResult run_stage(Stage& stage, const fs::path& mission, const json& options,
@@ -59,12 +54,7 @@ StageResult run_stage(Stage& stage, const fs::path& mission, const json& options
 }
 
 std::string error_of(Stage& stage, const json& options, const fs::path& work_dir) {
-  try {
-    run_stage(stage, simulated_mission(), options, work_dir);
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
+  return keel::testing::error_of([&] { run_stage(stage, simulated_mission(), options, work_dir); });
 }
 
 json read_json(const fs::path& path) {

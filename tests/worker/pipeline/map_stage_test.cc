@@ -20,13 +20,15 @@
 #include <string>
 #include <unordered_map>
 
+#include "tests/error_of.h"
 #include "tests/sim/scenarios.h"
 #include "tests/sim/simulator.h"
 #include "tests/worker/io/pnts_reader.h"
+#include "tests/worker/pipeline/sim_mission.h"
 #include "tests/worker/pipeline/stage_run.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/draco/draco_codec.h"
 #include "worker/io/folder_index.h"
-#include "worker/io/cloud/scan_file.h"
 #include "worker/io/tum.h"
 #include "worker/stages/refine/stage.h"
 
@@ -46,14 +48,7 @@ fs::path temp_root() {
 fs::path simulated_mission() {
   const fs::path dir = temp_root() / "bridge";
   if (fs::exists(dir / "mission.yaml")) return dir;
-  sim::SimOptions o;
-  o.scenario = "usv-bridge";
-  o.seed = kSeed;
-  o.out_dir = dir.string();
-  o.duration_s = 25.0;
-  o.sensors = {"lidar_h", "lidar_v", "sonar"};
-  sim::run_simulation(o);
-  return dir;
+  return testing::simulate(dir, "usv-bridge", kSeed, 25.0, {"lidar_h", "lidar_v", "sonar"});
 }
 
 using testing::StageRun;
@@ -63,12 +58,7 @@ StageRun run_stage(const fs::path& mission, const json& options, const fs::path&
 }
 
 std::string error_of(const fs::path& mission, const json& options) {
-  try {
-    run_stage(mission, options, temp_root() / "work_error");
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
+  return keel::testing::error_of([&] { run_stage(mission, options, temp_root() / "work_error"); });
 }
 
 // Nearest-neighbour distances by a hash grid of cell `cell_m` (oracle for small distances:

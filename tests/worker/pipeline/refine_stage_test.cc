@@ -11,7 +11,9 @@
 #include <sstream>
 #include <string>
 
+#include "tests/error_of.h"
 #include "tests/sim/simulator.h"
+#include "tests/worker/pipeline/sim_mission.h"
 #include "tests/worker/pipeline/stage_run.h"
 #include "worker/io/tum.h"
 #include "worker/pipeline/trajectories_file.h"
@@ -54,12 +56,7 @@ double ate_rmse(const Trajectory& truth, const Trajectory& estimate) {
 }
 
 std::string error_of(const fs::path& mission, const nlohmann::json& options) {
-  try {
-    run_stage(mission, options, temp_root() / "work_error");
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
+  return keel::testing::error_of([&] { run_stage(mission, options, temp_root() / "work_error"); });
 }
 
 class RefineStageTest : public ::testing::Test {
@@ -163,12 +160,7 @@ TEST_F(RefineStageTest, RefinedKeyframesBeatMapPosesAndTheRefinementWithoutDvl) 
 // the target), and the estimated drift must point along the corridor.
 TEST_F(RefineStageTest, CorridorRefinementsAreNotWorseThanTheMapPoses) {
   const fs::path mission = temp_root() / "corridor_12";
-  sim::SimOptions o;
-  o.scenario = "usv-corridor";
-  o.seed = 12;
-  o.out_dir = mission.string();
-  o.sensors = {"imu", "dvl", "depth"};
-  sim::run_simulation(o);
+  testing::simulate(mission, "usv-corridor", 12, 0.0, {"imu", "dvl", "depth"});
   const StageRun run = run_stage(mission, nlohmann::json::object(), temp_root() / "work_corridor");
   const auto& report = run.result.report;
   const auto& table = report["evaluation"]["table"];
@@ -189,12 +181,7 @@ TEST_F(RefineStageTest, CorridorRefinementsAreNotWorseThanTheMapPoses) {
 // without the DVL); turned back into that frame, the DVL helps again.
 TEST_F(RefineStageTest, DvlOnAServoTrayIsTurnedBackIntoItsManifestFrame) {
   const fs::path mission = temp_root() / "hull";
-  sim::SimOptions o;
-  o.scenario = "hauv-hull";
-  o.seed = 2;
-  o.out_dir = mission.string();
-  o.sensors = {"imu", "dvl", "depth"};
-  sim::run_simulation(o);  // the whole survey, 236 s
+  testing::simulate(mission, "hauv-hull", 2, 0.0, {"imu", "dvl", "depth"});  // whole survey, 236 s
   const StageRun run = run_stage(mission, nlohmann::json::object(), temp_root() / "work_hull");
   const auto& report = run.result.report;
   const auto& tray = report["inputs"]["dvl"]["servo_tray"];
@@ -228,13 +215,7 @@ TEST_F(RefineStageTest, EstimatesAnInjectedDvlScale) {
 // from the truth (before the outlier gate, 1.3 m ATE on this mission without DVL).
 TEST_F(RefineStageTest, FallsBackToGicpOdometryWithoutRecordedOdometry) {
   const fs::path dir = temp_root() / "gicp";
-  sim::SimOptions o;
-  o.scenario = "usv-bridge";
-  o.seed = 4;
-  o.out_dir = dir.string();
-  o.duration_s = 30.0;
-  o.sensors = {"imu", "dvl", "lidar_h"};
-  sim::run_simulation(o);
+  testing::simulate(dir, "usv-bridge", 4, 30.0, {"imu", "dvl", "lidar_h"});
   // Remove trajectories.odometry from mission.yaml (and the file, to be sure it is not read).
   std::ifstream in(dir / "mission.yaml");
   std::string yaml, line;

@@ -23,19 +23,19 @@
 #include <map>
 #include <unordered_map>
 
-#include "tests/sim/simulator.h"
+#include "tests/worker/pipeline/sim_mission.h"
+#include "worker/io/cloud/scan_file.h"
 #include "worker/io/draco/draco_codec.h"
 #include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/mission.h"
-#include "worker/io/cloud/scan_file.h"
-#include "worker/pipeline/pose_json.h"
 #include "worker/io/tum.h"
-#include "worker/stages/ba/stage.h"
 #include "worker/pipeline/job_runner.h"
-#include "worker/stages/map/stage.h"
-#include "worker/stages/refine/stage.h"
+#include "worker/pipeline/pose_json.h"
 #include "worker/pipeline/report.h"
 #include "worker/pipeline/trajectories_file.h"
+#include "worker/stages/ba/stage.h"
+#include "worker/stages/map/stage.h"
+#include "worker/stages/refine/stage.h"
 
 namespace keel::pipeline {
 namespace {
@@ -189,13 +189,7 @@ class ReportArtifactsTest : public ::testing::Test {
 
 TEST_F(ReportArtifactsTest, BridgeRefineAndMap) {
   const fs::path mission = temp_root() / "usv-bridge";
-  sim::SimOptions sim;
-  sim.scenario = "usv-bridge";
-  sim.seed = 7;
-  sim.out_dir = mission.string();
-  sim.duration_s = 20.0;
-  sim.sensors = {"imu", "dvl", "lidar_h", "lidar_v", "sonar"};
-  sim::run_simulation(sim);
+  testing::simulate(mission, "usv-bridge", 7, 20.0, {"imu", "dvl", "lidar_h", "lidar_v", "sonar"});
   const fs::path work = temp_root() / "bridge_work";
   const size_t kPreview = 60000;
   const json options = {{"map",
@@ -330,12 +324,7 @@ TEST_F(ReportArtifactsTest, BridgeRefineAndMap) {
 
 TEST_F(ReportArtifactsTest, HullBaAndInspect) {
   const fs::path mission = temp_root() / "hauv-hull";
-  sim::SimOptions sim;
-  sim.scenario = "hauv-hull";
-  sim.seed = 3;
-  sim.out_dir = mission.string();
-  sim.duration_s = 20.0;
-  sim::run_simulation(sim);
+  testing::simulate(mission, "hauv-hull", 3, 20.0);
   const fs::path work = temp_root() / "hull_work";
   const json report = run_job(mission, {"ingest", "refine", "ba", "inspect"},
                               {{"ba", {{"tracks", "ground_truth"}}}}, work);

@@ -106,12 +106,6 @@ const TiledMaps::Sensor& TiledMaps::sensor(const std::string& name) const {
   throw std::invalid_argument("tiled maps: no sensor '" + name + "'");
 }
 
-std::vector<std::string> TiledMaps::sensor_names() const {
-  std::vector<std::string> names;
-  for (const auto& s : sensors_) names.push_back(s->name);
-  return names;
-}
-
 uint16_t TiledMaps::output_cloud(const std::string& map) const {
   return map == "slam" ? kSlamCloud : sensor(map).output_cloud;
 }

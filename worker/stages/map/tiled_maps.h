@@ -99,7 +99,6 @@ class TiledMaps {
   // Maps: the sensors' names and "slam". Output points of a map, and whether it has intensity.
   size_t points(const std::string& map) const;
   bool has_intensity(const std::string& map) const;
-  std::vector<std::string> sensor_names() const;
 
   // Output tiles that partition the map made of `maps` (sensor names, "slam"), sorted, each
   // small enough to read with its halo within the tile budget: level-0 tiles, or the children

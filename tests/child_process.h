@@ -1,5 +1,5 @@
-// A child process for the program tests: stdout and stderr into files, wait with a
-// deadline, signals. The destructor SIGKILLs a child still running.
+// A child process for the program tests: stdout and stderr into files (one file when `err` is
+// `out`), wait with a deadline, signals. The destructor SIGKILLs a child still running.
 #pragma once
 
 #include <signal.h>
@@ -23,7 +23,8 @@ class Child {
         const std::vector<std::string>& env = {}) {
     pid_ = ::fork();
     if (pid_ == 0) {
-      if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr))
+      if (!std::freopen(out.c_str(), "w", stdout) ||
+          (err == out ? ::dup2(1, 2) < 0 : !std::freopen(err.c_str(), "w", stderr)))
         ::_exit(126);
       for (const auto& item : env) ::putenv(const_cast<char*>(item.c_str()));
       std::vector<char*> argv;
