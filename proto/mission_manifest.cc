@@ -18,7 +18,8 @@ constexpr std::pair<SensorType, const char*> kSensorTypeNames[] = {
     {SensorType::kSonar, "sonar"},
     {SensorType::kCamera, "camera"},
     {SensorType::kDepth, "depth"},
-    {SensorType::kServo, "servo"}};
+    {SensorType::kServo, "servo"},
+    {SensorType::kGnss, "gnss"}};
 
 constexpr std::pair<TimeUnit, const char*> kUnitNames[] = {{TimeUnit::kSeconds, "s"},
                                                            {TimeUnit::kMilliseconds, "ms"},
@@ -26,7 +27,11 @@ constexpr std::pair<TimeUnit, const char*> kUnitNames[] = {{TimeUnit::kSeconds, 
                                                            {TimeUnit::kNanoseconds, "ns"}};
 
 constexpr std::pair<TimeReference, const char*> kReferenceNames[] = {
-    {TimeReference::kScanStart, "scan_start"}, {TimeReference::kAbsolute, "absolute"}};
+    {TimeReference::kScanStart, "scan_start"},
+    {TimeReference::kScanEnd, "scan_end"},
+    {TimeReference::kAbsolute, "absolute"}};
+
+const char* const kLidarPacketModels[] = {"VLP16", "VLP32C", "HDL32E"};
 
 constexpr std::pair<Platform, const char*> kPlatformNames[] = {
     {Platform::kUsv, "usv"}, {Platform::kHauv, "hauv"}, {Platform::kOther, "other"}};
@@ -155,6 +160,12 @@ void read_noise(const FieldReader& sensor, SensorSpec& spec) {
       r.reject_unknown({"angle_sigma"});
       n.servo.angle_sigma = optional_positive(r, "angle_sigma", n.servo.angle_sigma);
       break;
+    case SensorType::kGnss:
+      r.reject_unknown({"horizontal_sigma_m", "vertical_sigma_m"});
+      n.gnss.horizontal_sigma_m =
+          optional_positive(r, "horizontal_sigma_m", n.gnss.horizontal_sigma_m);
+      n.gnss.vertical_sigma_m = optional_positive(r, "vertical_sigma_m", n.gnss.vertical_sigma_m);
+      break;
   }
 }
 
@@ -180,6 +191,9 @@ nlohmann::json noise_to_json(const SensorSpec& s) {
       return {{"depth_sigma", n.depth.depth_sigma}, {"range_sigma", n.range.range_sigma}};
     case SensorType::kServo:
       return {{"angle_sigma", n.servo.angle_sigma}};
+    case SensorType::kGnss:
+      return {{"horizontal_sigma_m", n.gnss.horizontal_sigma_m},
+              {"vertical_sigma_m", n.gnss.vertical_sigma_m}};
   }
   return nlohmann::json::object();
 }
@@ -200,6 +214,7 @@ void check_source(const SensorSpec& s, const FieldReader& r) {
                         " sensor has no scans (scans: lidar, sonar, depth)");
   if (!s.images.empty() && s.type != SensorType::kCamera)
     throw ContractError(r.child("images") + ": only camera sensors take images");
+  if (!s.file.empty() && s.type == SensorType::kGnss) return;
   if (!s.topic.empty() && (s.type == SensorType::kDvlRanges || s.type == SensorType::kServo))
     throw ContractError(r.child("topic") + ": a " + type +
                         " sensor has no ROS message mapping; give `file:` (CSV)");
@@ -208,6 +223,11 @@ void check_source(const SensorSpec& s, const FieldReader& r) {
 }  // namespace
 
 std::string to_string(SensorType type) { return name_of(kSensorTypeNames, type); }
+std::string known_lidar_packet_models() {
+  std::string out;
+  for (const char* m : kLidarPacketModels) out += (out.empty() ? "" : ", ") + std::string(m);
+  return out;
+}
 std::string known_sensor_types() { return names_of(kSensorTypeNames); }
 SensorType sensor_type_from_string(std::string_view text, const std::string& path) {
   return parse_enum(kSensorTypeNames, nlohmann::json(std::string(text)), path, "sensor type");
@@ -250,20 +270,76 @@ Extrinsic Extrinsic::from_json(const nlohmann::json& value, const std::string& p
 }
 
 nlohmann::json PointTimeSpec::to_json() const {
-  return {{"field", field}, {"unit", to_string(unit)}, {"reference", to_string(reference)}};
+  nlohmann::json j = {{"field", field}, {"unit", to_string(unit)}};
+  if (is_split()) j = {{"field", {field, nsec_field}}};
+  j["reference"] = to_string(reference);
+  return j;
 }
 
 PointTimeSpec PointTimeSpec::from_json(const nlohmann::json& value, const std::string& path) {
   FieldReader r(value, path);
   r.reject_unknown({"field", "unit", "reference"});
   PointTimeSpec p;
-  p.field = r.required<std::string>("field");
-  if (p.field.empty()) throw ContractError(r.child("field") + ": expected a field name");
-  p.unit = parse_enum(kUnitNames, r.at("unit"), r.child("unit"), "time unit");
+  const nlohmann::json& field = r.at("field");
+  if (field.is_array()) {
+    // Split time: [seconds field, nanoseconds field], both integers; the unit is implied.
+    if (field.size() != 2 || !field[0].is_string() || !field[1].is_string())
+      throw ContractError(r.child("field") +
+                          ": expected a field name or [seconds field, nanoseconds field]");
+    p.field = field[0].get<std::string>();
+    p.nsec_field = field[1].get<std::string>();
+    if (p.field.empty() || p.nsec_field.empty() || p.field == p.nsec_field)
+      throw ContractError(r.child("field") + ": expected two different field names");
+    if (r.has("unit"))
+      throw ContractError(r.child("unit") +
+                          ": a split time is whole seconds and nanoseconds; give no unit");
+  } else {
+    p.field = r.required<std::string>("field");
+    if (p.field.empty()) throw ContractError(r.child("field") + ": expected a field name");
+    p.unit = parse_enum(kUnitNames, r.at("unit"), r.child("unit"), "time unit");
+  }
   if (r.has("reference"))
     p.reference =
         parse_enum(kReferenceNames, r.at("reference"), r.child("reference"), "time reference");
   return p;
+}
+
+nlohmann::json LidarPacketSpec::to_json() const {
+  nlohmann::json j = {{"model", model}};
+  if (!calibration.empty()) j["calibration"] = calibration;
+  return j;
+}
+
+LidarPacketSpec LidarPacketSpec::from_json(const nlohmann::json& value, const std::string& path) {
+  FieldReader r(value, path);
+  r.reject_unknown({"model", "calibration"});
+  LidarPacketSpec p;
+  p.model = r.required<std::string>("model");
+  bool known = false;
+  for (const char* m : kLidarPacketModels) known = known || p.model == m;
+  if (!known)
+    throw ContractError(r.child("model") + ": unknown lidar packet model '" + p.model +
+                        "' (known: " + known_lidar_packet_models() + ")");
+  p.calibration = r.optional<std::string>("calibration", "");
+  return p;
+}
+
+nlohmann::json GeoOrigin::to_json() const {
+  return {{"latitude_deg", latitude_deg}, {"longitude_deg", longitude_deg}, {"height_m", height_m}};
+}
+
+GeoOrigin GeoOrigin::from_json(const nlohmann::json& value, const std::string& path) {
+  FieldReader r(value, path);
+  r.reject_unknown({"latitude_deg", "longitude_deg", "height_m"});
+  GeoOrigin o;
+  o.latitude_deg = finite_number(r.at("latitude_deg"), r.child("latitude_deg"));
+  o.longitude_deg = finite_number(r.at("longitude_deg"), r.child("longitude_deg"));
+  o.height_m = finite_number(r.at("height_m"), r.child("height_m"));
+  if (!(std::abs(o.latitude_deg) <= 90.0))
+    throw ContractError(r.child("latitude_deg") + ": expected degrees in [-90, 90]");
+  if (!(std::abs(o.longitude_deg) <= 180.0))
+    throw ContractError(r.child("longitude_deg") + ": expected degrees in [-180, 180]");
+  return o;
 }
 
 nlohmann::json CameraSpec::to_json() const {
@@ -320,6 +396,7 @@ nlohmann::json SensorSpec::to_json() const {
   if (T_body_sensor) j["T_body_sensor"] = T_body_sensor->to_json();
   j["noise"] = noise_to_json(*this);
   if (point_time) j["point_time"] = point_time->to_json();
+  if (packets) j["packets"] = packets->to_json();
   if (range_m) j["range_m"] = *range_m;
   if (!beams.empty()) j["beams"] = beams;
   if (camera) j["camera"] = camera->to_json();
@@ -332,7 +409,7 @@ SensorSpec SensorSpec::from_json(const nlohmann::json& value, const std::string&
   static const std::regex kNamePattern("[A-Za-z0-9_]+");
   FieldReader r(value, path);
   r.reject_unknown({"name", "type", "file", "scans", "images", "topic", "frame_id", "rate_hz",
-                    "T_body_sensor", "noise", "point_time", "range_m", "beams", "camera",
+                    "T_body_sensor", "noise", "point_time", "packets", "range_m", "beams", "camera",
                     "axis", "mounted_on"});
   SensorSpec s;
   s.name = r.required<std::string>("name");
@@ -352,6 +429,11 @@ SensorSpec SensorSpec::from_json(const nlohmann::json& value, const std::string&
     if (!s.is_scans())
       throw ContractError(r.child("point_time") + ": only scan sensors have per-point time");
     s.point_time = PointTimeSpec::from_json(r.at("point_time"), r.child("point_time"));
+  }
+  if (r.has("packets")) {
+    if (s.type != SensorType::kLidar || s.topic.empty())
+      throw ContractError(r.child("packets") + ": only a lidar on a bag topic has raw packets");
+    s.packets = LidarPacketSpec::from_json(r.at("packets"), r.child("packets"));
   }
   if (r.has("range_m")) {
     if (!s.is_scans() && s.type != SensorType::kDvlRanges)
@@ -387,7 +469,8 @@ SensorSpec SensorSpec::from_json(const nlohmann::json& value, const std::string&
     const auto a = fixed_numbers<3>(r.at("axis"), r.child("axis"));
     const double norm = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     if (std::abs(norm - 1.0) > 1e-3)
-      throw ContractError(r.child("axis") + ": expected a unit vector, |a| = " + std::to_string(norm));
+      throw ContractError(r.child("axis") +
+                          ": expected a unit vector, |a| = " + std::to_string(norm));
     s.axis = std::array<double, 3>{a[0] / norm, a[1] / norm, a[2] / norm};
   }
   s.mounted_on = r.optional<std::string>("mounted_on", "");
@@ -438,6 +521,7 @@ nlohmann::json MissionManifest::to_json() const {
                       {"platform", to_string(platform)},
                       {"body_frame", body_frame},
                       {"world_frame", world_frame}};
+  if (origin) j["origin"] = origin->to_json();
   if (!bag.empty()) j["bag"] = bag;
   j["sensors"] = nlohmann::json::array();
   for (const auto& s : sensors) j["sensors"].push_back(s.to_json());
@@ -454,8 +538,8 @@ nlohmann::json MissionManifest::to_json() const {
 MissionManifest MissionManifest::from_json(const nlohmann::json& value, const std::string& path) {
   static const std::regex kMissionName("[A-Za-z0-9._-]+");
   FieldReader r(value, path);
-  r.reject_unknown({"keel_mission", "name", "platform", "body_frame", "world_frame", "bag",
-                    "sensors", "trajectories", "loop_closures", "ground_truth", "cad_mesh"});
+  r.reject_unknown({"keel_mission", "name", "platform", "body_frame", "world_frame", "origin",
+                    "bag", "sensors", "trajectories", "loop_closures", "ground_truth", "cad_mesh"});
   MissionManifest m;
   m.keel_mission = r.required<int>("keel_mission");
   if (m.keel_mission != kMissionFormatVersion)
@@ -467,6 +551,7 @@ MissionManifest MissionManifest::from_json(const nlohmann::json& value, const st
     m.platform = parse_enum(kPlatformNames, r.at("platform"), r.child("platform"), "platform");
   m.body_frame = r.optional<std::string>("body_frame", m.body_frame);
   m.world_frame = r.optional<std::string>("world_frame", m.world_frame);
+  if (r.has("origin")) m.origin = GeoOrigin::from_json(r.at("origin"), r.child("origin"));
   m.bag = r.optional<std::string>("bag", "");
 
   const nlohmann::json& sensors = r.at("sensors");
@@ -479,6 +564,10 @@ MissionManifest MissionManifest::from_json(const nlohmann::json& value, const st
       throw ContractError(item + ".name: sensor '" + s.name + "' repeated");
     if (!s.topic.empty() && m.bag.empty())
       throw ContractError(item + ".topic: a topic needs `bag:` at the top level");
+    if (s.type == SensorType::kGnss && !m.origin)
+      throw ContractError(item +
+                          ": a gnss sensor needs `origin:` (latitude_deg, longitude_deg, "
+                          "height_m of the world frame) at the top level");
     m.sensors.push_back(std::move(s));
   }
   // A tray sensor must name a servo of this mission (checked once all sensors are known).

@@ -18,12 +18,12 @@ namespace keel::proto {
 
 constexpr int kMissionFormatVersion = 1;
 
-enum class SensorType { kImu, kDvl, kDvlRanges, kLidar, kSonar, kCamera, kDepth, kServo };
+enum class SensorType { kImu, kDvl, kDvlRanges, kLidar, kSonar, kCamera, kDepth, kServo, kGnss };
 
 std::string to_string(SensorType type);
 // Fails naming `path` and the known types for an unknown name.
 SensorType sensor_type_from_string(std::string_view text, const std::string& path = "type");
-// "imu, dvl, dvl_ranges, lidar, sonar, camera, depth, servo"
+// "imu, dvl, dvl_ranges, lidar, sonar, camera, depth, servo, gnss"
 std::string known_sensor_types();
 
 // T_body_sensor: maps points in the sensor frame into the body frame.
@@ -64,6 +64,12 @@ struct DepthNoise {
 struct ServoNoise {
   double angle_sigma = 0.0873;  // rad, 5 degrees (seed 001 Eq. (10))
 };
+// Used for fixes whose message gives no covariance (NavSatFix COVARIANCE_TYPE_UNKNOWN, or a
+// CSV without covariance columns). No paper figure: a single-frequency receiver's spread.
+struct GnssNoise {
+  double horizontal_sigma_m = 1.5;
+  double vertical_sigma_m = 3.0;
+};
 
 struct SensorNoise {
   ImuNoise imu;
@@ -73,23 +79,45 @@ struct SensorNoise {
   CameraNoise camera;
   DepthNoise depth;
   ServoNoise servo;
+  GnssNoise gnss;
 };
 
 enum class TimeUnit { kSeconds, kMilliseconds, kMicroseconds, kNanoseconds };
-enum class TimeReference { kScanStart, kAbsolute };
+// scan_start / scan_end: the point's time is an offset from the scan's header stamp, which
+// marks the first (Velodyne, Ouster) or the last (some Hesai and Livox set-ups) point of the
+// sweep; absolute: the point's time is a time since the epoch (Livox, Hesai float64).
+enum class TimeReference { kScanStart, kScanEnd, kAbsolute };
 std::string to_string(TimeUnit unit);
 std::string to_string(TimeReference reference);
 double seconds_per_unit(TimeUnit unit);
 
-// Per-point time of a scan (Velodyne: float s from sweep start; Ouster: uint32 ns).
+// Per-point time of a scan (Velodyne: float s from sweep start; Ouster: uint32 ns). A split
+// time is two integer fields, whole seconds and nanoseconds (`field: [time_sec, time_nsec]`
+// in mission.yaml): `nsec_field` is then the second name and `unit` is seconds for `field`.
 struct PointTimeSpec {
   std::string field = "time";
+  std::string nsec_field;  // empty: one field
   TimeUnit unit = TimeUnit::kSeconds;
   TimeReference reference = TimeReference::kScanStart;
+
+  bool is_split() const { return !nsec_field.empty(); }
 
   nlohmann::json to_json() const;
   static PointTimeSpec from_json(const nlohmann::json& value, const std::string& path);
 };
+
+// Raw lidar packets on a bag topic (velodyne_msgs/VelodyneScan): the sensor model whose firing
+// table decodes them, and optionally the driver's calibration YAML (per-laser corrections),
+// relative to the bundle. Without it the model's published factory table is used.
+struct LidarPacketSpec {
+  std::string model;  // VLP16, VLP32C, HDL32E
+  std::string calibration;
+
+  nlohmann::json to_json() const;
+  static LidarPacketSpec from_json(const nlohmann::json& value, const std::string& path);
+};
+// Known packet models: "VLP16, VLP32C, HDL32E".
+std::string known_lidar_packet_models();
 
 enum class CameraModel { kPinhole, kKannalaBrandt };
 
@@ -119,6 +147,7 @@ struct SensorSpec {
   std::optional<Extrinsic> T_body_sensor;  // absent: take it from /tf_static (bags) or unknown
   SensorNoise noise;                       // only the entry of this type is read/written
   std::optional<PointTimeSpec> point_time;       // scan sensors
+  std::optional<LidarPacketSpec> packets;        // lidar on a topic of raw packets
   std::optional<std::array<double, 2>> range_m;  // scan sensors and dvl_ranges: [min, max]
   std::vector<std::array<double, 3>> beams;      // dvl_ranges: 4 unit vectors (DVL frame)
   std::optional<CameraSpec> camera;              // cameras (required for them)
@@ -145,6 +174,18 @@ struct TrajectorySpec {
   static TrajectorySpec from_json(const nlohmann::json& value, const std::string& path);
 };
 
+// Where the world frame is on the earth: the world frame is the local east-north-up frame
+// whose origin is this WGS 84 point (height above the ellipsoid). Required with gnss sensors;
+// products carry it so that they can be placed on a map.
+struct GeoOrigin {
+  double latitude_deg = 0.0;
+  double longitude_deg = 0.0;
+  double height_m = 0.0;
+
+  nlohmann::json to_json() const;
+  static GeoOrigin from_json(const nlohmann::json& value, const std::string& path);
+};
+
 enum class Platform { kUsv, kHauv, kOther };
 std::string to_string(Platform platform);
 
@@ -154,7 +195,8 @@ struct MissionManifest {
   Platform platform = Platform::kOther;
   std::string body_frame = "base_link";
   std::string world_frame = "world";
-  std::string bag;  // optional ROS1 bag
+  std::optional<GeoOrigin> origin;  // world frame = ENU at this point
+  std::string bag;                  // optional ROS1 bag
   std::vector<SensorSpec> sensors;
   // Known names: map, odometry, ground_truth (ordered by name).
   std::map<std::string, TrajectorySpec> trajectories;

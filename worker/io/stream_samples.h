@@ -40,11 +40,24 @@ struct ServoSample {
   double angle_rad = 0.0;
 };
 
+// One fix (sensor_msgs/NavSatFix, or a gnss CSV row). Covariance in the fix's local ENU
+// frame, m^2, row-major (NavSatFix's position_covariance); covariance_known false when the
+// message says COVARIANCE_TYPE_UNKNOWN (the sensor's noise figures are used then).
+struct GnssSample {
+  TimeNs t_ns = 0;
+  double latitude_deg = 0.0, longitude_deg = 0.0;
+  double height_m = 0.0;  // above the WGS 84 ellipsoid
+  std::array<double, 9> covariance_enu_m2 = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  bool covariance_known = false;
+  int status = 0;  // NavSatStatus: -1 no fix, 0 fix, 1 SBAS, 2 GBAS (RTK)
+};
+
 using ImuSeries = std::vector<ImuSample>;
 using DvlSeries = std::vector<DvlSample>;
 using DvlRangesSeries = std::vector<DvlRangesSample>;
 using DepthSeries = std::vector<DepthSample>;
 using ServoSeries = std::vector<ServoSample>;
+using GnssSeries = std::vector<GnssSample>;
 
 // Stamps of any series (for rate and gap statistics).
 template <typename Series>
