@@ -384,6 +384,16 @@ void Rosbag2Reader::for_each_message(
   while (cursor.next(m)) body(m, cursor.index());
 }
 
+void Rosbag2Reader::for_each_raw_message(
+    const std::string& topic_name,
+    const std::function<bool(const BagRawMessage&, size_t index)>& body) const {
+  topic(topic_name);
+  TopicCursor cursor(impl_, topic_name);
+  RawMessage m;
+  while (cursor.next(m))
+    if (!body({m.type, m.log_time_ns, m.data, m.size, true}, cursor.index())) return;
+}
+
 ImuSeries Rosbag2Reader::read_imu(const std::string& topic_name) const {
   ImuSeries out;
   out.reserve(topic(topic_name).messages);
