@@ -82,6 +82,9 @@ TopicSurvey survey_topic(const io::BagSource& bag, const io::BagTopicInfo& info)
   } catch (const std::exception& e) {
     t.error = e.what();
   }
+  // The count the bag's index (ROS1) or metadata (rosbag2) states, as `rosbag info` shows it;
+  // fewer readable messages are reported as the error above.
+  t.messages = std::max(t.messages, info.messages);
   add_rate_and_gaps(t, stamps);
   if (first_cloud) {
     try {

@@ -187,7 +187,14 @@ MissionDraft draft_mission(const BagSurvey& survey, const DraftOptions& options)
   std::error_code ec;
   fs::path bag_rel =
       fs::relative(fs::absolute(survey.bag, ec), fs::absolute(options.mission_folder, ec), ec);
-  if (ec || bag_rel.empty()) bag_rel = fs::absolute(survey.bag, ec);
+  // A bundle holds its bag: a path inside the mission folder, never absolute or above it.
+  std::string bag_note;
+  if (ec || bag_rel.empty() || *bag_rel.begin() == "..") {
+    bag_rel = bag_name;
+    bag_note =
+        "  # CONFIRM: move or link " + io::display_path(survey.bag) + " into the mission folder";
+    draft.confirm.push_back("bag: the bag must be inside the mission folder");
+  }
 
   w.line("# mission.yaml drafted by `keel init` from " + io::display_path(survey.bag) + ".");
   w.line("# Read every comment marked CONFIRM; docs/mission-format.md describes each key.");
@@ -208,7 +215,7 @@ MissionDraft draft_mission(const BagSurvey& survey, const DraftOptions& options)
     w.line("  longitude_deg: " + num(f.longitude_deg));
     w.line("  height_m: " + num(f.altitude_m) + "  # NavSatFix altitude (above the ellipsoid)");
   }
-  w.line("bag: " + bag_rel.generic_string());
+  w.line("bag: " + bag_rel.generic_string() + bag_note);
   w.line("sensors:");
   for (const Sensor& s : sensors) {
     const TopicSurvey& t = *s.topic;

@@ -119,9 +119,17 @@ PointTimeGuess guess_point_time(const io::PackedCloudView& view, TimeNs stamp_ns
       spec.field = sec->name;
       spec.nsec_field = nsec.name;
       const bool absolute = rs.lo > 1e8;
-      // Offsets from the stamp, in seconds (approximate: for the reference only).
-      const double lo = rs.lo + rn.lo * 1e-9 - (absolute ? stamp_s : 0.0);
-      const double hi = rs.hi + rn.hi * 1e-9 - (absolute ? stamp_s : 0.0);
+      // Offsets from the stamp per point, in seconds (whole seconds subtracted first).
+      const double base_s = absolute ? std::floor(stamp_s) : 0.0;
+      const double stamp_frac_s = absolute ? stamp_s - base_s : 0.0;
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (size_t i = 0; i < view.num_points; ++i) {
+        const uint8_t* record = view.data + i * view.point_step;
+        const double t = (load_value(record + sec->offset, sec->type) - base_s) +
+                         load_value(record + nsec.offset, nsec.type) * 1e-9 - stamp_frac_s;
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+      }
       spec.reference = absolute ? TimeReference::kAbsolute : relative_reference(lo, hi);
       g.spec = spec;
       g.certain =

@@ -150,7 +150,9 @@ class TopicCursor {
   }
 
   void check_serialization(const std::string& format) const {
-    if (format != "cdr")
+    // "" is what some early rosbag2 writers recorded (nebula's VLS-128 test bag): ROS 2's
+    // default, CDR; a message that is not CDR still fails its encapsulation check.
+    if (format != "cdr" && !format.empty())
       throw BagFormatError("serialization format '" + format + "'; Keel decodes ROS 2 cdr");
   }
 
