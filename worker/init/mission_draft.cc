@@ -185,8 +185,12 @@ MissionDraft draft_mission(const BagSurvey& survey, const DraftOptions& options)
   for (char& c : name)
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') c = '_';
   std::error_code ec;
-  fs::path bag_rel =
-      fs::relative(fs::absolute(survey.bag, ec), fs::absolute(options.mission_folder, ec), ec);
+  // Lexically: a bag linked into the folder stays where the link is.
+  fs::path folder =
+      fs::absolute(options.mission_folder.empty() ? fs::path(".") : options.mission_folder, ec)
+          .lexically_normal();
+  if (folder.filename().empty()) folder = folder.parent_path();  // "/a/b/" from "/a/b/."
+  fs::path bag_rel = fs::absolute(survey.bag, ec).lexically_normal().lexically_relative(folder);
   // A bundle holds its bag: a path inside the mission folder, never absolute or above it.
   std::string bag_note;
   if (ec || bag_rel.empty() || *bag_rel.begin() == "..") {
