@@ -14,5 +14,6 @@ void add_watch_commands(CLI::App& app, CliContext& context);    // watch, log
 void add_fetch_command(CLI::App& app, CliContext& context);     // fetch
 void add_mission_commands(CLI::App& app, CliContext& context);  // missions, reprocess
 void add_compare_command(CLI::App& app, CliContext& context);   // compare (issue 16)
+void add_init_command(CLI::App& app, CliContext& context);      // init (commands_init.cc)
 
 }  // namespace keel::client

@@ -34,6 +34,7 @@ int run(int argc, char** argv) {
   add_fetch_command(app, context);
   add_mission_commands(app, context);
   add_compare_command(app, context);
+  add_init_command(app, context);
 
   try {
     app.parse(argc, argv);  // the chosen command runs in its callback

@@ -96,9 +96,9 @@ double seconds_per_unit(TimeUnit unit);
 // in mission.yaml): `nsec_field` is then the second name and `unit` is seconds for `field`.
 struct PointTimeSpec {
   std::string field = "time";
-  std::string nsec_field;  // empty: one field
   TimeUnit unit = TimeUnit::kSeconds;
   TimeReference reference = TimeReference::kScanStart;
+  std::string nsec_field;  // empty: one field (last, so {field, unit, reference} still works)
 
   bool is_split() const { return !nsec_field.empty(); }
 

@@ -50,6 +50,10 @@ const std::map<std::string, std::string>& msg_texts() {
       {"geometry_msgs/PoseStamped", "std_msgs/Header header\nPose pose\n"},
       {"geometry_msgs/TwistWithCovarianceStamped",
        "std_msgs/Header header\nTwistWithCovariance twist\n"},
+      {"geometry_msgs/Transform", "Vector3 translation\nQuaternion rotation\n"},
+      {"geometry_msgs/TransformStamped",
+       "std_msgs/Header header\nstring child_frame_id\nTransform transform\n"},
+      {"tf2_msgs/TFMessage", "geometry_msgs/TransformStamped[] transforms\n"},
       {"nav_msgs/Odometry",
        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n"
        "geometry_msgs/TwistWithCovariance twist\n"},
@@ -71,6 +75,9 @@ const std::map<std::string, std::vector<std::string>>& dependencies() {
       {"geometry_msgs/TwistWithCovarianceStamped",
        {"std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/TwistWithCovariance",
         "geometry_msgs/Twist", "geometry_msgs/Vector3"}},
+      {"tf2_msgs/TFMessage",
+       {"geometry_msgs/TransformStamped", "std_msgs/Header", "builtin_interfaces/Time",
+        "geometry_msgs/Transform", "geometry_msgs/Vector3", "geometry_msgs/Quaternion"}},
       {"nav_msgs/Odometry",
        {"std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/PoseWithCovariance",
         "geometry_msgs/Pose", "geometry_msgs/Point", "geometry_msgs/Quaternion",
@@ -274,6 +281,17 @@ void Bag2Writer::image(const std::string& topic, const std::string& frame, TimeN
     std::memcpy(&pixels[static_cast<size_t>(r) * gray.cols], gray.ptr(r), gray.cols);
   w.byte_sequence(pixels.data(), pixels.size());
   record(topic, "sensor_msgs/msg/Image", t_ns, w.bytes());
+}
+
+void Bag2Writer::transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) {
+  CdrWriter w;
+  w.u32(static_cast<uint32_t>(edges.size()));
+  for (const auto& [parent, child, T] : edges) {
+    header(w, parent, t_ns);
+    w.string(child);
+    write_pose(w, T);  // Transform: translation then rotation, as Pose's position, orientation
+  }
+  record(topic, "tf2_msgs/msg/TFMessage", t_ns, w.bytes());
 }
 
 void Bag2Writer::pose(const std::string& topic, const std::string& frame, const StampedPose& p) {

@@ -37,6 +37,7 @@ class Bag2Writer : public BagSink {
   void odometry(const std::string& topic, const std::string& frame, const std::string& child_frame,
                 const StampedPose& pose) override;
   // Closes the last file and writes metadata.yaml.
+  void transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) override;
   void close() override;
 
  private:

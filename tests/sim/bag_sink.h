@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/point_cloud.h"
@@ -31,6 +32,9 @@ class BagSink {
                     const StampedPose& pose) = 0;
   virtual void odometry(const std::string& topic, const std::string& frame,
                         const std::string& child_frame, const StampedPose& pose) = 0;
+  // tf2_msgs/TFMessage: one message of edges (parent frame, child frame, T_parent_child).
+  using TransformEdges = std::vector<std::tuple<std::string, std::string, Pose3>>;
+  virtual void transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) = 0;
   virtual void close() = 0;
 };
 
@@ -60,6 +64,9 @@ class BagSinks : public BagSink {
   void odometry(const std::string& topic, const std::string& frame, const std::string& child_frame,
                 const StampedPose& pose) override {
     for (auto& s : sinks_) s->odometry(topic, frame, child_frame, pose);
+  }
+  void transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) override {
+    for (auto& s : sinks_) s->transforms(topic, t_ns, edges);
   }
   void close() override {
     for (auto& s : sinks_) s->close();

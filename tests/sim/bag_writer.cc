@@ -7,6 +7,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <cstring>
 #include <stdexcept>
@@ -142,6 +143,25 @@ void BagWriter::odometry(const std::string& topic, const std::string& frame,
   m.child_frame_id = child_frame;
   m.pose.pose = to_msg(p.T_world_body);
   impl_->bag.write(topic, m.header.stamp, m);
+}
+
+void BagWriter::transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) {
+  tf2_msgs::TFMessage m;
+  for (const auto& [parent, child, T] : edges) {
+    geometry_msgs::TransformStamped e;
+    e.header = header(parent, t_ns);
+    e.child_frame_id = child;
+    const Eigen::Quaterniond q(T.linear());
+    e.transform.translation.x = T.translation().x();
+    e.transform.translation.y = T.translation().y();
+    e.transform.translation.z = T.translation().z();
+    e.transform.rotation.x = q.x();
+    e.transform.rotation.y = q.y();
+    e.transform.rotation.z = q.z();
+    e.transform.rotation.w = q.w();
+    m.transforms.push_back(e);
+  }
+  impl_->bag.write(topic, header("", t_ns).stamp, m);
 }
 
 void BagWriter::close() {

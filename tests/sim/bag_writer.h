@@ -29,6 +29,7 @@ class BagWriter : public BagSink {
   void pose(const std::string& topic, const std::string& frame, const StampedPose& pose) override;
   void odometry(const std::string& topic, const std::string& frame, const std::string& child_frame,
                 const StampedPose& pose) override;
+  void transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) override;
   void close() override;
 
  private:

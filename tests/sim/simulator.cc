@@ -375,6 +375,17 @@ SimSummary run_simulation(const SimOptions& options) {
     }
     if (!sinks->empty()) bag = std::move(sinks);
   }
+  if (bag) {
+    // /tf_static: body -> each sensor frame a bag topic names (frame = sensor name), as a
+    // robot's URDF publishes them; servo-tray sensors move, so they have no static edge.
+    BagSink::TransformEdges edges;
+    for (const auto& [name, T] : scenario.T_body_sensor) {
+      const bool tray = std::find(scenario.tray_sensors.begin(), scenario.tray_sensors.end(),
+                                  name) != scenario.tray_sensors.end();
+      if (!tray) edges.emplace_back("base_link", name, T);
+    }
+    bag->transforms("/tf_static", t0, edges);
+  }
 
   YAML::Emitter sensors_yaml, sensors_bag_yaml;  // the sensors: lists of both manifests
   sensors_yaml.SetDoublePrecision(10);

@@ -29,5 +29,6 @@ Subcommand add_filter_command(CLI::App& app);   // filter_command.cc (map filter
 Subcommand add_metrics_command(CLI::App& app);  // metrics_command.cc (Table V metrics)
 Subcommand add_compare_command(CLI::App& app);  // compare_command.cc (two job folders)
 Subcommand add_options_command(CLI::App& app);  // options_command.cc (stage options, docs)
+Subcommand add_init_command(CLI::App& app);     // init_command.cc (mission.yaml from a bag)
 
 }  // namespace keel::worker

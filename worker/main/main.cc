@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
       keel::worker::add_metrics_command(app),
       keel::worker::add_compare_command(app),
       keel::worker::add_options_command(app),
+      keel::worker::add_init_command(app),
   };
 
   std::vector<std::string> args = with_default_subcommand(argc, argv);

@@ -278,6 +278,27 @@ BagReader::~BagReader() = default;
 const fs::path& BagReader::path() const { return impl_->path; }
 const std::vector<BagTopicInfo>& BagReader::topics() const { return impl_->topics; }
 
+void BagReader::for_each_raw_message(
+    const std::string& topic,
+    const std::function<bool(const BagRawMessage&, size_t index)>& body) const {
+  impl_->topic(topic);
+  std::vector<uint8_t> bytes;
+  struct Stop {};  // leaves rosbag's view early
+  try {
+    impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
+      bytes.resize(m.size());
+      ros::serialization::OStream out(bytes.data(), static_cast<uint32_t>(bytes.size()));
+      m.write(out);
+      const ros::Time t = m.getTime();
+      if (!body({m.getDataType(), static_cast<TimeNs>(t.sec) * 1000000000 + t.nsec, bytes.data(),
+                 bytes.size(), false},
+                i))
+        throw Stop{};
+    });
+  } catch (const Stop&) {
+  }
+}
+
 ImuSeries BagReader::read_imu(const std::string& topic) const {
   impl_->expect_type(topic, {"sensor_msgs/Imu"});
   ImuSeries out;

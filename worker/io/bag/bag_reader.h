@@ -27,6 +27,9 @@ class BagReader : public BagSource {
   std::unique_ptr<ScanSource> open_scans(const std::string& topic,
                                          ScanReadOptions options) const override;
   std::unique_ptr<ImageSource> open_images(const std::string& topic) const override;
+  void for_each_raw_message(
+      const std::string& topic,
+      const std::function<bool(const BagRawMessage&, size_t index)>& body) const override;
 
   struct Impl;
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,17 @@ struct BagTopicInfo {
   std::string topic;
   std::string datatype;  // as recorded: sensor_msgs/Imu (ROS1), sensor_msgs/msg/Imu (ROS 2)
   size_t messages = 0;
+};
+
+// One message as recorded, whatever its type, for tools that look at every topic (keel
+// init): the recorder's receive time and the serialized bytes, ROS1 serialization or (ROS 2
+// bags, `cdr`) CDR with its 4-byte encapsulation header.
+struct BagRawMessage {
+  std::string_view type;
+  TimeNs log_time_ns = 0;
+  const uint8_t* data = nullptr;
+  size_t size = 0;
+  bool cdr = false;
 };
 
 // One edge of the TF tree: T_parent_child maps points in `child_frame` into `parent_frame`.
@@ -55,6 +67,11 @@ class BagSource {
                                                  ScanReadOptions options) const = 0;
   // sensor_msgs/Image (mono8/16, rgb8, bgr8, rgba8, bgra8) or sensor_msgs/CompressedImage.
   virtual std::unique_ptr<ImageSource> open_images(const std::string& topic) const = 0;
+  // Every message of `topic` in recording order, undecoded (`body` may stop early by
+  // returning false). Fails naming the bag and the topic.
+  virtual void for_each_raw_message(
+      const std::string& topic,
+      const std::function<bool(const BagRawMessage&, size_t index)>& body) const = 0;
 
  protected:
   // Why topics may be missing (a file cut short), for the "no topic" error; "" when intact.

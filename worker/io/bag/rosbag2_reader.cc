@@ -150,7 +150,9 @@ class TopicCursor {
   }
 
   void check_serialization(const std::string& format) const {
-    if (format != "cdr")
+    // "" is what some early rosbag2 writers recorded (nebula's VLS-128 test bag): ROS 2's
+    // default, CDR; a message that is not CDR still fails its encapsulation check.
+    if (format != "cdr" && !format.empty())
       throw BagFormatError("serialization format '" + format + "'; Keel decodes ROS 2 cdr");
   }
 
@@ -382,6 +384,16 @@ void Rosbag2Reader::for_each_message(
   TopicCursor cursor(impl_, topic_name);
   RawMessage m;
   while (cursor.next(m)) body(m, cursor.index());
+}
+
+void Rosbag2Reader::for_each_raw_message(
+    const std::string& topic_name,
+    const std::function<bool(const BagRawMessage&, size_t index)>& body) const {
+  topic(topic_name);
+  TopicCursor cursor(impl_, topic_name);
+  RawMessage m;
+  while (cursor.next(m))
+    if (!body({m.type, m.log_time_ns, m.data, m.size, true}, cursor.index())) return;
 }
 
 ImuSeries Rosbag2Reader::read_imu(const std::string& topic_name) const {

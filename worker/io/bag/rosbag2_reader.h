@@ -42,6 +42,9 @@ class Rosbag2Reader : public BagSource {
   std::unique_ptr<ScanSource> open_scans(const std::string& topic,
                                          ScanReadOptions options) const override;
   std::unique_ptr<ImageSource> open_images(const std::string& topic) const override;
+  void for_each_raw_message(
+      const std::string& topic,
+      const std::function<bool(const BagRawMessage&, size_t index)>& body) const override;
 
   // A topic's messages as stored (CDR bytes after any per-message decompression), whatever
   // their type: the container tests read rosbag2's own test bags (std_msgs/msg/String, ...).

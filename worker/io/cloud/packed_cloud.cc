@@ -148,20 +148,65 @@ const PackedField* PackedCloudView::find(const std::string& name) const {
   return nullptr;
 }
 
+namespace {
+
+// The reference under which offsets [lo, hi] s from the stamp fit one sweep: all after it
+// (the stamp marks the first point) or all before it (the last point); "" for neither.
+std::string fitting_reference(double lo, double hi, double sweep_s) {
+  const double slack = 0.05 * sweep_s;
+  if (lo >= -slack && hi <= sweep_s + slack) return "scan_start";
+  if (hi <= slack && lo >= -sweep_s - slack) return "scan_end";
+  return "";
+}
+
+}  // namespace
+
 std::vector<double> point_time_offsets(const PackedCloudView& view, const PackedField& field,
                                        TimeNs t_ns, const proto::PointTimeSpec& spec,
                                        double sweep_period_s, const std::string& source) {
   const size_t n = view.num_points;
   const bool absolute = spec.reference == proto::TimeReference::kAbsolute;
-  const double unit_s = proto::seconds_per_unit(spec.unit);
+  const bool split = spec.is_split();
+  const double unit_s = split ? 1.0 : proto::seconds_per_unit(spec.unit);
   std::vector<double> offsets(n);
   double raw_min = std::numeric_limits<double>::infinity();
   double raw_max = -raw_min;
   const uint8_t* base = view.data + field.offset;
-  const std::string what = source + ": field '" + field.name + "' (" + to_string(field.type) +
-                           ", declared unit " + proto::to_string(spec.unit) + ", reference " +
-                           proto::to_string(spec.reference) + ")";
-  if (absolute && is_integer(field.type)) {
+  const PackedField* nsec = split ? view.find(spec.nsec_field) : nullptr;
+  const std::string what =
+      split ? source + ": fields '" + field.name + "' (" + to_string(field.type) + ") + '" +
+                  spec.nsec_field + "' (" + (nsec ? to_string(nsec->type) : "missing") +
+                  "), split seconds + nanoseconds, reference " + proto::to_string(spec.reference)
+            : source + ": field '" + field.name + "' (" + to_string(field.type) +
+                  ", declared unit " + proto::to_string(spec.unit) + ", reference " +
+                  proto::to_string(spec.reference) + ")";
+  if (split) {
+    if (!nsec) {
+      std::string names;
+      for (const auto& f : view.fields) names += (names.empty() ? "" : " ") + f.name;
+      throw IoError(source + ": no nanoseconds field '" + spec.nsec_field +
+                    "' of the split time (fields: " + names + ")");
+    }
+    if (!is_integer(field.type) || !is_integer(nsec->type))
+      throw IoError(what + ": a split time needs integer fields");
+    // Exact: sec * 1e9 + nsec in int64 ns, minus the integer stamp when absolute.
+    constexpr int64_t kMaxSec = std::numeric_limits<int64_t>::max() / 1000000000 - 1;
+    const uint8_t* nsec_base = view.data + nsec->offset;
+    for (size_t i = 0; i < n; ++i) {
+      const int64_t sec = load_int64(base + i * view.point_step, field.type);
+      const int64_t ns = load_int64(nsec_base + i * view.point_step, nsec->type);
+      if (ns < 0 || ns >= 1000000000)
+        throw IoError(what + ": point " + std::to_string(i) + " has " + std::to_string(ns) +
+                      " ns; expected 0 <= nanoseconds < 1e9");
+      if (sec > kMaxSec || sec < -kMaxSec)
+        throw IoError(what + ": point " + std::to_string(i) + " has " + std::to_string(sec) +
+                      " s, beyond int64 nanoseconds");
+      const int64_t total_ns = sec * 1000000000 + ns;
+      raw_min = std::min(raw_min, static_cast<double>(total_ns) * 1e-9);
+      raw_max = std::max(raw_max, static_cast<double>(total_ns) * 1e-9);
+      offsets[i] = static_cast<double>(absolute ? total_ns - t_ns : total_ns) * 1e-9;
+    }
+  } else if (absolute && is_integer(field.type)) {
     // Exact: integer stamps minus the integer scan stamp, in nanoseconds.
     const int64_t scale = ns_per_unit(spec.unit);
     for (size_t i = 0; i < n; ++i) {
@@ -174,9 +219,12 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
                             : static_cast<double>(raw * scale - t_ns) * 1e-9;
     }
   } else {
-    // Absolute float stamps: subtract whole seconds first to keep double precision.
-    const double stamp_whole_s = absolute ? static_cast<double>(t_ns / 1000000000) : 0.0;
-    const double stamp_frac_s = absolute ? static_cast<double>(t_ns % 1000000000) * 1e-9 : 0.0;
+    // Absolute float stamps: the raw value's whole units are converted to integer ns and
+    // subtracted from the stamp exactly; only the fraction is scaled in floating point. The
+    // error is then the float64 value's own rounding: an epoch time near 1.7e9 s has an ulp
+    // of 2^-22 s = 238 ns (at most 119 ns off), well under a microsecond.
+    const int64_t scale = ns_per_unit(spec.unit);
+    const double max_whole = static_cast<double>(std::numeric_limits<int64_t>::max() / scale);
     for (size_t i = 0; i < n; ++i) {
       const double raw = load_double(base + i * view.point_step, field.type);
       if (!std::isfinite(raw))
@@ -184,7 +232,17 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
                       "; expected finite values");
       raw_min = std::min(raw_min, raw);
       raw_max = std::max(raw_max, raw);
-      offsets[i] = (raw * unit_s - stamp_whole_s) - stamp_frac_s;
+      if (!absolute) {
+        offsets[i] = raw * unit_s;
+        continue;
+      }
+      const double whole = std::floor(raw);
+      if (std::abs(whole) >= max_whole) {
+        offsets[i] = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      const int64_t whole_ns = static_cast<int64_t>(whole) * scale;
+      offsets[i] = static_cast<double>(whole_ns - t_ns) * 1e-9 + (raw - whole) * unit_s;
     }
   }
   if (n == 0 || sweep_period_s <= 0.0) return offsets;
@@ -193,22 +251,44 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
   const double lo = *lo_it, hi = *hi_it;
   const double limit_s = 10.0 * sweep_period_s;
   const double stamp_s = absolute ? ns_to_seconds(t_ns) : 0.0;
-  const std::string found =
-      "values in [" + number_text(raw_min) + ", " + number_text(raw_max) + "]";
+  const double raw_unit_s = split ? 1.0 : unit_s;  // raw_min/max are in this unit
+  const std::string found = "values in [" + number_text(raw_min) + ", " + number_text(raw_max) +
+                            "]" + (split ? " s" : "");
+  const std::string offsets_text = "offsets [" + number_text(lo) + ", " + number_text(hi) +
+                                   "] s from the scan stamp " + format_seconds(t_ns);
   if (std::max(std::abs(lo), std::abs(hi)) > limit_s) {
     std::string hint;
-    const std::string units = fitting_units(raw_min, raw_max, stamp_s, limit_s);
+    const std::string units =
+        split ? std::string() : fitting_units(raw_min, raw_max, stamp_s, limit_s);
     if (!units.empty()) hint = "; they fit unit " + units;
-    if (!absolute && raw_min * unit_s > 1e8)
+    if (!absolute && raw_min * raw_unit_s > 1e8)
       hint = "; they look like absolute stamps (reference absolute?)";
-    if (absolute && !fitting_units(raw_min, raw_max, 0.0, limit_s).empty())
-      hint = "; they look like offsets from the scan start (reference scan_start?)";
-    throw IoError(what + ": " + found + " give offsets [" + number_text(lo) + ", " +
-                  number_text(hi) + "] s from the scan stamp " + format_seconds(t_ns) +
-                  ", beyond 10 sweep periods (" + number_text(limit_s) + " s)" + hint);
+    if (absolute) {
+      const std::string reference =
+          fitting_reference(raw_min * raw_unit_s, raw_max * raw_unit_s, sweep_period_s);
+      if (!reference.empty())
+        hint = std::string("; they look like offsets ") +
+               (reference == "scan_start" ? "from the scan start" : "to the scan end") +
+               " (reference " + reference + "?)";
+      else if (!split && !fitting_units(raw_min, raw_max, 0.0, limit_s).empty())
+        hint = "; they look like offsets from the scan start (reference scan_start?)";
+    }
+    throw IoError(what + ": " + found + " give " + offsets_text + ", beyond 10 sweep periods (" +
+                  number_text(limit_s) + " s)" + hint);
+  }
+  // The stamp marks the sweep's first (scan_start) or last (scan_end) point: points more than
+  // a sweep before (after) it mean the other reference.
+  const bool before = spec.reference == proto::TimeReference::kScanStart && lo < -sweep_period_s;
+  const bool after = spec.reference == proto::TimeReference::kScanEnd && hi > sweep_period_s;
+  if (before || after) {
+    const std::string reference = fitting_reference(lo, hi, sweep_period_s);
+    throw IoError(what + ": " + found + " give " + offsets_text + ", more than a sweep (" +
+                  number_text(sweep_period_s) + " s) " + (before ? "before" : "after") +
+                  " the stamp" +
+                  (reference.empty() ? std::string() : "; they fit reference " + reference));
   }
   const double span = hi - lo;
-  if (span > 0.0 && span < 1e-4 * sweep_period_s) {
+  if (!split && span > 0.0 && span < 1e-4 * sweep_period_s) {
     const std::string units = fitting_units(raw_min, raw_max, stamp_s, limit_s);
     if (!units.empty() && units.find(proto::to_string(spec.unit)) == std::string::npos)
       throw IoError(what + ": " + found + " span only " + number_text(span) + " s of a " +
@@ -334,6 +414,8 @@ PackedCloud pack_cloud(const PointCloud& cloud, const std::optional<PointTimeEnc
   if (cloud.has_ring()) add("ring", FieldType::kUint16);
   const bool with_time = time && cloud.has_time();
   if (with_time) add(time->spec.field, time->type);
+  const bool split = with_time && time->spec.is_split();
+  if (split) add(time->spec.nsec_field, FieldType::kUint32);
   out.num_points = cloud.size();
   out.data.resize(out.num_points * out.point_step);
   const bool absolute = with_time && time->spec.reference == proto::TimeReference::kAbsolute;
@@ -347,13 +429,28 @@ PackedCloud pack_cloud(const PointCloud& cloud, const std::optional<PointTimeEnc
     if (!with_time) continue;
     uint8_t* p = record + out.fields[f].offset;
     const double offset_s = cloud.time_s[i];
-    if (absolute && is_integer(time->type)) {
+    if (split) {
+      // Whole seconds (floor) and nanoseconds in [0, 1e9) of the time in ns.
+      const int64_t t = std::llround(offset_s * 1e9) + (absolute ? cloud.t_ns : 0);
+      int64_t sec = t / 1000000000, nsec = t % 1000000000;
+      if (nsec < 0) {
+        nsec += 1000000000;
+        --sec;
+      }
+      store_number(p, time->type, static_cast<double>(sec));
+      if (time->type == FieldType::kInt64 || time->type == FieldType::kUint64)
+        store<int64_t>(p, sec);
+      store<uint32_t>(record + out.fields[f + 1].offset, static_cast<uint32_t>(nsec));
+    } else if (absolute && is_integer(time->type)) {
       const int64_t stamp_ns = cloud.t_ns + std::llround(offset_s * 1e9);
       store_number(p, time->type, static_cast<double>(stamp_ns / ns_per_unit(time->spec.unit)));
       if (time->type == FieldType::kInt64 || time->type == FieldType::kUint64)
         store<int64_t>(p, stamp_ns / ns_per_unit(time->spec.unit));  // exact beyond 2^53
     } else if (absolute) {
-      store_number(p, time->type, (ns_to_seconds(cloud.t_ns) + offset_s) / unit_s);
+      // One rounding: whole seconds (exact in a double) plus the fraction and the offset.
+      const double whole_s = static_cast<double>(cloud.t_ns / 1000000000);
+      const double frac_s = static_cast<double>(cloud.t_ns % 1000000000) * 1e-9 + offset_s;
+      store_number(p, time->type, (whole_s + frac_s) / unit_s);
     } else {
       store_number(p, time->type, offset_s / unit_s);
     }

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "proto/mission_manifest.h"
 #include "core/point_cloud.h"
+#include "proto/mission_manifest.h"
 
 namespace keel::io {
 
@@ -62,10 +62,14 @@ struct ScanReadOptions {
 PointCloud unpack_cloud(const PackedCloudView& view, TimeNs t_ns, const ScanReadOptions& options,
                         const std::string& source);
 
-// Converts raw per-point times (the field of `view`) into seconds from `t_ns` per `spec`.
-// Fails naming `source`, the field and the values found when they cannot be what the spec
-// declares (non-finite, offsets beyond 10 sweep periods, or a span that only fits a coarser
-// unit). Exposed for tests.
+// Converts raw per-point times (the field of `view`; with a split spec also its nsec_field,
+// combined exactly as sec * 1e9 + nsec in int64 ns) into seconds from `t_ns` per `spec`:
+// scan_start offsets are >= 0, scan_end offsets <= 0 (the stamp marks the last point), and
+// absolute times have the stamp subtracted in integer ns (float64 epoch seconds keep their
+// own ~0.24 us resolution). Fails naming `source`, the field and the values found, and the
+// unit or reference they would fit, when they cannot be what the spec declares (non-finite,
+// offsets beyond 10 sweep periods, more than a sweep on the wrong side of the stamp, or a
+// span that only fits a coarser unit). Exposed for tests.
 std::vector<double> point_time_offsets(const PackedCloudView& view, const PackedField& field,
                                        TimeNs t_ns, const proto::PointTimeSpec& spec,
                                        double sweep_period_s, const std::string& source);
@@ -92,7 +96,10 @@ struct PointTimeEncoding {
 
 // Packs x y z (float32), intensity (float32) and ring (uint16) when present, and the time
 // field when `time` is given and the cloud has per-point times: raw = (offset [+ stamp]) /
-// unit, rounded for integer types (absolute integer stamps are computed exactly in ns).
+// unit, rounded for integer types (absolute integer stamps are computed exactly in ns). A
+// split spec writes `field` (whole seconds, of `type`) and `nsec_field` (uint32 ns). Offsets
+// are written as the cloud holds them, relative to cloud.t_ns: a scan_end cloud's stamp is
+// its last point and its offsets are <= 0.
 PackedCloud pack_cloud(const PointCloud& cloud, const std::optional<PointTimeEncoding>& time);
 
 }  // namespace keel::io

@@ -101,6 +101,16 @@ json scans_report(const io::MissionReader& reader, const proto::SensorSpec& s,
                        {"span_s", time_span.to_json()},
                        {"offset_min_s", time_offset.count ? json(time_offset.min) : json(nullptr)},
                        {"offset_max_s", time_offset.count ? json(time_offset.max) : json(nullptr)}};
+    if (s.point_time->is_split()) r["time_field"]["nsec_field"] = s.point_time->nsec_field;
+    // Where the stamp falls in the detected sweep [offset_min_s, offset_max_s]: a check of
+    // the declared reference (scan_start: first point, scan_end: last point).
+    if (time_offset.count) {
+      const double span = time_offset.max - time_offset.min;
+      const double slack = 0.05 * span;
+      r["time_field"]["stamp_marks"] = time_offset.min >= -slack  ? "first point"
+                                       : time_offset.max <= slack ? "last point"
+                                                                  : "inside the sweep";
+    }
   }
   return r;
 }
