@@ -48,7 +48,7 @@ std::vector<Eigen::Vector3d> janus_beam_directions(double tilt_rad,
 std::array<Eigen::Vector3d, 4> a50_beam_directions() {
   const double deg = M_PI / 180.0;
   const auto b = janus_beam_directions(kA50BeamTiltDeg * deg,
-                                       {45.0 * deg, 135.0 * deg, 225.0 * deg, 315.0 * deg});
+                                       {135.0 * deg, 225.0 * deg, 315.0 * deg, 45.0 * deg});
   return {b[0], b[1], b[2], b[3]};
 }
 

@@ -4,6 +4,12 @@
 #include "worker/io/bag/a50_dvl_sample.h"
 
 #include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
 
 #include <cmath>
 #include <cstring>
@@ -26,12 +32,15 @@ using testing::TempDir;
 constexpr TimeNs kT0 = 1700000000LL * 1000000000LL;
 const double kTilt = kA50BeamTiltDeg * M_PI / 180.0;
 
-// Beams of velocity v (b_k . v), with beam k's validity from `valid`.
+// Beams of velocity v (b . v) in azimuth order 45, 135, 225, 315 degrees, i.e. A50 transducer
+// ids 3, 0, 1, 2 (the reader places beams by id, not by position); validity from `valid`.
 std::vector<A50Beam> beams_of(const Eigen::Vector3d& v, std::array<bool, 4> valid) {
   std::vector<A50Beam> out;
   const auto b = a50_beam_directions();
-  for (int k = 0; k < 4; ++k)
-    out.push_back({k, b[k].dot(v), 1.5 + 0.1 * k, -30.0 - k, -90.0 + k, valid[k]});
+  for (int j = 0; j < 4; ++j) {
+    const int id = (j + 3) % 4;
+    out.push_back({id, b[id].dot(v), 1.5 + 0.1 * j, -30.0 - j, -90.0 + j, valid[j]});
+  }
   return out;
 }
 
@@ -74,8 +83,8 @@ std::vector<Case> cases() {
     for (int k = 0; k < 4; ++k) beams[k].velocity_m_s += k == dropped ? 7.0 : noise[k];
     double r[4];
     for (int k = 0; k < 4; ++k) r[k] = beams[k].velocity_m_s;
-    // Closed forms with beam `dropped` missing (b_k = (s cos a_k, s sin a_k, c),
-    // a_k = 45 + 90 k degrees): each solves the three remaining equations exactly.
+    // Closed forms with beam `dropped` missing (b_j = (s cos a_j, s sin a_j, c),
+    // a_j = 45 + 90 j degrees): each solves the three remaining equations exactly.
     Eigen::Vector3d closed;
     switch (dropped) {
       case 0:
@@ -219,6 +228,64 @@ TEST(A50Dvl, BadBeamIdsAndNonFiniteVelocitiesAreRefusedNamingTheMessage) {
   nan.velocity_valid = true;
   nan.velocity_m_s.x() = std::nan("");
   EXPECT_THROW(a50_dvl_sample(nan, 1, "x"), IoError);
+}
+
+// Water Linked's own A50 recordings (github.com/waterlinked/dvl-a50-ros-driver, data/01-06 at
+// commit e09ad0a; never part of this repository): KEEL_A50_BAGS names the folder holding them.
+// Counts per bag from Debian's python3-rosbag (an independent reader): messages, invalid
+// (velocity_valid false and < 3 valid beams), velocity_valid false with exactly 3 beams.
+TEST(A50Dvl, WaterLinkedRecordings) {
+  const char* folder = std::getenv("KEEL_A50_BAGS");
+  if (!folder || !*folder)
+    GTEST_SKIP() << "KEEL_A50_BAGS is not set (a folder with Water Linked's A50 bags: "
+                    "dvl.bag, dvl_circle.bag, dvl_fast_rectangle.bag, dvl_slow_rectangle.bag)";
+  struct Expected {
+    const char* bag;
+    size_t messages, invalid, three_beam;
+  };
+  const Expected expected[] = {{"dvl.bag", 1423, 29, 1},
+                               {"dvl_circle.bag", 378, 16, 7},
+                               {"dvl_fast_rectangle.bag", 395, 4, 0},
+                               {"dvl_slow_rectangle.bag", 457, 8, 1}};
+  std::vector<double> differences, foms;
+  for (const Expected& e : expected) {
+    SCOPED_TRACE(e.bag);
+    const std::filesystem::path path = std::filesystem::path(folder) / e.bag;
+    const DvlSeries series = open_bag(path)->read_dvl("/dvl/data");
+    ASSERT_EQ(series.size(), e.messages);
+    EXPECT_EQ(size_t(std::count_if(series.begin(), series.end(),
+                                   [](const DvlSample& x) { return !x.valid; })),
+              e.invalid);
+    EXPECT_EQ(size_t(std::count_if(series.begin(), series.end(),
+                                   [](const DvlSample& x) { return x.beams_used == 3; })),
+              e.three_beam);
+    // The beam geometry: the velocity solved from four beams against the A50's own.
+    rosbag::Bag bag(path.string());
+    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery("/dvl/data"))) {
+      std::vector<uint8_t> bytes(m.size());
+      ros::serialization::OStream out(bytes.data(), static_cast<uint32_t>(bytes.size()));
+      m.write(out);
+      A50Dvl message = decode_a50_ros1(bytes.data(), bytes.size());
+      if (!message.velocity_valid || message.beams.size() != 4) continue;
+      if (!std::all_of(message.beams.begin(), message.beams.end(),
+                       [](const A50Beam& b) { return b.valid; }))
+        continue;
+      message.velocity_valid = false;
+      const DvlSample s = a50_dvl_sample(message, 1, e.bag);
+      ASSERT_EQ(s.beams_used, 4);
+      differences.push_back((s.velocity_m_s - message.velocity_m_s).norm());
+      foms.push_back(message.fom_m_s);
+    }
+  }
+  ASSERT_GT(differences.size(), 2000u);
+  auto median = [](std::vector<double> x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return x[x.size() / 2];
+  };
+  // The A50 weighs its beams itself; equal weights agree to about its figure of merit. A wrong
+  // beam assignment (a mirrored or rotated array) differs by 18 mm/s or more.
+  EXPECT_LT(median(differences), 1.5 * median(foms));
+  EXPECT_LT(median(differences), 0.003);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@ const double kTilt = kA50BeamTiltDeg * M_PI / 180.0;
 std::vector<BeamMeasurement> beams_of(const Eigen::Vector3d& v, std::array<double, 4> noise = {},
                                       std::array<double, 4> sigma = {1, 1, 1, 1}) {
   std::vector<BeamMeasurement> out;
-  const auto b = a50_beam_directions();
+  const auto b = janus_beam_directions(kTilt, {M_PI / 4, 3 * M_PI / 4, 5 * M_PI / 4, 7 * M_PI / 4});
   for (int k = 0; k < 4; ++k) out.push_back({b[k], b[k].dot(v) + noise[k], sigma[k], true});
   return out;
 }
@@ -27,7 +27,7 @@ TEST(DvlBeams, A50DirectionsAreUnitAndTiltedFromTheAxis) {
     EXPECT_NEAR(b[k].norm(), 1.0, 1e-15);
     EXPECT_NEAR(std::acos(b[k].z()), kTilt, 1e-12);
     EXPECT_NEAR(std::atan2(b[k].y(), b[k].x()),
-                std::remainder((45.0 + 90.0 * k) * M_PI / 180.0, 2 * M_PI), 1e-12);
+                std::remainder((135.0 + 90.0 * k) * M_PI / 180.0, 2 * M_PI), 1e-12);
   }
 }
 
