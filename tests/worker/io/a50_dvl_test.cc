@@ -222,7 +222,7 @@ TEST(A50Dvl, BadBeamIdsAndNonFiniteVelocitiesAreRefusedNamingTheMessage) {
     EXPECT_NE(std::string(e.what()).find("message 3 beams[2].id is 9"), std::string::npos)
         << e.what();
   }
-  m.beams[2].id = 1;
+  m.beams[2].id = m.beams[0].id;
   EXPECT_THROW(a50_dvl_sample(m, 1, "x"), IoError);  // id 1 twice
   A50Dvl nan;
   nan.velocity_valid = true;
