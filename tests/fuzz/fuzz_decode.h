@@ -1,4 +1,5 @@
-// Decodes a message of one of the ROS 2 types Keel reads (ros2_messages.h), by type name;
+// Decodes a message of one of the ROS 2 types Keel reads (ros2_messages.h, a50_messages.h), by
+// type name;
 // unknown types are left alone. For the fuzzers: every decoder must refuse bad bytes with
 // BagFormatError and nothing else.
 #pragma once
@@ -7,6 +8,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "worker/io/bag/a50_messages.h"
 #include "worker/io/bag/bag_format_error.h"
 #include "worker/io/bag/ros2_messages.h"
 
@@ -25,6 +27,7 @@ inline void decode_as(std::string_view type, const uint8_t* data, size_t size) {
     if (type == "geometry_msgs/msg/TwistWithCovarianceStamped")
       r::decode_twist_with_covariance_stamped(data, size);
     if (type == "tf2_msgs/msg/TFMessage") r::decode_tf_message(data, size);
+    if (type == "dvl_msgs/msg/DVL") io::decode_a50_ros2(data, size);
   } catch (const io::BagFormatError&) {
   }
 }
@@ -37,6 +40,7 @@ inline constexpr const char* kTypes[] = {"sensor_msgs/msg/Imu",
                                          "geometry_msgs/msg/PoseStamped",
                                          "geometry_msgs/msg/TwistStamped",
                                          "geometry_msgs/msg/TwistWithCovarianceStamped",
-                                         "tf2_msgs/msg/TFMessage"};
+                                         "tf2_msgs/msg/TFMessage",
+                                         "dvl_msgs/msg/DVL"};
 
 }  // namespace keel::fuzz

@@ -25,18 +25,31 @@
 #include "tests/sim/bag_writer.h"
 #include "worker/io/bag/bag_reader.h"
 #include "worker/io/bag/byte_source.h"
-#include "worker/io/draco/draco_codec.h"
 #include "worker/io/bag/mcap_reader.h"
+#include "worker/io/draco/draco_codec.h"
 
 namespace fs = std::filesystem;
 using namespace keel;
 
 namespace {
 
-void record(sim::BagSink& bag) {
+// A Water Linked A50 message with four beams, `valid` of them locked.
+io::A50Dvl a50(TimeNs t, int valid) {
+  io::A50Dvl m;
+  m.stamp_ns = t;
+  m.velocity_m_s = {0.3, 0.1, 0.0};
+  m.fom_m_s = 0.002;
+  m.velocity_valid = valid == 4;
+  for (int k = 0; k < 4; ++k) m.beams.push_back({k, 0.1 * k, 2.0, -30.0, -90.0, k < valid});
+  return m;
+}
+
+template <typename Bag>  // sim::BagWriter or sim::Bag2Writer
+void record(Bag& bag) {
   const TimeNs t0 = 1700000000000000000LL;
   for (int i = 0; i < 3; ++i) {
     const TimeNs t = t0 + i * 100000000LL;
+    bag.a50_dvl("/dvl/data", "dvl", a50(t, 4 - i));
     bag.imu("/imu", "imu", t, Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::Vector3d(0, 0, 9.81));
     bag.twist("/dvl", "dvl", t, Eigen::Vector3d(1, 0, 0), 0.01);
     PointCloud cloud;
@@ -151,7 +164,7 @@ int main(int argc, char** argv) {
   const fs::path out = argv[1];
   fs::remove_all(out);
   for (const char* d : {"mcap", "db3", "cdr", "draco", "image", "scan_file", "mesh", "trajectory",
-                        "csv_streams", "bundle_check", "json_contracts", "bag", "bags"})
+                        "csv_streams", "bundle_check", "json_contracts", "bag", "bags", "a50"})
     fs::create_directories(out / d);
   for (const char* compression : {"zstd", "lz4", "none"}) {
     sim::Bag2Options o;
@@ -180,6 +193,11 @@ int main(int argc, char** argv) {
     const auto& types = keel::fuzz::kTypes;
     for (size_t t = 0; t < sizeof(types) / sizeof(types[0]); ++t) {
       if (m.channel->schema_name != types[t]) continue;
+      if (m.channel->schema_name == std::string("dvl_msgs/msg/DVL")) {  // a50_fuzz: odd = CDR
+        std::ofstream a(out / "a50" / ("cdr_" + std::to_string(n)), std::ios::binary);
+        a.put(1);
+        a.write(reinterpret_cast<const char*>(m.data), static_cast<std::streamsize>(m.size));
+      }
       std::ofstream f(out / "cdr" / ("msg_" + std::to_string(n++)), std::ios::binary);
       f.put(static_cast<char>(t));
       f.write(reinterpret_cast<const char*>(m.data), static_cast<std::streamsize>(m.size));

@@ -15,7 +15,7 @@ shift
 build="${KEEL_FUZZ_BUILD_DIR:-$here/build-fuzz}"
 work="${KEEL_FUZZ_WORK:-$build/work}"
 all=(byte_range json_contracts bundle_check mission_yaml trajectory csv_streams scan_file bag mesh draco
-  image)
+  image a50)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
 export CCACHE_BASEDIR="$here"
@@ -34,7 +34,7 @@ if [ -n "${KEEL_SIM:-}" ] && [ -x "$KEEL_SIM" ] && [ ! -d "$seeds/mission" ]; th
   (cd "$seeds/mission" && tar -cf "$seeds/mission.tar" mission.yaml) 2>/dev/null || true
 fi
 seeded_by_fuzz_seeds() {  # the harnesses fuzz_seeds writes a folder for
-  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check | json_contracts | bag) echo yes ;; esac
+  case "$1" in draco | image | scan_file | mesh | trajectory | csv_streams | bundle_check | json_contracts | bag | a50) echo yes ;; esac
 }
 seed_files() {  # name -> files for it (prefixing the selector byte where the harness has one)
   local name="$1" dir="$work/corpus/$name"

@@ -54,6 +54,12 @@ const std::map<std::string, std::string>& msg_texts() {
       {"geometry_msgs/TransformStamped",
        "std_msgs/Header header\nstring child_frame_id\nTransform transform\n"},
       {"tf2_msgs/TFMessage", "geometry_msgs/TransformStamped[] transforms\n"},
+      {"dvl_msgs/DVLBeam",
+       "int64 id\nfloat64 velocity\nfloat64 distance\nfloat64 rssi\nfloat64 nsd\nbool valid\n"},
+      {"dvl_msgs/DVL",
+       "std_msgs/Header header\nfloat64 time\ngeometry_msgs/Vector3 velocity\nfloat64 fom\n"
+       "float64[9] covariance\nfloat64 altitude\nDVLBeam[] beams\nbool velocity_valid\n"
+       "int64 status\nint64 time_of_validity\nint64 time_of_transmission\nstring form\n"},
       {"nav_msgs/Odometry",
        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n"
        "geometry_msgs/TwistWithCovariance twist\n"},
@@ -78,6 +84,8 @@ const std::map<std::string, std::vector<std::string>>& dependencies() {
       {"tf2_msgs/TFMessage",
        {"geometry_msgs/TransformStamped", "std_msgs/Header", "builtin_interfaces/Time",
         "geometry_msgs/Transform", "geometry_msgs/Vector3", "geometry_msgs/Quaternion"}},
+      {"dvl_msgs/DVL",
+       {"std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/Vector3", "dvl_msgs/DVLBeam"}},
       {"nav_msgs/Odometry",
        {"std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/PoseWithCovariance",
         "geometry_msgs/Pose", "geometry_msgs/Point", "geometry_msgs/Quaternion",
@@ -225,6 +233,27 @@ void Bag2Writer::twist(const std::string& topic, const std::string& frame, TimeN
     w.f64(r != c ? 0.0 : r < 3 ? sigma * sigma : -1.0);  // angular part unknown
   }
   record(topic, "geometry_msgs/msg/TwistWithCovarianceStamped", t_ns, w.bytes());
+}
+
+void Bag2Writer::a50_dvl(const std::string& topic, const std::string& frame, const io::A50Dvl& m) {
+  CdrWriter w;
+  header(w, frame, m.stamp_ns);
+  w.f64(m.time_ms);
+  vector3(w, m.velocity_m_s);
+  w.f64(m.fom_m_s);
+  for (double c : m.covariance_m2_s2) w.f64(c);
+  w.f64(m.altitude_m);
+  w.sequence(static_cast<uint32_t>(m.beams.size()));
+  for (const io::A50Beam& b : m.beams) {
+    w.i64(b.id);
+    w.f64(b.velocity_m_s), w.f64(b.distance_m), w.f64(b.rssi_dbm), w.f64(b.nsd_dbm);
+    w.boolean(b.valid);
+  }
+  w.boolean(m.velocity_valid);
+  w.i64(m.status);
+  w.i64(0), w.i64(0);  // time_of_validity, time_of_transmission (not read)
+  w.string("json_v3");
+  record(topic, "dvl_msgs/msg/DVL", m.stamp_ns, w.bytes());
 }
 
 void Bag2Writer::cloud(const std::string& topic, const std::string& frame,

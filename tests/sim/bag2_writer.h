@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tests/sim/bag_sink.h"
+#include "worker/io/bag/a50_messages.h"
 
 namespace keel::sim {
 
@@ -38,6 +39,9 @@ class Bag2Writer : public BagSink {
                 const StampedPose& pose) override;
   // Closes the last file and writes metadata.yaml.
   void transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) override;
+  // A Water Linked A50 message (ROS1 waterlinked_a50_ros_driver/DVL, ROS 2 dvl_msgs/msg/DVL)
+  // stamped m.stamp_ns; layouts as worker/io/bag/a50_messages.h describes.
+  void a50_dvl(const std::string& topic, const std::string& frame, const io::A50Dvl& m);
   void close() override;
 
  private:

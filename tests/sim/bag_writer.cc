@@ -11,9 +11,76 @@
 
 #include <cstring>
 #include <stdexcept>
+#include <vector>
+
+// The A50 driver's message, serialized by hand (no message package of the driver is
+// installed): rosbag writes it through these traits. MD5 by the genmsg rule over
+// msg/DVL.msg and msg/DVLBeam.msg of github.com/waterlinked/dvl-a50-ros-driver.
+namespace keel::sim {
+struct A50Ros1Bytes {
+  std::vector<uint8_t> bytes;
+};
+}  // namespace keel::sim
+
+namespace ros {
+namespace message_traits {
+template <>
+struct MD5Sum<keel::sim::A50Ros1Bytes> {
+  static const char* value() { return "dea1debc1aca7804a62c507714ec3777"; }
+  static const char* value(const keel::sim::A50Ros1Bytes&) { return value(); }
+};
+template <>
+struct DataType<keel::sim::A50Ros1Bytes> {
+  static const char* value() { return "waterlinked_a50_ros_driver/DVL"; }
+  static const char* value(const keel::sim::A50Ros1Bytes&) { return value(); }
+};
+template <>
+struct Definition<keel::sim::A50Ros1Bytes> {
+  static const char* value() {
+    return "Header header\nfloat64 time\ngeometry_msgs/Vector3 velocity\nfloat64 fom\n"
+           "float64 altitude\nDVLBeam[] beams\nbool velocity_valid\nint64 status\nstring form\n"
+           "\n================================================================================\n"
+           "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n"
+           "\n================================================================================\n"
+           "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n"
+           "\n================================================================================\n"
+           "MSG: waterlinked_a50_ros_driver/DVLBeam\nint64 id\nfloat64 velocity\n"
+           "float64 distance\nfloat64 rssi\nfloat64 nsd\nbool valid\n";
+  }
+  static const char* value(const keel::sim::A50Ros1Bytes&) { return value(); }
+};
+}  // namespace message_traits
+namespace serialization {
+template <>
+struct Serializer<keel::sim::A50Ros1Bytes> {
+  template <typename Stream>
+  static void write(Stream& stream, const keel::sim::A50Ros1Bytes& m) {
+    std::memcpy(stream.advance(static_cast<uint32_t>(m.bytes.size())), m.bytes.data(),
+                m.bytes.size());
+  }
+  template <typename Stream>
+  static void read(Stream&, keel::sim::A50Ros1Bytes&) {}
+  static uint32_t serializedLength(const keel::sim::A50Ros1Bytes& m) {
+    return static_cast<uint32_t>(m.bytes.size());
+  }
+};
+}  // namespace serialization
+}  // namespace ros
 
 namespace keel::sim {
 namespace {
+
+template <typename T>
+void put(std::vector<uint8_t>& out, T v) {
+  const size_t at = out.size();
+  out.resize(at + sizeof(T));
+  std::memcpy(out.data() + at, &v, sizeof(T));
+}
+
+void put_string(std::vector<uint8_t>& out, const std::string& s) {
+  put(out, static_cast<uint32_t>(s.size()));
+  out.insert(out.end(), s.begin(), s.end());
+}
 
 ros::Time to_ros(TimeNs t_ns) {
   ros::Time t;
@@ -162,6 +229,27 @@ void BagWriter::transforms(const std::string& topic, TimeNs t_ns, const Transfor
     m.transforms.push_back(e);
   }
   impl_->bag.write(topic, header("", t_ns).stamp, m);
+}
+
+void BagWriter::a50_dvl(const std::string& topic, const std::string& frame, const io::A50Dvl& m) {
+  A50Ros1Bytes msg;
+  std::vector<uint8_t>& b = msg.bytes;
+  const ros::Time stamp = to_ros(m.stamp_ns);
+  put(b, uint32_t{0}), put(b, stamp.sec), put(b, stamp.nsec);  // header: seq, stamp
+  put_string(b, frame);
+  put(b, m.time_ms);
+  for (int i = 0; i < 3; ++i) put(b, m.velocity_m_s(i));
+  put(b, m.fom_m_s), put(b, m.altitude_m);
+  put(b, static_cast<uint32_t>(m.beams.size()));
+  for (const io::A50Beam& beam : m.beams) {
+    put(b, beam.id);
+    put(b, beam.velocity_m_s), put(b, beam.distance_m), put(b, beam.rssi_dbm), put(b, beam.nsd_dbm);
+    put(b, static_cast<uint8_t>(beam.valid));
+  }
+  put(b, static_cast<uint8_t>(m.velocity_valid));
+  put(b, m.status);
+  put_string(b, "json_v3");
+  impl_->bag.write(topic, stamp.isZero() ? ros::Time(1) : stamp, msg);
 }
 
 void BagWriter::close() {

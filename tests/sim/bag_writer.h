@@ -6,6 +6,7 @@
 #include <string>
 
 #include "tests/sim/bag_sink.h"
+#include "worker/io/bag/a50_messages.h"
 
 namespace keel::sim {
 
@@ -30,6 +31,9 @@ class BagWriter : public BagSink {
   void odometry(const std::string& topic, const std::string& frame, const std::string& child_frame,
                 const StampedPose& pose) override;
   void transforms(const std::string& topic, TimeNs t_ns, const TransformEdges& edges) override;
+  // A Water Linked A50 message (ROS1 waterlinked_a50_ros_driver/DVL, ROS 2 dvl_msgs/msg/DVL)
+  // stamped m.stamp_ns; layouts as worker/io/bag/a50_messages.h describes.
+  void a50_dvl(const std::string& topic, const std::string& frame, const io::A50Dvl& m);
   void close() override;
 
  private:

@@ -18,6 +18,7 @@ class CdrWriter {
   void boolean(bool v) { put(static_cast<uint8_t>(v ? 1 : 0)); }
   void u32(uint32_t v) { put(v); }
   void i32(int32_t v) { put(v); }
+  void i64(int64_t v) { put(v); }
   void f32(float v) { put(v); }
   void f64(double v) { put(v); }
   // uint32 length counting the terminating NUL, the bytes, the NUL.

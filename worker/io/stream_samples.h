@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -23,6 +24,12 @@ struct DvlSample {
   TimeNs t_ns = 0;
   Eigen::Vector3d velocity_m_s = Eigen::Vector3d::Zero();  // DVL w.r.t. bottom, DVL frame
   bool valid = true;                                       // false marks a dropout
+  // Beam-level input (Water Linked A50, docs/mission-format.md): the beams the velocity was
+  // solved from when the driver's own velocity was invalid (3 or 4; worker/io/dvl_beams.h);
+  // 0 = the velocity as published. fom_m_s: the driver's figure of merit (expected error of
+  // the velocity, m/s); NaN when the message has none.
+  int beams_used = 0;
+  double fom_m_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct DvlRangesSample {

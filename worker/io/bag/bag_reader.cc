@@ -16,11 +16,13 @@
 #include <map>
 #include <vector>
 
+#include "worker/io/bag/a50_dvl_sample.h"
+#include "worker/io/bag/bag_format_error.h"
 #include "worker/io/bag/bag_record_check.h"
-#include "worker/io/display_path.h"
-#include "worker/io/io_error.h"
 #include "worker/io/bag/ros1_message_check.h"
 #include "worker/io/bag/ros_messages.h"
+#include "worker/io/display_path.h"
+#include "worker/io/io_error.h"
 
 namespace keel::io {
 
@@ -316,9 +318,39 @@ ImuSeries BagReader::read_imu(const std::string& topic) const {
   return out;
 }
 
+namespace {
+
+// No message package of the A50 driver is installed: its messages are decoded from their
+// bytes (a50_messages.h), whatever MD5 the connection declares (driver versions that append
+// dead-reckoning fields keep the prefix read here).
+DvlSeries read_a50(const BagReader::Impl& impl, const std::string& topic) {
+  DvlSeries out;
+  impl.for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
+    const std::string what = where(impl, topic, i);
+    std::vector<uint8_t> bytes(m.size());
+    ros::serialization::OStream stream(bytes.data(), static_cast<uint32_t>(bytes.size()));
+    m.write(stream);
+    A50Dvl message;
+    try {
+      message = decode_a50_ros1(bytes.data(), bytes.size());
+    } catch (const BagFormatError& e) {
+      throw IoError(what + ": " + e.what());
+    }
+    const TimeNs t_ns =
+        message.stamp_ns != 0 ? message.stamp_ns : static_cast<TimeNs>(m.getTime().toNSec());
+    check_increasing(impl, topic, i, t_ns, out.empty() ? 0 : out.back().t_ns);
+    out.push_back(a50_dvl_sample(message, t_ns, what));
+  });
+  return out;
+}
+
+}  // namespace
+
 DvlSeries BagReader::read_dvl(const std::string& topic) const {
-  const std::string type = impl_->expect_type(
-      topic, {"geometry_msgs/TwistWithCovarianceStamped", "geometry_msgs/TwistStamped"});
+  const std::string type =
+      impl_->expect_type(topic, {"geometry_msgs/TwistWithCovarianceStamped",
+                                 "geometry_msgs/TwistStamped", "waterlinked_a50_ros_driver/DVL"});
+  if (type == "waterlinked_a50_ros_driver/DVL") return read_a50(*impl_, topic);
   const bool with_covariance = type == "geometry_msgs/TwistWithCovarianceStamped";
   DvlSeries out;
   impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {

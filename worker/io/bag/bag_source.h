@@ -55,7 +55,8 @@ class BagSource {
   // Each fails naming bag, topic and message index on a wrong message type, a non-finite
   // value or a duplicate/decreasing stamp.
   virtual ImuSeries read_imu(const std::string& topic) const = 0;  // sensor_msgs/Imu
-  // geometry_msgs/TwistWithCovarianceStamped or geometry_msgs/TwistStamped
+  // geometry_msgs/TwistWithCovarianceStamped or geometry_msgs/TwistStamped, or a Water Linked
+  // A50's waterlinked_a50_ros_driver/DVL (ROS1) / dvl_msgs/msg/DVL (ROS 2): a50_dvl_sample.h.
   virtual DvlSeries read_dvl(const std::string& topic) const = 0;
   // geometry_msgs/PoseStamped or nav_msgs/Odometry
   virtual Trajectory read_trajectory(const std::string& topic) const = 0;

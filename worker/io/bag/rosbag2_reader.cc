@@ -6,15 +6,16 @@
 #include <optional>
 #include <set>
 
+#include "worker/io/bag/a50_dvl_sample.h"
 #include "worker/io/bag/bag_format_error.h"
 #include "worker/io/bag/byte_source.h"
 #include "worker/io/bag/db3_reader.h"
-#include "worker/io/display_path.h"
-#include "worker/io/io_error.h"
 #include "worker/io/bag/mcap_reader.h"
 #include "worker/io/bag/ros2_messages.h"
 #include "worker/io/bag/ros_messages.h"
 #include "worker/io/bag/rosbag2_metadata.h"
+#include "worker/io/display_path.h"
+#include "worker/io/io_error.h"
 
 namespace keel::io {
 
@@ -418,9 +419,17 @@ DvlSeries Rosbag2Reader::read_dvl(const std::string& topic_name) const {
   topic(topic_name);
   DvlSeries out;
   for_each_typed(impl_, topic_name, [&](const RawMessage& m, size_t i, const std::string& what) {
-    const size_t kind = expect_type(
-        m, {"geometry_msgs/msg/TwistWithCovarianceStamped", "geometry_msgs/msg/TwistStamped"},
-        what);
+    const size_t kind = expect_type(m,
+                                    {"geometry_msgs/msg/TwistWithCovarianceStamped",
+                                     "geometry_msgs/msg/TwistStamped", "dvl_msgs/msg/DVL"},
+                                    what);
+    if (kind == 2) {  // Water Linked A50 (a50_messages.h)
+      const A50Dvl msg = decode_a50_ros2(m.data, m.size);
+      const TimeNs t_ns = stamp_of(msg.stamp_ns, m);
+      check_increasing(what, i, t_ns, out.empty() ? 0 : out.back().t_ns);
+      out.push_back(a50_dvl_sample(msg, t_ns, what));
+      return;
+    }
     const ros2::Twist msg = kind == 0 ? ros2::decode_twist_with_covariance_stamped(m.data, m.size)
                                       : ros2::decode_twist_stamped(m.data, m.size);
     DvlSample s;

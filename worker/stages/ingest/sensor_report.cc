@@ -43,6 +43,20 @@ json stream_report(const io::MissionReader& reader, const proto::SensorSpec& s,
       stamps = io::stamps_of(samples);
       extra["invalid"] =
           std::count_if(samples.begin(), samples.end(), [](const auto& x) { return !x.valid; });
+      // A DVL that publishes beams and a figure of merit (Water Linked A50): velocities solved
+      // from three beams, and the figure of merit of the published ones (m/s). Refine weighs
+      // DVL samples by the mission's noise figures, not per sample: the figure is shown here.
+      const bool beam_level = std::any_of(samples.begin(), samples.end(), [](const auto& x) {
+        return x.beams_used > 0 || std::isfinite(x.fom_m_s);
+      });
+      if (beam_level) {
+        extra["three_beam"] = std::count_if(samples.begin(), samples.end(),
+                                            [](const auto& x) { return x.beams_used == 3; });
+        Summary fom;
+        for (const auto& x : samples)
+          if (x.valid && std::isfinite(x.fom_m_s)) fom.add(x.fom_m_s);
+        extra["fom_m_s"] = fom.to_json();
+      }
       break;
     }
     case SensorType::kDvlRanges: {
