@@ -25,6 +25,7 @@ inline void decode_as(std::string_view type, const uint8_t* data, size_t size) {
     if (type == "geometry_msgs/msg/TwistWithCovarianceStamped")
       r::decode_twist_with_covariance_stamped(data, size);
     if (type == "tf2_msgs/msg/TFMessage") r::decode_tf_message(data, size);
+    if (type == "sensor_msgs/msg/NavSatFix") r::decode_nav_sat_fix(data, size);
   } catch (const io::BagFormatError&) {
   }
 }
@@ -37,6 +38,7 @@ inline constexpr const char* kTypes[] = {"sensor_msgs/msg/Imu",
                                          "geometry_msgs/msg/PoseStamped",
                                          "geometry_msgs/msg/TwistStamped",
                                          "geometry_msgs/msg/TwistWithCovarianceStamped",
-                                         "tf2_msgs/msg/TFMessage"};
+                                         "tf2_msgs/msg/TFMessage",
+                                         "sensor_msgs/msg/NavSatFix"};
 
 }  // namespace keel::fuzz

@@ -45,6 +45,8 @@ class BagSource {
   virtual ImuSeries read_imu(const std::string& topic) const = 0;  // sensor_msgs/Imu
   // geometry_msgs/TwistWithCovarianceStamped or geometry_msgs/TwistStamped
   virtual DvlSeries read_dvl(const std::string& topic) const = 0;
+  // sensor_msgs/NavSatFix: every message, no-fix ones included (status -1; nav_sat_fix.h).
+  virtual GnssSeries read_gnss(const std::string& topic) const = 0;
   // geometry_msgs/PoseStamped or nav_msgs/Odometry
   virtual Trajectory read_trajectory(const std::string& topic) const = 0;
   // tf2_msgs/TFMessage; empty when the bag has no such topic.
