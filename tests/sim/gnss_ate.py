@@ -47,7 +47,6 @@ def ate(traj):
     return math.sqrt(sum(sq) / len(sq)), len(sq)
 
 
-report = json.load(open(work + "/report.json")) if False else None
 out = {}
 out["ate_refined_m"], out["keyframes"] = ate(refined)
 out["ate_map_m"], _ = ate(map_poses)
