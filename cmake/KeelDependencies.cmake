@@ -13,6 +13,8 @@ pkg_check_modules(PQXX REQUIRED IMPORTED_TARGET libpqxx)
 pkg_check_modules(ZSTD REQUIRED IMPORTED_TARGET libzstd)
 pkg_check_modules(LZ4 REQUIRED IMPORTED_TARGET liblz4)
 find_package(LibArchive REQUIRED)
+# PROJ (libproj-dev, 9.1): WGS 84 <-> local ENU; pkg-config (its CMake package is named by version).
+pkg_check_modules(PROJ REQUIRED IMPORTED_TARGET proj)
 find_package(CLI11 REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(yaml-cpp REQUIRED)

@@ -12,6 +12,8 @@ packages=(
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libcgal-dev libnanoflann-dev
   libdraco-dev draco libsqlite3-dev nlohmann-json3-dev libcli11-dev
   libspdlog-dev libyaml-cpp-dev libssl-dev libarchive-dev
+  # WGS 84 <-> the world frame's local ENU (core/geodesy.h)
+  libproj-dev
   # PostgreSQL store for several replicas (issue 14); tests start a private server
   libpqxx-dev postgresql
   # deploy/ checks (tests/deploy): systemd-analyze, nginx -t

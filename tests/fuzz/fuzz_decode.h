@@ -28,6 +28,7 @@ inline void decode_as(std::string_view type, const uint8_t* data, size_t size) {
       r::decode_twist_with_covariance_stamped(data, size);
     if (type == "tf2_msgs/msg/TFMessage") r::decode_tf_message(data, size);
     if (type == "dvl_msgs/msg/DVL") io::decode_a50_ros2(data, size);
+    if (type == "sensor_msgs/msg/NavSatFix") r::decode_nav_sat_fix(data, size);
   } catch (const io::BagFormatError&) {
   }
 }
@@ -41,6 +42,6 @@ inline constexpr const char* kTypes[] = {"sensor_msgs/msg/Imu",
                                          "geometry_msgs/msg/TwistStamped",
                                          "geometry_msgs/msg/TwistWithCovarianceStamped",
                                          "tf2_msgs/msg/TFMessage",
-                                         "dvl_msgs/msg/DVL"};
+                                         "dvl_msgs/msg/DVL", "sensor_msgs/msg/NavSatFix"};
 
 }  // namespace keel::fuzz

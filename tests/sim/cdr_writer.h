@@ -15,6 +15,7 @@ class CdrWriter {
   CdrWriter() : bytes_{0x00, 0x01, 0x00, 0x00} {}
 
   void u8(uint8_t v) { put(v); }
+  void u16(uint16_t v) { put(v); }
   void boolean(bool v) { put(static_cast<uint8_t>(v ? 1 : 0)); }
   void u32(uint32_t v) { put(v); }
   void i32(int32_t v) { put(v); }

@@ -1,6 +1,7 @@
 // keel-sim: writes a synthetic mission bundle with ground truth (docs/design.md "Processes").
 //   keel-sim --scenario usv-bridge|usv-corridor|hauv-hull --seed N --out DIR [--duration S]
-//            [--sensors imu,dvl,lidar_h,lidar_v,sonar,camera,depth] [--dvl-scale 1.02]
+//            [--sensors imu,dvl,lidar_h,lidar_v,sonar,camera,depth,gnss] [--gnss]
+//            [--dvl-scale 1.02]
 //            [--dvl-dropout-rate R] [--bag] [--bag2 mcap,sqlite3] [--survey N]
 //            [--set key=value ...]
 #include <CLI/CLI.hpp>
@@ -29,6 +30,9 @@ int main(int argc, char** argv) {
   app.add_option("--dvl-scale", options.dvl_scale, "true DVL scale factor s_d (seed 000 Eq. (8))");
   app.add_option("--dvl-dropout-rate", options.dvl_dropout_rate,
                  "fraction of DVL samples lost (bursts)");
+  app.add_flag("--gnss", options.gnss,
+               "usv: also write gnss.csv (fixes with dropouts under the deck and multipath near "
+               "the piers), ground_truth/gnss.csv and the mission's origin");
   app.add_flag("--bag", options.write_bag, "also write mission.bag and mission_bag.yaml");
   app.add_option("--bag2", options.bag2_storages,
                  "also write ROS 2 bags of the same data: mcap (mission_mcap/, mission_mcap.yaml) "
@@ -57,6 +61,9 @@ int main(int argc, char** argv) {
         options.out_dir.c_str(), s.duration_s, s.path_length_m, s.imu_samples, s.dvl_samples,
         s.scans, s.scan_points, s.images, s.track_observations, s.odometry_rmse_m, s.map_rmse_m,
         elapsed);
+    if (s.gnss_fixes + s.gnss_no_fix > 0)
+      std::printf("  gnss fixes %zu (multipath %zu), no fix %zu\n", s.gnss_fixes, s.gnss_multipath,
+                  s.gnss_no_fix);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "keel-sim: %s\n", e.what());

@@ -36,6 +36,7 @@ enum class Stream : uint64_t {
   kHull,
   kLandmarks,
   kDropout,
+  kGnss,
 };
 
 class Rng {

@@ -227,7 +227,12 @@ void add_usv_rig(Scenario* s) {
   s->T_body_sensor["sonar"] = pose(rot_x(M_PI / 4) * rot_z(-M_PI / 2), {0.4, -0.3, -0.3});
   s->T_body_sensor["cam0"] = pose(forward_looking(), {0.6, 0.0, 0.8});
   s->T_body_sensor["depth"] = pose(Eigen::Matrix3d::Identity(), {0.0, 0.0, -0.2});
+  s->T_body_sensor["gnss"] = pose(Eigen::Matrix3d::Identity(), {-0.5, 0.0, 2.0});  // mast top
   s->default_sensors = {"imu", "dvl", "lidar_h", "lidar_v", "sonar", "camera", "depth"};
+  s->optional_sensors = {"gnss"};
+  // The world frame's origin: on the Welland Canal near St. Catharines (Bridge 13 of seed 000
+  // Environment 1), height above the WGS 84 ellipsoid.
+  s->origin = {43.1594, -79.1917, 140.0};
   // Seed 000 Table I Kannala-Brandt camera, scaled from 2048x1536 to 512x384 (1/4): rendering
   // 3.2 MP at 20 Hz by ray casting is not affordable; --set camera.rate_hz raises the rate.
   CameraModel& c = s->camera;
@@ -268,6 +273,10 @@ Scenario make_usv(const std::string& name, uint64_t seed, const ScenarioOptions&
   s.default_duration_s = std::ceil(s.motion->end_time());
   if (!bridge) s.degenerate_axis_world = Eigen::Vector3d::UnitX();
   add_usv_rig(&s);
+  if (bridge) {  // the deck (bridge_scene) hides the sky; the piers reflect
+    s.gnss_environment.decks.emplace_back(Eigen::Vector2d(-3.5, -21.0), Eigen::Vector2d(3.5, 21.0));
+    s.gnss_environment.reflectors = {{0.0, 7.0}, {0.0, -7.0}};
+  }
   return s;
 }
 

@@ -7,13 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "core/geodesy.h"
+#include "core/pose.h"
 #include "tests/sim/analytic_scene.h"
 #include "tests/sim/cad_hull.h"
 #include "tests/sim/camera_sim.h"
+#include "tests/sim/gnss_sim.h"
 #include "tests/sim/hull_model.h"
 #include "tests/sim/hull_world.h"
 #include "tests/sim/motion.h"
-#include "core/pose.h"
 
 namespace keel::sim {
 
@@ -66,7 +68,14 @@ struct Scenario {
   const AnalyticScene* analytic = nullptr;  // usv scenarios
   const HullWorld* hull_world = nullptr;    // hauv-hull
   double default_duration_s = 0.0;
-  std::vector<std::string> default_sensors;    // --sensors names
+  std::vector<std::string> default_sensors;  // --sensors names
+  // Sensors the scenario has but writes only when asked (--sensors, --gnss): gnss on USVs, so
+  // that missions written without it stay what they were.
+  std::vector<std::string> optional_sensors;
+  // Where the world frame is on the earth (its local ENU origin; usv scenarios) and what hides
+  // or reflects GNSS signals there.
+  GeodeticPoint origin;
+  GnssEnvironment gnss_environment;
   std::map<std::string, Pose3> T_body_sensor;  // at servo angle 0 for tray sensors
   std::vector<std::string> tray_sensors;       // sensors riding the servo tray
   Eigen::Vector3d degenerate_axis_world = Eigen::Vector3d::Zero();

@@ -19,6 +19,7 @@
 #include "tests/sim/bag2_writer.h"
 #include "tests/sim/bag_writer.h"
 #include "tests/sim/bundle_files.h"
+#include "tests/sim/gnss_sim.h"
 #include "tests/sim/pose_table.h"
 #include "tests/sim/rng.h"
 
@@ -55,6 +56,11 @@ std::map<std::string, double*> setting_table(SensorSettings* s, ScenarioOptions*
       {"depth.rate_hz", &s->depth_rate_hz},
       {"depth.sigma", &s->depth_sigma_m},
       {"servo.rate_hz", &s->servo_rate_hz},
+      {"gnss.rate_hz", &s->gnss.rate_hz},
+      {"gnss.horizontal_sigma", &s->gnss.horizontal_sigma_m},
+      {"gnss.vertical_sigma", &s->gnss.vertical_sigma_m},
+      {"gnss.multipath_probability", &s->gnss.multipath_probability},
+      {"gnss.multipath_radius", &s->gnss.multipath_radius_m},
       {"servo.sigma", &s->servo_sigma_rad},
       {"odometry.rate_hz", &s->odometry.rate_hz},
       {"odometry.scale_sigma", &s->odometry.scale_sigma},
@@ -189,8 +195,12 @@ void apply_settings(const std::vector<std::string>& settings, SensorSettings* s,
   }
   if (s->imu.rate_hz <= 0 || s->dvl.rate_hz <= 0 || s->lidar.rate_hz <= 0 ||
       s->sonar.rate_hz <= 0 || s->depth_rate_hz <= 0 || s->servo_rate_hz <= 0 ||
-      s->odometry.rate_hz <= 0 || s->map.rate_hz <= 0)
+      s->odometry.rate_hz <= 0 || s->map.rate_hz <= 0 || s->gnss.rate_hz <= 0)
     throw std::invalid_argument("--set: every rate_hz must be > 0");
+  if (!(s->gnss.horizontal_sigma_m > 0 && s->gnss.vertical_sigma_m > 0))
+    throw std::invalid_argument("--set gnss.horizontal_sigma, gnss.vertical_sigma: must be > 0");
+  if (!(s->gnss.multipath_probability >= 0 && s->gnss.multipath_probability <= 1))
+    throw std::invalid_argument("--set gnss.multipath_probability: expected [0, 1]");
   if (c->motion.cruise_speed_mps <= 0)
     throw std::invalid_argument("--set motion.speed: must be > 0");
 }
@@ -299,18 +309,19 @@ void parallel_for(size_t n, int threads, const std::function<void(size_t)>& fn) 
 
 std::vector<std::string> resolve_sensors(const SimOptions& options, const Scenario& scenario) {
   const std::set<std::string> known = {"imu",   "dvl",    "lidar_h", "lidar_v",
-                                       "sonar", "camera", "depth"};
+                                       "sonar", "camera", "depth",   "gnss"};
   std::vector<std::string> requested =
       options.sensors.empty() ? scenario.default_sensors : options.sensors;
+  if (options.gnss) requested.push_back("gnss");
   std::vector<std::string> out;
   for (const auto& s : requested) {
     if (!known.count(s))
       throw std::invalid_argument("--sensors: unknown sensor '" + s +
-                                  "' (expected imu,dvl,lidar_h,lidar_v,sonar,camera,depth)");
-    const bool available =
-        std::find(scenario.default_sensors.begin(), scenario.default_sensors.end(), s) !=
-        scenario.default_sensors.end();
-    if (!available)
+                                  "' (expected imu,dvl,lidar_h,lidar_v,sonar,camera,depth,gnss)");
+    const auto offers = [&](const std::vector<std::string>& list) {
+      return std::find(list.begin(), list.end(), s) != list.end();
+    };
+    if (!offers(scenario.default_sensors) && !offers(scenario.optional_sensors))
       throw std::invalid_argument("--sensors: scenario " + scenario.name + " has no " + s);
     if (std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
   }
@@ -551,6 +562,45 @@ SimSummary run_simulation(const SimOptions& options) {
                 });
   }
 
+  // ---- GNSS (usv): fixes of the antenna, and which of them keel-sim corrupted ----
+  if (has("gnss")) {
+    const auto samples =
+        simulate_gnss(*scenario.motion, duration, scenario.T_body_sensor.at("gnss").translation(),
+                      scenario.gnss_environment, settings.gnss, seed);
+    const LocalEnuFrame enu(scenario.origin);
+    TextFile f((out / "gnss.csv").string()), g((out / "ground_truth" / "gnss.csv").string());
+    f.line("t,latitude,longitude,height,status");
+    g.line(
+        "t,east,north,up,kind");  // the true antenna position; kind 0 clean, 1 multipath, 2 no fix
+    for (const auto& s : samples) {
+      // 12 significant digits: 1e-10 degrees, 0.01 mm (TextFile::row's 9 would be 1 cm).
+      std::string text = format_seconds(t0 + s.t_ns) + ",nan,nan,nan,-1";
+      if (s.kind != GnssFixKind::kNoFix) {
+        const GeodeticPoint p = enu.to_geodetic(s.antenna_measured_world);
+        char buffer[96];
+        std::snprintf(buffer, sizeof buffer, ",%.12g,%.12g,%.6f,0", p.latitude_deg, p.longitude_deg,
+                      p.height_m);
+        text = format_seconds(t0 + s.t_ns) + buffer;
+      }
+      f.line(text);
+      const double truth_row[4] = {s.antenna_true_world.x(), s.antenna_true_world.y(),
+                                   s.antenna_true_world.z(), static_cast<double>(s.kind)};
+      g.row(t0 + s.t_ns, truth_row, 4);
+      summary.gnss_fixes += s.kind != GnssFixKind::kNoFix;
+      summary.gnss_multipath += s.kind == GnssFixKind::kMultipath;
+      summary.gnss_no_fix += s.kind == GnssFixKind::kNoFix;
+    }
+    f.close();
+    g.close();
+    emit_sensor(
+        "gnss", "gnss", "file", "gnss.csv", "", settings.gnss.rate_hz, [&](YAML::Emitter& y) {
+          y << YAML::Key << "noise" << YAML::Value << YAML::BeginMap;
+          y << YAML::Key << "horizontal_sigma_m" << YAML::Value << settings.gnss.horizontal_sigma_m;
+          y << YAML::Key << "vertical_sigma_m" << YAML::Value << settings.gnss.vertical_sigma_m;
+          y << YAML::EndMap;
+        });
+  }
+
   // ---- scans and images: independent jobs on threads, written in chunks ----
   const double camera_rate =
       settings.camera_rate_hz > 0.0 ? settings.camera_rate_hz : scenario.camera_rate_hz;
@@ -733,8 +783,11 @@ SimSummary run_simulation(const SimOptions& options) {
     y << YAML::Key << "survey" << YAML::Value << options.survey;
     y << YAML::Key << "trajectory" << YAML::Value << "trajectory.tum";
     y << YAML::Key << "dvl_scale" << YAML::Value << settings.dvl.scale;
+    // ground_truth/gnss.csv: the true antenna position of each fix and what keel-sim did to it.
+    if (has("gnss")) y << YAML::Key << "gnss" << YAML::Value << "gnss.csv";
     y << YAML::Key << "extrinsics" << YAML::Value << YAML::BeginMap;
     for (const auto& [name, T] : scenario.T_body_sensor) {
+      if (name == "gnss" && !has("gnss")) continue;  // missions without gnss stay as they were
       y << YAML::Key << name << YAML::Value;
       emit_pose(y, T);
     }
@@ -778,6 +831,13 @@ SimSummary run_simulation(const SimOptions& options) {
     y << YAML::Key << "platform" << YAML::Value << scenario.platform;
     y << YAML::Key << "body_frame" << YAML::Value << "base_link";
     y << YAML::Key << "world_frame" << YAML::Value << "world";
+    if (has("gnss")) {
+      y << YAML::Key << "origin" << YAML::Value << YAML::BeginMap;
+      y << YAML::Key << "latitude_deg" << YAML::Value << scenario.origin.latitude_deg;
+      y << YAML::Key << "longitude_deg" << YAML::Value << scenario.origin.longitude_deg;
+      y << YAML::Key << "height_m" << YAML::Value << scenario.origin.height_m;
+      y << YAML::EndMap;
+    }
     if (which > 0) y << YAML::Key << "bag" << YAML::Value << bag_manifests[which - 1].second;
     y << YAML::Key << "sensors" << YAML::Value
       << YAML::Load((which == 0 ? sensors_yaml : sensors_bag_yaml).c_str());

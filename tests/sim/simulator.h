@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "core/time.h"
 #include "tests/sim/bag2_writer.h"
 #include "tests/sim/camera_sim.h"
 #include "tests/sim/inertial_sensors.h"
 #include "tests/sim/range_sensors.h"
 #include "tests/sim/scenarios.h"
 #include "tests/sim/slam_recording.h"
-#include "core/time.h"
 
 namespace keel::sim {
 
@@ -29,6 +29,7 @@ struct SensorSettings {
   double camera_rate_hz = 0.0;  // <= 0: scenario default
   double depth_rate_hz = 10.0, depth_sigma_m = 0.01;
   double servo_rate_hz = 20.0, servo_sigma_rad = 5.0 * M_PI / 180.0;  // seed 001 Eq. (10)
+  GnssOptions gnss;
   OdometryOptions odometry;
   MapPoseOptions map;
   bool feature_tracks = true;  // hauv-hull: ground-truth tracks of landmark blobs
@@ -43,7 +44,9 @@ struct SimOptions {
   int survey = 1;
   std::string out_dir;
   double duration_s = 0.0;           // <= 0: the scenario's full path
-  std::vector<std::string> sensors;  // imu,dvl,lidar_h,lidar_v,sonar,camera,depth; empty: all
+  std::vector<std::string> sensors;  // imu,dvl,lidar_h,lidar_v,sonar,camera,depth,gnss; empty: all
+                                     //   default ones (gnss is optional)
+  bool gnss = false;                 // adds gnss to the sensors (usv scenarios)
   double dvl_scale = 1.0;
   double dvl_dropout_rate = 0.0;
   bool write_bag = false;
@@ -61,6 +64,7 @@ struct SimSummary {
   double path_length_m = 0.0;
   size_t imu_samples = 0, dvl_samples = 0, scans = 0, scan_points = 0, images = 0;
   size_t track_observations = 0;
+  size_t gnss_fixes = 0, gnss_multipath = 0, gnss_no_fix = 0;
   double odometry_rmse_m = 0.0, map_rmse_m = 0.0;
 };
 

@@ -1,6 +1,7 @@
 #include "worker/io/mission_reader.h"
 
 #include "worker/io/display_path.h"
+#include "worker/io/gnss_csv.h"
 #include "worker/io/io_error.h"
 #include "worker/io/stream_csv.h"
 #include "worker/io/tum.h"
@@ -64,6 +65,11 @@ DepthSeries MissionReader::read_depth(const std::string& sensor) const {
 ServoSeries MissionReader::read_servo(const std::string& sensor) const {
   expect(sensor, SensorType::kServo);
   return read_servo_csv(mission_.sensor_path(sensor));
+}
+
+GnssSeries MissionReader::read_gnss(const std::string& sensor) const {
+  const auto& s = expect(sensor, SensorType::kGnss);
+  return s.topic.empty() ? read_gnss_csv(mission_.sensor_path(sensor)) : bag_->read_gnss(s.topic);
 }
 
 ScanReadOptions MissionReader::scan_options(const std::string& sensor) const {

@@ -34,6 +34,8 @@ class MissionReader {
   DvlRangesSeries read_dvl_ranges(const std::string& sensor) const;
   DepthSeries read_depth(const std::string& sensor) const;  // pressure depth (a `file:` sensor)
   ServoSeries read_servo(const std::string& sensor) const;
+  // Every fix, no-fix ones included (status -1): a CSV (gnss_csv.h) or sensor_msgs/NavSatFix.
+  GnssSeries read_gnss(const std::string& sensor) const;
   // Scan sensors (lidar, sonar, depth with scans); the time field per the manifest's
   // point_time, checked against 10 sweep periods (1 / rate_hz).
   std::unique_ptr<ScanSource> open_scans(const std::string& sensor) const;

@@ -193,7 +193,7 @@ class GraphBuilder {
     add_vector_prior(s_->bg(0), opt_.prior_sigma_gyro_bias_radps);
     add_vector_prior(s_->ba(0), opt_.prior_sigma_accel_bias_mps2);
     add_vector_prior(s_->bv(0), opt_.prior_sigma_dvl_bias_mps);
-    if (opt_.use_map_anchors) return;
+    if (opt_.use_map_anchors || gnss_gauge_) return;
     Matrix6d S = Matrix6d::Zero();
     S.diagonal().head<3>().setConstant(1.0 / opt_.prior_sigma_position_m);
     S.diagonal().tail<3>().setConstant(1.0 / opt_.prior_sigma_rotation_rad);
@@ -308,6 +308,7 @@ class GraphBuilder {
     num_dvl_ = 0;
   }
   int num_dvl() const { return num_dvl_; }
+  bool gnss_gauge_ = false;  // GNSS fixes fix the gauge: no pose prior
 
  private:
   void add_vector_prior(double* b, double sigma) {
@@ -466,6 +467,12 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
                                 std::to_string(n));
   }
 
+  // GNSS fixes between the keyframes, and the antenna's lever arm in the IMU frame.
+  const std::vector<GnssPlacement> gnss_at = place_gnss_fixes(in.gnss, t_ns, opt.gnss);
+  const Eigen::Vector3d lever_imu_gnss = (in.T_body_imu.inverse() * in.T_body_gnss).translation();
+  const long gnss_placed = std::count_if(gnss_at.begin(), gnss_at.end(),
+                                         [](const GnssPlacement& p) { return p.k >= 0; });
+
   // 5. Preintegrate at the current estimates, build Eq. (3) extended, solve; repeat.
   std::unique_ptr<GraphBuilder> graph;
   const int passes = std::max(1, opt.relinearization_passes);
@@ -479,6 +486,7 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
     graph->reset_usage(n);
     graph->set_lever_arm(T_imu_dvl.translation());
     graph->add_blocks();
+    graph->gnss_gauge_ = gnss_placed >= opt.min_gnss_fixes_for_gauge;
     graph->add_prior(T_world_imu[0]);
     graph->add_edges(odometry, /*robust=*/false);
     graph->add_edges(loops, /*robust=*/true);
@@ -496,6 +504,11 @@ RefineResult refine_trajectory(const RefineInput& in, const RefineOptions& opt) 
       for (size_t k = 1; k < n; ++k)
         walks[k] = kf[k].degenerate && (kf[k].has_dvl_factor || kf[k].has_odometry_factor);
       graph->add_map_anchors(T_world_imu, map_noise, path_m, walks);
+    }
+    if (gnss_placed > 0) {  // gated against the previous pass (the first: Cauchy, no gate)
+      result.gnss_counts = add_gnss_factors(
+          graph->problem(), in.gnss, gnss_at, [&](size_t k) { return s.pose(k); }, lever_imu_gnss,
+          opt.gnss, /*gate=*/pass > 0 || passes == 1, &result.gnss_use);
     }
     graph->finish(kf, T_imu_dvl.linear());
 

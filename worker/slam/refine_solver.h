@@ -32,6 +32,7 @@
 #include "worker/slam/degeneracy.h"
 #include "worker/slam/dvl_imu_reconciliation.h"
 #include "worker/slam/dvl_preintegration.h"
+#include "worker/slam/gnss_factor.h"
 #include "worker/slam/imu_preintegration.h"
 #include "worker/slam/map_pose_noise.h"
 #include "worker/slam/relative_pose.h"
@@ -126,6 +127,11 @@ struct RefineOptions {
   double loop_closure_cauchy_scale = 1.0;
   double measurement_time_tolerance_s = 0.05;
 
+  // GNSS position factors (gnss_factor.h), when RefineInput::gnss has fixes. With at least
+  // `min_gnss_fixes_for_gauge` fixes placed they fix the gauge: r_0 keeps no pose part.
+  GnssOptions gnss;
+  int min_gnss_fixes_for_gauge = 3;
+
   // Solver.
   int max_iterations = 50;
   // Threads of the covariance's columns; the solve runs on one thread (refine_solver.cc).
@@ -145,6 +151,9 @@ struct RefineInput {
   // Body-frame relative poses; stamps must match keyframe stamps within the tolerance.
   std::vector<RelativePoseMeasurement> odometry;       // usually consecutive keyframes
   std::vector<RelativePoseMeasurement> loop_closures;  // non-consecutive keyframes
+  // GNSS fixes of the antenna in the world frame (the mission's ENU), in time order.
+  std::vector<GnssFix> gnss;
+  Pose3 T_body_gnss = Pose3::Identity();  // the antenna's lever arm (its translation)
 };
 
 struct KeyframeEstimate {
@@ -207,6 +216,9 @@ struct RefineResult {
   // Tangent delta theta of R_body_dvl <- R_body_dvl Exp(delta theta), rad^2.
   Eigen::Matrix3d dvl_rotation_covariance = Eigen::Matrix3d::Zero();
   RefineSummary summary;
+  // Each GNSS fix's fate in the last pass (RefineInput::gnss order), and their counts.
+  std::vector<GnssFixUse> gnss_use;
+  GnssCounts gnss_counts;
 
   Trajectory trajectory() const;  // refined T_world_body at the keyframe stamps
 };

@@ -9,6 +9,7 @@
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/NavSatFix.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -19,6 +20,7 @@
 #include "worker/io/bag/a50_dvl_sample.h"
 #include "worker/io/bag/bag_format_error.h"
 #include "worker/io/bag/bag_record_check.h"
+#include "worker/io/bag/nav_sat_fix.h"
 #include "worker/io/bag/ros1_message_check.h"
 #include "worker/io/bag/ros_messages.h"
 #include "worker/io/display_path.h"
@@ -371,6 +373,27 @@ DvlSeries BagReader::read_dvl(const std::string& topic) const {
     check_increasing(*impl_, topic, i, s.t_ns, out.empty() ? 0 : out.back().t_ns);
     s.velocity_m_s = finite3(*linear, what + " twist.linear");
     out.push_back(s);
+  });
+  return out;
+}
+
+GnssSeries BagReader::read_gnss(const std::string& topic) const {
+  impl_->expect_type(topic, {"sensor_msgs/NavSatFix"});
+  GnssSeries out;
+  out.reserve(impl_->topic(topic).messages);
+  impl_->for_each(topic, [&](const rosbag::MessageInstance& m, size_t i) {
+    const std::string what = where(*impl_, topic, i);
+    auto msg = instantiate_as<sensor_msgs::NavSatFix>(m, what);
+    NavSatFixValues fix;
+    fix.status = msg->status.status;
+    fix.latitude_deg = msg->latitude;
+    fix.longitude_deg = msg->longitude;
+    fix.altitude_m = msg->altitude;
+    for (size_t k = 0; k < 9; ++k) fix.position_covariance[k] = msg->position_covariance[k];
+    fix.position_covariance_type = msg->position_covariance_type;
+    const TimeNs t_ns = stamp_of(msg->header.stamp, m);
+    check_increasing(*impl_, topic, i, t_ns, out.empty() ? 0 : out.back().t_ns);
+    out.push_back(gnss_sample_of(fix, t_ns, what));
   });
   return out;
 }

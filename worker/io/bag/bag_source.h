@@ -58,6 +58,8 @@ class BagSource {
   // geometry_msgs/TwistWithCovarianceStamped or geometry_msgs/TwistStamped, or a Water Linked
   // A50's waterlinked_a50_ros_driver/DVL (ROS1) / dvl_msgs/msg/DVL (ROS 2): a50_dvl_sample.h.
   virtual DvlSeries read_dvl(const std::string& topic) const = 0;
+  // sensor_msgs/NavSatFix: every message, no-fix ones included (status -1; nav_sat_fix.h).
+  virtual GnssSeries read_gnss(const std::string& topic) const = 0;
   // geometry_msgs/PoseStamped or nav_msgs/Odometry
   virtual Trajectory read_trajectory(const std::string& topic) const = 0;
   // tf2_msgs/TFMessage; empty when the bag has no such topic.

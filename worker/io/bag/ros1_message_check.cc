@@ -60,6 +60,10 @@ void check_ros1_message(std::string_view datatype, const uint8_t* data, size_t s
   if (datatype == "sensor_msgs/Imu") {
     w.header();
     w.fixed((4 + 9 + 3 + 9 + 3 + 9) * kDouble, "orientation .. linear_acceleration_covariance");
+  } else if (datatype == "sensor_msgs/NavSatFix") {
+    w.header();
+    w.fixed(1 + 2, "status");  // int8 status, uint16 service
+    w.fixed((3 + 9) * kDouble + 1, "latitude .. position_covariance_type");
   } else if (datatype == "geometry_msgs/TwistWithCovarianceStamped") {
     w.header();
     w.fixed((6 + 36) * kDouble, "twist");

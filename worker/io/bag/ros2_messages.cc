@@ -50,6 +50,20 @@ Imu decode_imu(const uint8_t* data, size_t size) {
   return m;
 }
 
+NavSatFix decode_nav_sat_fix(const uint8_t* data, size_t size) {
+  CdrReader cdr(data, size);
+  NavSatFix m;
+  m.stamp_ns = header(cdr);
+  m.status = static_cast<int8_t>(cdr.u8("status.status"));
+  cdr.u16("status.service");
+  m.latitude_deg = cdr.f64("latitude");
+  m.longitude_deg = cdr.f64("longitude");
+  m.altitude_m = cdr.f64("altitude");
+  for (double& c : m.position_covariance) c = cdr.f64("position_covariance");
+  m.position_covariance_type = cdr.u8("position_covariance_type");
+  return m;
+}
+
 Twist decode_twist_stamped(const uint8_t* data, size_t size) {
   CdrReader cdr(data, size);
   Twist m;

@@ -1,7 +1,7 @@
 // The ROS 2 message types Keel reads, decoded from CDR (cdr_reader.h) with every length
-// checked: sensor_msgs/msg/{Imu, PointCloud2, Image, CompressedImage}, nav_msgs/msg/Odometry,
-// geometry_msgs/msg/{PoseStamped, TwistWithCovarianceStamped, TwistStamped} and
-// tf2_msgs/msg/TFMessage. Layouts: the .msg files of ROS 2 common_interfaces (unchanged from
+// checked: sensor_msgs/msg/{Imu, NavSatFix, PointCloud2, Image, CompressedImage},
+// nav_msgs/msg/Odometry, geometry_msgs/msg/{PoseStamped, TwistWithCovarianceStamped, TwistStamped}
+// and tf2_msgs/msg/TFMessage. Layouts: the .msg files of ROS 2 common_interfaces (unchanged from
 // Foxy to Jazzy). Views (PointCloud2View, ImageView, CompressedImage data) point into the
 // message bytes. Errors are BagFormatError naming the field.
 #pragma once
@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -39,6 +40,13 @@ struct Transform {  // one geometry_msgs/msg/TransformStamped of a TFMessage
   Eigen::Vector3d translation;
   Eigen::Quaterniond rotation;
 };
+struct NavSatFix {  // sensor_msgs/msg/NavSatFix
+  TimeNs stamp_ns = 0;
+  int status = 0;  // NavSatStatus.status (int8): -1 no fix .. 2 GBAS fix
+  double latitude_deg = 0.0, longitude_deg = 0.0, altitude_m = 0.0;
+  std::array<double, 9> position_covariance{};  // ENU, m^2, row-major
+  int position_covariance_type = 0;             // 0 unknown, 1 approximated, 2 diagonal, 3 known
+};
 struct PointCloud2 {
   TimeNs stamp_ns = 0;
   PointCloud2View view;
@@ -55,6 +63,7 @@ struct CompressedImage {
 };
 
 Imu decode_imu(const uint8_t* data, size_t size);
+NavSatFix decode_nav_sat_fix(const uint8_t* data, size_t size);
 Twist decode_twist_stamped(const uint8_t* data, size_t size);
 Twist decode_twist_with_covariance_stamped(const uint8_t* data, size_t size);
 Pose decode_pose_stamped(const uint8_t* data, size_t size);

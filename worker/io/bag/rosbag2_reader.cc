@@ -11,6 +11,7 @@
 #include "worker/io/bag/byte_source.h"
 #include "worker/io/bag/db3_reader.h"
 #include "worker/io/bag/mcap_reader.h"
+#include "worker/io/bag/nav_sat_fix.h"
 #include "worker/io/bag/ros2_messages.h"
 #include "worker/io/bag/ros_messages.h"
 #include "worker/io/bag/rosbag2_metadata.h"
@@ -438,6 +439,26 @@ DvlSeries Rosbag2Reader::read_dvl(const std::string& topic_name) const {
     const auto& v = msg.linear;
     s.velocity_m_s = finite_vector(v.x(), v.y(), v.z(), what + " twist.linear");
     out.push_back(s);
+  });
+  return out;
+}
+
+GnssSeries Rosbag2Reader::read_gnss(const std::string& topic_name) const {
+  topic(topic_name);
+  GnssSeries out;
+  for_each_typed(impl_, topic_name, [&](const RawMessage& m, size_t i, const std::string& what) {
+    expect_type(m, {"sensor_msgs/msg/NavSatFix"}, what);
+    const ros2::NavSatFix msg = ros2::decode_nav_sat_fix(m.data, m.size);
+    NavSatFixValues fix;
+    fix.status = msg.status;
+    fix.latitude_deg = msg.latitude_deg;
+    fix.longitude_deg = msg.longitude_deg;
+    fix.altitude_m = msg.altitude_m;
+    fix.position_covariance = msg.position_covariance;
+    fix.position_covariance_type = msg.position_covariance_type;
+    const TimeNs t_ns = stamp_of(msg.stamp_ns, m);
+    check_increasing(what, i, t_ns, out.empty() ? 0 : out.back().t_ns);
+    out.push_back(gnss_sample_of(fix, t_ns, what));
   });
   return out;
 }

@@ -36,6 +36,7 @@ class Rosbag2Reader : public BagSource {
 
   ImuSeries read_imu(const std::string& topic) const override;
   DvlSeries read_dvl(const std::string& topic) const override;
+  GnssSeries read_gnss(const std::string& topic) const override;
   Trajectory read_trajectory(const std::string& topic) const override;
   std::vector<StaticTransform> read_static_transforms(
       const std::string& topic = "/tf_static") const override;

@@ -74,6 +74,17 @@ json stream_report(const io::MissionReader& reader, const proto::SensorSpec& s,
     case SensorType::kServo:
       stamps = io::stamps_of(reader.read_servo(s.name));
       break;
+    case SensorType::kGnss: {
+      const auto samples = reader.read_gnss(s.name);
+      stamps = io::stamps_of(samples);
+      size_t by_status[4] = {0, 0, 0, 0};  // NavSatStatus -1..2
+      for (const auto& x : samples) ++by_status[x.status + 1];
+      extra["fixes_by_status"] = {{"no_fix", by_status[0]},
+                                  {"fix", by_status[1]},
+                                  {"sbas_fix", by_status[2]},
+                                  {"gbas_fix", by_status[3]}};
+      break;
+    }
     default:
       break;
   }

@@ -12,7 +12,8 @@
 //   6. the metrics of Table V (Eqs. (23)-(26)) of the SLAM map, the SLAM lidar's inspection
 //      map and the combined map, measured by output tasks too (metrics.h);
 //   7. the report: poses, sensors and their filters, files, metrics, timing, memory and
-//      warnings (report_json.h; report_html.cc renders it).
+//      warnings (report_json.h; report_html.cc renders it), and with mission.yaml's `origin`,
+//      the origin in the report and every sidecar (origin_sidecars.h).
 // docs/map-filters.md explains the throughput and memory choices.
 #include "worker/stages/map/stage.h"
 
@@ -22,6 +23,7 @@
 
 #include "worker/io/mission_reader.h"
 #include "worker/stages/map/metrics.h"
+#include "worker/stages/map/origin_sidecars.h"
 #include "worker/stages/map/output_plan.h"
 #include "worker/stages/map/output_runner.h"
 #include "worker/stages/map/poses.h"
@@ -98,6 +100,10 @@ StageResult MapStage::run(StageContext& context) {
   r["timing"] = timing_report(times, options.threads);
   r["memory"] = memory_report(options, scans.tiled(), outputs.budget_bytes());
   r["warnings"] = warnings;
+  if (reader.manifest().origin) {
+    r["origin"] = origin_json(*reader.manifest().origin);
+    add_origin_to_sidecars(context.work_dir, out.artifacts, reader.manifest().origin);
+  }
   outputs.keep();
   context.log("map: outputs and metrics " + std::to_string(seconds_since(times.outputs_start)) +
               " s wall, " + std::to_string(process_cpu_seconds() - outputs_cpu_start) + " s cpu");

@@ -23,6 +23,10 @@ struct Inputs {
   nlohmann::json warnings = nlohmann::json::array();
   std::string dvl_sensor;                         // empty without DVL fusion
   Pose3 T_body_dvl_manifest = Pose3::Identity();  // the DVL rotation's starting value
+  // GNSS (gnss_inputs.cc): the sensor used (empty: none) and, per fix given to the solver,
+  // its stamp; fixes read without a position (status -1).
+  std::string gnss_sensor;
+  size_t gnss_no_fix = 0;
 };
 
 // Step 2 (inputs.cc): the recorded `map` poses as keyframes (stamps and initial values).
@@ -41,6 +45,15 @@ void odometry_edges(const io::MissionReader& reader, const RefineStageOptions& o
 // Step 5 (loop_closures.cc): the loop closures whose stamps both match a keyframe.
 void loop_closures(const io::MissionReader& reader, const RefineStageOptions& options,
                    const slam::RefineOptions& solver_options, Inputs& in);
+
+// Step 5b (gnss_inputs.cc): the GNSS fixes in the world (ENU) frame with their covariance and
+// the antenna's lever arm, when the mission has a gnss sensor and `options.gnss`.
+void gnss_inputs(const io::MissionReader& reader, const RefineStageOptions& options, Inputs& in);
+// report.json `gnss` (null without GNSS): counts of fixes used, rejected by the gate, without a
+// fix, outside the keyframes, the rejected fixes' stamps, the origin and the options used.
+nlohmann::json gnss_report_json(const slam::RefineResult& result, const Inputs& in,
+                                const RefineStageOptions& options,
+                                const proto::MissionManifest& manifest);
 
 // ---- shared by the steps above (inputs.cc) ------------------------------------------------
 

@@ -20,6 +20,7 @@ const char* const kDegeneracy =
     "Degeneracy (seed 000 Sec. IV-B: \"fully relies on IMU and DVL factors when degeneracy is "
     "detected\")";
 const char* const kSolver = "Solver";
+const char* const kGnss = "GNSS (a `gnss` sensor in mission.yaml, issue 30)";
 const char* const kEvaluation =
     "Evaluation (only when the mission has a `ground_truth` trajectory)";
 const char* const kAsAbove = "as above";
@@ -211,6 +212,28 @@ const OptionTable<O>& table() {
                      "solve uses them. Reported as `map_noise`. false: the three options above, "
                      "as given",
                      "beyond the paper: the recorded poses carry no covariance", kOdometry)),
+          option("gnss", &O::gnss,
+                 doc("",
+                     "add a position factor per GNSS fix (`slam::GnssPositionFactor`: the antenna "
+                     "at T_body_sensor, interpolated between the keyframes around the fix; "
+                     "covariance from the fix, else the sensor's `noise`). No-fix messages "
+                     "(status -1) are counted and left out. With 3 or more fixes r_0 keeps no "
+                     "pose part: the fixes place the trajectory in the world frame, which "
+                     "mission.yaml's `origin` makes the local ENU frame",
+                     "beyond the paper (issue 30)", kGnss)),
+          option("gnss_sensor", &O::gnss_sensor,
+                 doc("", "GNSS whose fixes make the factors", "", kGnss, "`\"\"` = first `gnss`")),
+          option("gnss_gate_chi2", &O::gnss_gate_chi2, greater_than(0),
+                 doc("",
+                     "> 0: a fix whose squared Mahalanobis distance (3 dof, its covariance) to "
+                     "the previous pass's estimate exceeds this is left out and counted "
+                     "(`gnss.rejected`); the first pass keeps every fix under a Cauchy loss. "
+                     "16.266 = chi-square 3 dof at p = 0.999",
+                     "beyond the paper: a reflected fix under a bridge is metres off, status 0",
+                     kGnss)),
+          option("gnss_min_sigma_m", &O::gnss_min_sigma_m, greater_than(0),
+                 doc("m", "> 0: floor on a fix's sigma per axis, m (RTK fixes claim mm)", kBeyond,
+                     kGnss)),
           option("max_iterations", &O::max_iterations, int_in_range(1, 10000),
                  doc("", "in [1, 10000]: Ceres iterations per pass", "", kSolver)),
           option("relinearization_passes", &O::relinearization_passes, int_in_range(1, 10),

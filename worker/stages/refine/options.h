@@ -61,6 +61,12 @@ struct RefineStageOptions {
   double map_drift_per_sqrt_m = 0.001;
   bool estimate_map_noise = true;
 
+  // GNSS position factors (issue 30), when the mission has a gnss sensor.
+  bool gnss = true;
+  std::string gnss_sensor;         // empty: the first gnss sensor
+  double gnss_gate_chi2 = 16.266;  // chi-square, 3 dof, p = 0.999
+  double gnss_min_sigma_m = 0.02;  // floor on a fix's stated sigma (RTK fixes claim mm)
+
   int max_iterations = 50;
   int relinearization_passes = 2;
   int threads = 2;

@@ -29,6 +29,7 @@ slam::RefineOptions RefineStageOptions::solver_options() const {
                           : degeneracy == "keep_well_conditioned"
                               ? slam::DegeneracyHandling::kKeepWellConditioned
                               : slam::DegeneracyHandling::kDropFactor;
+  s.gnss.gate_chi2 = gnss_gate_chi2;
   s.max_iterations = max_iterations;
   s.relinearization_passes = relinearization_passes;
   s.num_threads = threads;

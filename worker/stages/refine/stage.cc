@@ -5,7 +5,8 @@
 //      so a mission without the sensors fails early);
 //   4. odometry edges L_ij: the recorded `odometry` interpolated at the keyframes, or GICP
 //      between keyframe scans of the first lidar when the mission records none;
-//   5. loop closures (loops.csv);
+//   5. loop closures (loops.csv), and GNSS fixes in the world (ENU) frame when the mission has
+//      a gnss sensor (gnss_inputs.cc);
 //   6. the batch solve with DVL fusion (seed 000 Sec. IV) and, when ground truth exists, a
 //      second solve without it, so the report can set them side by side (Table II);
 //   7. trajectory_refined.tum, the self-check against the MAP poses, trajectories.json and the
@@ -49,6 +50,7 @@ StageResult RefineStage::run(StageContext& context) {
 
   // Step 5: loop closures.
   loop_closures(reader, options, solver_options, in);
+  gnss_inputs(reader, options, in);
   context.log("refine: " + std::to_string(in.solver.keyframes.size()) + " keyframes, " +
               std::to_string(in.solver.odometry.size()) + " odometry edges, " +
               std::to_string(in.solver.loop_closures.size()) + " loop closures, " +
@@ -94,6 +96,11 @@ StageResult RefineStage::run(StageContext& context) {
   write_trajectories(context.work_dir, map_poses, refined,
                      solves.both() ? &refined_without : nullptr, truth, options);
   out.artifacts.push_back(kTrajectoriesFile);
+  // Only with GNSS, so that report.json of a mission without it stays what it was.
+  if (!in.gnss_sensor.empty()) {
+    r["gnss"] = gnss_report_json(result, in, options, reader.manifest());
+    r["origin"] = r["gnss"]["origin"];
+  }
   r["warnings"] = in.warnings;
   context.progress(1.0);
   return out;
