@@ -1,0 +1,4 @@
+# tests/worker/io/lidar: raw lidar packets. The check against nebula's decoded clouds reads
+# KEEL_NEBULA_TESTDATA (nebula's src/nebula_velodyne folder; environment or cache).
+set(KEEL_NEBULA_TESTDATA "" CACHE PATH "nebula's src/nebula_velodyne folder (decoder ground truth)")
+keel_test(io/velodyne_packet SOURCES lidar/velodyne_packet_test.cc DEPS keel_lidar)
