@@ -2,3 +2,8 @@
 # KEEL_NEBULA_TESTDATA (nebula's src/nebula_velodyne folder; environment or cache).
 set(KEEL_NEBULA_TESTDATA "" CACHE PATH "nebula's src/nebula_velodyne folder (decoder ground truth)")
 keel_test(io/velodyne_packet SOURCES lidar/velodyne_packet_test.cc DEPS keel_lidar)
+keel_test(io/velodyne_nebula SOURCES lidar/velodyne_nebula_test.cc DEPS keel_io keel_lidar)
+if(KEEL_NEBULA_TESTDATA)
+  set_tests_properties(io/velodyne_nebula PROPERTIES
+    ENVIRONMENT "KEEL_NEBULA_TESTDATA=${KEEL_NEBULA_TESTDATA}")
+endif()
