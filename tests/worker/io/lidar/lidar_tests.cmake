@@ -7,3 +7,8 @@ if(KEEL_NEBULA_TESTDATA)
   set_tests_properties(io/velodyne_nebula PROPERTIES
     ENVIRONMENT "KEEL_NEBULA_TESTDATA=${KEEL_NEBULA_TESTDATA}")
 endif()
+keel_test(io/velodyne_bag SOURCES lidar/velodyne_bag_test.cc DEPS keel_io keel_lidar)
+if(KEEL_NEBULA_TESTDATA)
+  set_tests_properties(io/velodyne_bag PROPERTIES
+    ENVIRONMENT "KEEL_NEBULA_TESTDATA=${KEEL_NEBULA_TESTDATA}")
+endif()
