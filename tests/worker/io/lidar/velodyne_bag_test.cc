@@ -4,12 +4,16 @@
 // scans. Needs KEEL_NEBULA_TESTDATA (nebula's src/nebula_velodyne); skips without it.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "worker/io/bag/bag_source.h"
 #include "worker/io/io_error.h"
 #include "worker/io/lidar/velodyne_calibration.h"
+#include "worker/io/mission.h"
+#include "worker/io/mission_reader.h"
 
 namespace keel::io {
 namespace {
@@ -130,6 +134,68 @@ TEST(VelodyneBag, WrongModelIsAnErrorNamingTopicMessageAndPacket) {
               std::string::npos)
         << e.what();
   }
+}
+
+}  // namespace
+}  // namespace keel::io
+
+namespace keel::io {
+namespace {
+
+// A bundle whose lidar is the nebula bag's packet topic, with or without a calibration file.
+fs::path write_bundle(const fs::path& dir, const std::string& packets) {
+  fs::create_directories(dir);
+  fs::copy_file(vlp16_bag() / "1673400471837873222_0.db3", dir / "lidar.db3",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "mission.yaml")
+      << "keel_mission: 1\nname: velodyne\nbag: lidar.db3\nsensors:\n"
+         "  - name: lidar\n    type: lidar\n"
+         "    topic: /velodyne_packets\n    rate_hz: 10\n"
+         "    packets: "
+      << packets << "\n";
+  return dir;
+}
+
+TEST(VelodyneBag, MissionLidarWithPacketsAndCalibration) {
+  if (vlp16_bag().empty())
+    GTEST_SKIP() << "KEEL_NEBULA_TESTDATA is not set (nebula's src/nebula_velodyne)";
+  const fs::path dir =
+      fs::temp_directory_path() / ("keel-velodyne-mission-" + std::to_string(getpid()));
+  write_bundle(dir, "{model: VLP16, calibration: VLP16.yaml}");
+  fs::copy_file(fs::path(std::getenv("KEEL_NEBULA_TESTDATA")) /
+                    "nebula_velodyne_decoders/calibration/VLP16.yaml",
+                dir / "VLP16.yaml", fs::copy_options::overwrite_existing);
+  MissionReader reader(load_mission(dir));
+  auto scans = reader.open_scans("lidar");
+  PointCloud cloud;
+  size_t count = 0;
+  while (scans->next(cloud)) {
+    EXPECT_EQ(cloud.frame, "lidar");
+    EXPECT_TRUE(cloud.has_time());
+    ++count;
+  }
+  EXPECT_EQ(count, 4u);
+
+  // Without the file: an error naming the field.
+  fs::remove(dir / "VLP16.yaml");
+  try {
+    load_mission(dir);
+    ADD_FAILURE() << "no error";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("sensors[0].packets.calibration: 'VLP16.yaml' not found"),
+              std::string::npos)
+        << e.what();
+  }
+  // A model Keel does not know: an error naming the field and the known ones.
+  write_bundle(dir, "{model: HDL64E}");
+  try {
+    MissionReader(load_mission(dir)).open_scans("lidar");
+    ADD_FAILURE() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("packets"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("VLP16, VLP32C, HDL32E"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace
