@@ -15,7 +15,7 @@ shift
 build="${KEEL_FUZZ_BUILD_DIR:-$here/build-fuzz}"
 work="${KEEL_FUZZ_WORK:-$build/work}"
 all=(byte_range json_contracts bundle_check mission_yaml trajectory csv_streams scan_file bag mesh draco
-  image a50)
+  image a50 velodyne_packet gnss_csv init_messages)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
 export CCACHE_BASEDIR="$here"

@@ -102,6 +102,9 @@ Mission load_mission(const fs::path& dir_in) {
     if (!s.images.empty())
       mission.sensor_paths[s.name] =
           resolver.resolve(s.images, item + ".images", Kind::kIndexedFolder);
+    if (s.packets && !s.packets->calibration.empty())
+      mission.calibration_paths[s.name] =
+          resolver.resolve(s.packets->calibration, item + ".packets.calibration", Kind::kFile);
   }
   for (const auto& [name, t] : m.trajectories)
     if (!t.file.empty())

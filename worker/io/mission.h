@@ -20,6 +20,8 @@ struct Mission {
   std::map<std::string, std::filesystem::path> sensor_paths;
   // By trajectory name (map, odometry, ground_truth): TUM files; absent for bag topics.
   std::map<std::string, std::filesystem::path> trajectory_paths;
+  // By sensor name: packets.calibration (a Velodyne driver YAML); absent without one.
+  std::map<std::string, std::filesystem::path> calibration_paths;
   std::filesystem::path loop_closures_path;  // empty when absent
   std::filesystem::path ground_truth_path;   // empty when absent
   std::filesystem::path cad_mesh_path;       // empty when absent

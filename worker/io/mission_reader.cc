@@ -3,6 +3,7 @@
 #include "worker/io/display_path.h"
 #include "worker/io/gnss_csv.h"
 #include "worker/io/io_error.h"
+#include "worker/io/lidar/velodyne_calibration.h"
 #include "worker/io/stream_csv.h"
 #include "worker/io/tum.h"
 
@@ -78,6 +79,17 @@ ScanReadOptions MissionReader::scan_options(const std::string& sensor) const {
   options.point_time = s.point_time;
   options.sweep_period_s = 1.0 / s.rate_hz;
   options.frame = s.name;
+  if (s.packets) {
+    // Raw packets: the model's firing table with the driver's calibration, or its factory one.
+    const std::string field = display_path(mission_.manifest_path) + ": sensor '" + s.name +
+                              "' packets";
+    const auto model = lidar::velodyne_model_from_string(s.packets->model, field + ".model");
+    const auto path = mission_.calibration_paths.find(s.name);
+    options.packets = std::make_shared<const lidar::VelodyneCalibration>(
+        path == mission_.calibration_paths.end()
+            ? lidar::factory_calibration(model)
+            : lidar::load_velodyne_calibration(path->second, model));
+  }
   return options;
 }
 

@@ -162,7 +162,9 @@ class BagScanSource : public ScanSource {
   BagScanSource(std::shared_ptr<const BagReader::Impl> impl, std::string topic,
                 ScanReadOptions options)
       : impl_(std::move(impl)), topic_(std::move(topic)), options_(std::move(options)) {
-    impl_->expect_type(topic_, {"sensor_msgs/PointCloud2"});
+    packets_ = impl_->expect_type(topic_, {"sensor_msgs/PointCloud2", kVelodyneScanRos1}) ==
+               kVelodyneScanRos1;
+    check_packet_options(impl_->name(), topic_, packets_, options_);
     count_ = impl_->topic(topic_).messages;
     try {
       view_ = std::make_unique<rosbag::View>(impl_->bag, rosbag::TopicQuery(topic_));
@@ -180,11 +182,23 @@ class BagScanSource : public ScanSource {
     return read_guarded(*impl_, topic_, index_, [&] {
       if (it_ == view_->end()) return false;
       const std::string what = where(*impl_, topic_, index_);
-      auto msg = instantiate_as<sensor_msgs::PointCloud2>(*it_, what);
-      const TimeNs t_ns = stamp_of(msg->header.stamp, *it_);
-      check_increasing(*impl_, topic_, index_, t_ns, previous_ns_);
-      cloud = unpack_point_cloud2(view_of(*msg), t_ns, options_, what);
-      previous_ns_ = t_ns;
+      if (packets_) {
+        // One VelodyneScan at a time, decoded from its serialised bytes.
+        bytes_.resize(it_->size());
+        ros::serialization::OStream out(bytes_.data(), static_cast<uint32_t>(bytes_.size()));
+        it_->write(out);
+        const ros::Time received = it_->getTime();
+        cloud = decode_velodyne_message(bytes_.data(), bytes_.size(), false,
+                                        static_cast<TimeNs>(received.sec) * 1000000000 +
+                                            received.nsec,
+                                        options_, what, scratch_);
+      } else {
+        auto msg = instantiate_as<sensor_msgs::PointCloud2>(*it_, what);
+        cloud = unpack_point_cloud2(view_of(*msg), stamp_of(msg->header.stamp, *it_), options_,
+                                    what);
+      }
+      check_increasing(*impl_, topic_, index_, cloud.t_ns, previous_ns_);
+      previous_ns_ = cloud.t_ns;
       ++index_;
       ++it_;
       return true;
@@ -200,6 +214,9 @@ class BagScanSource : public ScanSource {
   rosbag::View::iterator it_;
   size_t index_ = 0;
   TimeNs previous_ns_ = 0;
+  bool packets_ = false;  // velodyne_msgs/VelodyneScan
+  std::vector<uint8_t> bytes_;
+  std::vector<lidar::VelodynePoint> scratch_;
 };
 
 class BagImageSource : public ImageSource {

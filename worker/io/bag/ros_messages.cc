@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "worker/io/io_error.h"
+#include "worker/io/lidar/velodyne_scan.h"
 
 namespace keel::io {
 
@@ -135,6 +136,35 @@ void check_increasing(const std::string& what, size_t index, TimeNs t_ns, TimeNs
     throw IoError(what + ": " + (t_ns == previous_ns ? "duplicate" : "decreasing") + " stamp " +
                   format_seconds(t_ns) + " (previous " + format_seconds(previous_ns) +
                   "); expected strictly increasing header stamps");
+}
+
+void check_packet_options(const std::string& bag, const std::string& topic, bool is_packets,
+                          const ScanReadOptions& options) {
+  if (is_packets && !options.packets)
+    throw IoError(bag + ": topic '" + topic +
+                  "' holds raw Velodyne packets (velodyne_msgs/VelodyneScan): give its lidar "
+                  "sensor `packets: {model: VLP16 | VLP32C | HDL32E}` in mission.yaml");
+  if (!is_packets && options.packets)
+    throw IoError(bag + ": topic '" + topic +
+                  "' holds point clouds, not velodyne_msgs/VelodyneScan packets: remove the "
+                  "sensor's `packets:`");
+}
+
+PointCloud decode_velodyne_message(const uint8_t* data, size_t size, bool cdr, TimeNs received_ns,
+                                   const ScanReadOptions& options, const std::string& what,
+                                   std::vector<lidar::VelodynePoint>& scratch) {
+  lidar::VelodyneScanView scan;
+  try {
+    scan = cdr ? lidar::parse_velodyne_scan_cdr(data, size)
+               : lidar::parse_velodyne_scan_ros1(data, size);
+  } catch (const IoError& e) {
+    throw IoError(what + ": " + e.what());
+  }
+  // The firing times are the point times: point_time (a PointCloud2 field) does not apply.
+  PointCloud cloud =
+      lidar::decode_velodyne_scan(scan, received_ns, *options.packets, {}, what, scratch);
+  cloud.frame = options.frame;
+  return cloud;
 }
 
 }  // namespace keel::io

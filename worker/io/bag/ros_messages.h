@@ -11,11 +11,25 @@
 
 #include "core/point_cloud.h"
 #include "core/pose.h"
-#include "worker/io/image_source.h"
-#include "worker/io/cloud/packed_cloud.h"
 #include "worker/io/bag/ros_message_views.h"
+#include "worker/io/cloud/packed_cloud.h"
+#include "worker/io/image_source.h"
+#include "worker/io/lidar/velodyne_packet.h"
 
 namespace keel::io {
+
+// Raw Velodyne packets (velodyne_msgs/VelodyneScan) on a lidar topic.
+constexpr const char* kVelodyneScanRos1 = "velodyne_msgs/VelodyneScan";
+constexpr const char* kVelodyneScanRos2 = "velodyne_msgs/msg/VelodyneScan";
+// A packet topic needs `options.packets` (mission.yaml `packets:`), a PointCloud2 topic must
+// not have it; fails naming the bag, the topic and what to write.
+void check_packet_options(const std::string& bag, const std::string& topic, bool is_packets,
+                          const ScanReadOptions& options);
+// One serialised VelodyneScan (ROS 1, or CDR when `cdr`) decoded into one scan
+// (lidar/velodyne_scan.h); `received_ns` (the bag's time) stands in for missing stamps.
+PointCloud decode_velodyne_message(const uint8_t* data, size_t size, bool cdr, TimeNs received_ns,
+                                   const ScanReadOptions& options, const std::string& what,
+                                   std::vector<lidar::VelodynePoint>& scratch);
 
 // Little-endian point records only; rows may be padded (row_step > width * point_step).
 PointCloud unpack_point_cloud2(const PointCloud2View& msg, TimeNs t_ns,

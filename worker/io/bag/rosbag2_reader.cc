@@ -236,17 +236,22 @@ class Ros2ScanSource : public ScanSource {
     if (!cursor_.next(m)) return false;
     returned_ = true;
     const std::string what = cursor_.where();
-    expect_type(m, {"sensor_msgs/msg/PointCloud2"}, what);
-    ros2::PointCloud2 msg;
-    try {
-      msg = ros2::decode_point_cloud2(m.data, m.size);
-    } catch (const BagFormatError& e) {
-      throw IoError(what + ": " + e.what());
+    const bool packets =
+        expect_type(m, {"sensor_msgs/msg/PointCloud2", kVelodyneScanRos2}, what) == 1;
+    if (packets) {
+      cloud = decode_velodyne_message(m.data, m.size, true, stamp_of(0, m), options_, what,
+                                      scratch_);
+    } else {
+      ros2::PointCloud2 msg;
+      try {
+        msg = ros2::decode_point_cloud2(m.data, m.size);
+      } catch (const BagFormatError& e) {
+        throw IoError(what + ": " + e.what());
+      }
+      cloud = unpack_point_cloud2(msg.view, stamp_of(msg.stamp_ns, m), options_, what);
     }
-    const TimeNs t_ns = stamp_of(msg.stamp_ns, m);
-    check_increasing(what, cursor_.index(), t_ns, previous_ns_);
-    cloud = unpack_point_cloud2(msg.view, t_ns, options_, what);
-    previous_ns_ = t_ns;
+    check_increasing(what, cursor_.index(), cloud.t_ns, previous_ns_);
+    previous_ns_ = cloud.t_ns;
     return true;
   }
 
@@ -256,6 +261,7 @@ class Ros2ScanSource : public ScanSource {
   ScanReadOptions options_;
   bool returned_ = false;
   TimeNs previous_ns_ = 0;
+  std::vector<lidar::VelodynePoint> scratch_;
 };
 
 class Ros2ImageSource : public ImageSource {
@@ -501,8 +507,10 @@ std::vector<StaticTransform> Rosbag2Reader::read_static_transforms(
 
 std::unique_ptr<ScanSource> Rosbag2Reader::open_scans(const std::string& topic_name,
                                                       ScanReadOptions options) const {
-  const size_t count = topic(topic_name).messages;
-  return std::make_unique<Ros2ScanSource>(impl_, topic_name, count, std::move(options));
+  const BagTopicInfo& info = topic(topic_name);
+  check_packet_options(display_path(path()), topic_name, info.datatype == kVelodyneScanRos2,
+                       options);
+  return std::make_unique<Ros2ScanSource>(impl_, topic_name, info.messages, std::move(options));
 }
 
 std::unique_ptr<ImageSource> Rosbag2Reader::open_images(const std::string& topic_name) const {

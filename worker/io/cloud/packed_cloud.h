@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,6 +15,10 @@
 #include "proto/mission_manifest.h"
 
 namespace keel::io {
+
+namespace lidar {
+struct VelodyneCalibration;
+}
 
 enum class FieldType {
   kInt8,
@@ -55,6 +60,9 @@ struct ScanReadOptions {
   double sweep_period_s = 0.0;
   bool keep_non_finite = false;  // false: drop points with NaN/inf coordinates
   std::string frame;             // copied into PointCloud::frame
+  // A topic of raw velodyne_msgs/VelodyneScan packets is decoded with this calibration
+  // (lidar/velodyne_scan.h; the firing times replace point_time); null: PointCloud2 only.
+  std::shared_ptr<const lidar::VelodyneCalibration> packets;
 };
 
 // Unpacks x, y, z (float or double, required), intensity and ring (any numeric, optional) and

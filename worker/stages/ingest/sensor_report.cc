@@ -136,6 +136,14 @@ json scans_report(const io::MissionReader& reader, const proto::SensorSpec& s,
                                        : time_offset.max <= slack ? "last point"
                                                                   : "inside the sweep";
     }
+  } else if (s.packets) {
+    // Raw packets: each point's time is its firing time from the model's table.
+    r["packets"] = {{"model", s.packets->model},
+                    {"calibration", s.packets->calibration.empty() ? json("factory table")
+                                                                   : json(s.packets->calibration)},
+                    {"span_s", time_span.to_json()},
+                    {"offset_min_s", time_offset.count ? json(time_offset.min) : json(nullptr)},
+                    {"offset_max_s", time_offset.count ? json(time_offset.max) : json(nullptr)}};
   }
   return r;
 }
