@@ -36,7 +36,7 @@ if [ "${KEEL_SKIP_FUZZ:-0}" != 1 ]; then
   if [ "$fuzz_seconds" -gt 0 ]; then
     KEEL_FUZZ_BUILD_DIR="$build-fuzz" KEEL_SIM="$build/bin/keel-sim" \
       bash "$here/tests/fuzz/run_fuzzers.sh" "$fuzz_seconds" byte_range json_contracts \
-      bundle_check mission_yaml trajectory csv_streams mesh draco image velodyne_packet a50 gnss_csv
+      bundle_check mission_yaml trajectory csv_streams mesh draco image velodyne_packet a50 gnss_csv \
       init_messages
   fi
 fi
