@@ -21,6 +21,7 @@ class CsvReader {
 
   // Advances to the next data row (blank lines are skipped); false at the end.
   bool next();
+  size_t num_columns() const { return names_.size(); }
   bool has_column(size_t column) const { return column < names_.size(); }
   // Column `column` of the current row as a number; NaN/inf fail unless allowed.
   double number(size_t column, bool allow_nan = false) const;
