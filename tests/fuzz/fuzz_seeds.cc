@@ -216,8 +216,8 @@ int main(int argc, char** argv) {
       record(bag);
     }
     const io::BagReader check(out / "bag" / name);  // throws when Keel cannot read it
-    if (check.topics().size() != 6) {
-      std::fprintf(stderr, "fuzz_seeds: %s has %zu topics, not 6\n", name, check.topics().size());
+    if (check.topics().size() != 7) {
+      std::fprintf(stderr, "fuzz_seeds: %s has %zu topics, not 7\n", name, check.topics().size());
       return 1;
     }
   }
