@@ -289,9 +289,9 @@ TEST(PointTimeConventions, SplitTimeIsCombinedExactlyInNanoseconds) {
   // Offsets exact in float32 ns: the written integers are then exactly the firing times.
   for (size_t i = 0; i < cloud.size(); ++i) cloud.time_s[i] = static_cast<float>(i) * 0.001f;
   const PackedCloud packed = pack_cloud(cloud, PointTimeEncoding{spec, FieldType::kUint32});
-  const PackedField& sec = *packed.view().find("sec");
-  const auto offsets =
-      point_time_offsets(packed.view(), sec, kScanStart, spec, kSweepS, "split.pcd");
+  const PackedCloudView view = packed.view();  // find() points into this view's fields
+  const PackedField& sec = *view.find("sec");
+  const auto offsets = point_time_offsets(view, sec, kScanStart, spec, kSweepS, "split.pcd");
   for (size_t i = 0; i < cloud.size(); ++i) {
     const TimeNs expected_ns = std::llround(double(cloud.time_s[i]) * 1e9);
     EXPECT_EQ(std::llround(offsets[i] * 1e9), expected_ns) << i;
