@@ -1,5 +1,7 @@
 #include "worker/init/init_command.h"
 
+#include <CLI/CLI.hpp>
+
 #include <fstream>
 
 #include "worker/init/bag_survey.h"
@@ -46,6 +48,18 @@ int run_init(const InitArgs& args, std::ostream& out, std::ostream& err) {
     return 1;
   }
   return 0;
+}
+
+std::pair<CLI::App*, std::shared_ptr<InitArgs>> add_init_subcommand(CLI::App& app) {
+  auto args = std::make_shared<InitArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "init", "Print a bag's topics and write a commented mission.yaml draft for it");
+  cmd->add_option("bag", args->bag, "A ROS1 .bag, a rosbag2 folder, or a .mcap or .db3 file")
+      ->required();
+  cmd->add_option("-o,--output", args->output, "The draft to write (default mission.yaml)");
+  cmd->add_option("--name", args->name, "Mission name (default: from the bag's name)");
+  cmd->add_flag("--force", args->force, "Replace an existing output file");
+  return {cmd, args};
 }
 
 }  // namespace keel::init

@@ -4,8 +4,14 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <ostream>
 #include <string>
+#include <utility>
+
+namespace CLI {
+class App;
+}
 
 namespace keel::init {
 
@@ -18,5 +24,9 @@ struct InitArgs {
 
 // Returns the exit code: 0 written, 1 bad arguments or an unreadable bag (message on `err`).
 int run_init(const InitArgs& args, std::ostream& out, std::ostream& err);
+
+// Adds the `init` subcommand's arguments to `app` (the same for `keel` and `keel-worker`);
+// the returned arguments are filled when the command line is parsed.
+std::pair<CLI::App*, std::shared_ptr<InitArgs>> add_init_subcommand(CLI::App& app);
 
 }  // namespace keel::init
