@@ -139,19 +139,17 @@ start_worker() {  # name
     --wait-seconds 5 --request-timeout 10 >>"$tmp/worker-$1.log" 2>&1 &
   pid_of[$1]=$!
 }
-for w in w1 w2 w3; do start_worker "$w"; done
-
 # --- 20 missions through replica a ---
 api() {  # replica url, path
   curl -sf --max-time 10 -H "Authorization: Bearer $token" "$1$2"
 }
 url_a="http://$addr_a:$port_a" url_b="http://$addr_b:$port_b"
-mission() {  # name: a lidar of 5,000 scans (ingest reads them one by one: seconds)
+mission() {  # name: a lidar of 15,000 scans (ingest reads them one by one: seconds)
   local dir="$tmp/missions/$1"
   mkdir -p "$dir/lidar"
   printf 'keel_mission: 1\nname: %s\nplatform: usv\nsensors:\n  - name: lidar\n    type: lidar\n    scans: lidar\n    rate_hz: 10\n' "$1" >"$dir/mission.yaml"
   printf '# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n0 0 1\n' >"$dir/lidar/s.pcd"
-  { echo "t,file"; awk -v seed="$2" 'BEGIN { for (i = 0; i < 5000 + seed; ++i) printf "%d.%d,s.pcd\n", 1700000000 + int(i / 10), i % 10 }'; } >"$dir/lidar/index.csv"
+  { echo "t,file"; awk -v seed="$2" 'BEGIN { for (i = 0; i < 15000 + seed; ++i) printf "%d.%d,s.pcd\n", 1700000000 + int(i / 10), i % 10 }'; } >"$dir/lidar/index.csv"
 }
 export HOME="$tmp" XDG_CACHE_HOME="$tmp/xdg-cache" XDG_CONFIG_HOME="$tmp/xdg-config"
 for i in $(seq -w 1 20); do
@@ -161,6 +159,9 @@ for i in $(seq -w 1 20); do
 done
 [ "$(wc -l <"$tmp/jobs.txt")" -eq 20 ] || fail "20 jobs expected"
 echo "20 missions submitted through replica a"
+# Workers start once every job is queued: started earlier, they could finish the first jobs
+# while the rest are still being uploaded, and w1 might hold nothing when the faults begin.
+for w in w1 w2 w3; do start_worker "$w"; done
 
 jobs_json() { api "$url_b" "/v1/jobs?limit=100"; }
 holder_of() {  # worker name -> a job it runs now ("" = none), as replica b sees it
