@@ -99,8 +99,8 @@ export const jobsApi = {
   retry: (id) => postJson(`v1/jobs/${encodeURIComponent(id)}/retry`),
   // A new job on the same stored mission with the same stages and options: nothing is
   // uploaded again (POST /v1/reprocess).
-  reprocess: (job) =>
-    postJson('v1/reprocess', {mission_ids: [job.mission_id], stages: job.stages, options: job.options}),
+  reprocess: (job, options = job.options) =>
+    postJson('v1/reprocess', {mission_ids: [job.mission_id], stages: job.stages, options}),
 };
 
 export const artifactUrl = (artifact) => `v1/artifacts/${encodeURIComponent(artifact.id)}`;
@@ -132,6 +132,21 @@ export async function fetchArtifact(artifact, {signal, onProgress} = {}) {
     offset += chunk.length;
   }
   return joined.buffer;
+}
+
+// Bytes start .. end-1 of an artifact (one HTTP Range request, docs/api.md "Ranged
+// downloads"). A server that answers the whole file (200) is sliced here.
+export async function fetchArtifactRange(artifact, start, end, {signal} = {}) {
+  if (end <= start) return new ArrayBuffer(0);
+  const response = await request(artifactUrl(artifact), {signal, headers: {Range: `bytes=${start}-${end - 1}`}});
+  const bytes = await response.arrayBuffer();
+  if (response.status === 206) {
+    if (bytes.byteLength !== end - start)
+      throw new Error(`${artifact.name}: bytes ${start}-${end - 1} asked, ${bytes.byteLength} received`);
+    return bytes;
+  }
+  if (bytes.byteLength < end) throw new Error(`${artifact.name}: ${bytes.byteLength} bytes, shorter than ${end}`);
+  return bytes.slice(start, end);
 }
 
 export async function fetchArtifactJson(artifact, options) {

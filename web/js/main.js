@@ -1,5 +1,5 @@
 // The dashboard's entry: a hash router (#/jobs, #/jobs/<id>, #/jobs/<id>/report,
-// #/jobs/<id>/viewer, #/queue, #/signin), the sign-in state and the live-event indicator.
+// #/jobs/<id>/viewer, #/jobs/<id>/calibrate, #/queue, #/signin), the sign-in state and the live-event indicator.
 // Pages are modules with mount(container, route) -> unmount; the report view and the 3D
 // viewer are loaded only when opened, so the job list never waits for uPlot or three.js.
 import {jobsApi, prefetchJson, session} from './api.js';
@@ -17,6 +17,7 @@ const pages = {
   job: () => import('./pages/job.js'),
   report: () => import('./pages/report.js'),
   viewer: () => import('./pages/viewer.js'),
+  calibrate: () => import('./pages/calibrate.js'),
   queue: () => import('./pages/queue.js'),
 };
 

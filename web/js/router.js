@@ -1,5 +1,5 @@
 // Hash routes of the dashboard (#/jobs, #/jobs/<id>, #/jobs/<id>/report,
-// #/jobs/<id>/viewer?cam=..., #/queue, #/signin?next=...). Pure parse, tested in node.
+// #/jobs/<id>/viewer?cam=..., #/jobs/<id>/calibrate, #/queue, #/signin?next=...). Pure parse, tested in node.
 
 // "#/jobs/j_1/viewer?cam=..." -> {page: 'viewer', id: 'j_1', query: URLSearchParams}
 export function parseRoute(hash) {
@@ -17,7 +17,7 @@ export function parseRoute(hash) {
   if (parts[0] === 'queue') return {page: 'queue', query};
   if (parts[0] === 'jobs' && parts[1]) {
     const sub = parts[2];
-    if (sub === 'report' || sub === 'viewer') return {page: sub, id: parts[1], query};
+    if (sub === 'report' || sub === 'viewer' || sub === 'calibrate') return {page: sub, id: parts[1], query};
     return {page: 'job', id: parts[1], query};
   }
   return {page: 'jobs', query};

@@ -1,6 +1,7 @@
 // One job: its error first when it failed, the stage timeline with each stage's time, the
 // log followed live (a `log` event says new lines exist; they are read from where this page
-// stopped) with a level filter, and the artifacts with size, SHA-256 and download.
+// stopped) with a level filter, and the artifacts with size, SHA-256 and download; links to
+// the report, the 3D viewer and, when the job has calibration scans, the calibration page.
 import {ApiError, fetchArtifact, jobsApi} from '../api.js';
 import {actionButtons, handleActionClick} from '../actions.js';
 import {h, message} from '../dom.js';
@@ -28,6 +29,8 @@ export function mount(container, {id}) {
   const follow = h('input', {type: 'checkbox', id: 'log-follow', checked: true});
   const logBox = h('pre', {class: 'log', id: 'log'});
   const artifacts = h('div', {id: 'artifacts'});
+  // Shown once the artifacts include calibration_scans.bin (docs/calibration.md section 3).
+  const calibrateLink = h('a', {href: jobHash(id, 'calibrate'), id: 'open-calibrate', hidden: true}, 'Calibration');
 
   container.append(header, errorBox, notice,
     h('section', null, h('h2', null, 'Stages'), timeline),
@@ -42,7 +45,7 @@ export function mount(container, {id}) {
   function renderHeader() {
     const links = h('span', {class: 'links'},
       h('a', {href: jobHash(job.id, 'report'), id: 'open-report'}, 'Report'),
-      h('a', {href: jobHash(job.id, 'viewer'), id: 'open-viewer'}, '3D viewer'));
+      h('a', {href: jobHash(job.id, 'viewer'), id: 'open-viewer'}, '3D viewer'), calibrateLink);
     header.replaceChildren(
       h('h1', null, 'Job ', h('code', null, job.id), ' ', stateBadge(job.state)),
       h('dl', {class: 'facts'},
@@ -152,6 +155,7 @@ export function mount(container, {id}) {
   }
 
   function renderArtifacts(list) {
+    calibrateLink.hidden = !list.some((a) => a.name === 'calibration_scans.bin');
     if (list.length === 0) {
       artifacts.replaceChildren(h('p', {class: 'muted'}, 'No artifacts yet.'));
       return;

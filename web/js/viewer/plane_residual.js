@@ -14,6 +14,9 @@ export const PLANE_DEFAULTS = {
   max_flatness: 0.1,
 };
 
+// Candidate points whose residual the page computes on every step.
+export const SAMPLE_POINTS = 5000;
+
 const SPAN = 131072;  // voxel indices per axis around the first point: 65 km at 0.5 m
 const HALF = SPAN / 2;
 const key = (ix, iy, iz) => ((ix + HALF) * SPAN + (iy + HALF)) * SPAN + (iz + HALF);
@@ -129,7 +132,7 @@ export function pointToPlane(map, x, y, z) {
 
 // Up to `size` candidate points spread evenly over a window's scans (the same picks for
 // every step of the sliders): {scan: Int32Array, x, y, z: Float32Array} in the sensor frames.
-export function samplePoints(scanPointArrays, size = 5000) {
+export function samplePoints(scanPointArrays, size = SAMPLE_POINTS) {
   const total = scanPointArrays.reduce((t, points) => t + points.length / 3, 0);
   const count = Math.min(size, total);
   const sample = {scan: new Int32Array(count), x: new Float32Array(count), y: new Float32Array(count), z: new Float32Array(count)};
