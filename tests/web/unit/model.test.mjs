@@ -58,6 +58,7 @@ test('routes', () => {
   assert.equal(parseRoute('#/jobs/j_1/viewer?cam=1,2,3,4,5,6').query.get('cam'), '1,2,3,4,5,6');
   assert.equal(parseRoute('#/jobs/j_2').page, 'job');
   assert.equal(parseRoute('#/jobs/j_2/report').page, 'report');
+  assert.deepEqual({...parseRoute('#/jobs/j_2/calibrate?candidate=sonar'), query: undefined}, {page: 'calibrate', id: 'j_2', query: undefined});
   assert.equal(parseRoute('').page, 'jobs');
   assert.equal(parseRoute('#/queue').page, 'queue');
   assert.equal(parseRoute('#/jobs/%E0%A4%A').page, 'jobs');  // a bad escape is not an error
