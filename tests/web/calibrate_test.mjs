@@ -273,8 +273,11 @@ test('a 1 M-point window: time per slider step (printed, not asserted)', async (
       frame.push(performance.now() - t1);
       await new Promise((r) => setTimeout(r, 0));
     }
-    return {step, frame};
+    // Positions never re-uploaded: each BufferAttribute still at version 0.
+    const versions = window.keelCalibration.candidateGroup.children.map((o) => o.geometry.getAttribute('position').version);
+    return {step, frame, versions};
   });
+  assert.ok(figures.versions.every((v) => v === 0), `position versions ${figures.versions}`);
   const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];
   const col = (c) => median(figures.step.map((s) => s[c]));
   console.log(`calibration page, ${points} points in the window, median of 15 slider steps: ` +

@@ -112,7 +112,7 @@ test('the residual of points on a known plane moved by d is d', () => {
   for (const [normal, d] of [[[0, 0, 1], 0.03], [[1, 2, 3], 0.12], [[0, 1, 0], 0], [[-2, 1, 0.5], 0.3]]) {
     const {reference, candidate} = planeScans(normal, 1.5, d);
     const map = buildPlaneMap([{points: reference, matrix: ident}]);
-    assert.ok(map.planes.size > 10, `${map.planes.size} planes`);
+    assert.ok(map.count > 10, `${map.count} planes`);
     const sample = samplePoints([candidate.subarray(0, 900), candidate.subarray(900)], 500);
     assert.equal(sample.scan.length, 500);
     const r = residual(map, sample, [ident, ident], 0.05);
@@ -120,6 +120,10 @@ test('the residual of points on a known plane moved by d is d', () => {
     close(r.median_m, d, 2e-5, `median for normal ${normal}, d ${d}`);
     assert.ok(r.matched >= 0.8 * r.count, `${r.matched} of ${r.count} matched`);
     assert.equal(r.within, d <= 0.05 ? 1 : 0);
+    // The hash that replaces the dense grid over a huge extent finds the same planes.
+    const hashed = buildPlaneMap([{points: reference, matrix: ident}], {max_grid_cells: 0});
+    assert.ok(hashed.hash && !hashed.grid);
+    assert.deepEqual(residual(hashed, sample, [ident, ident], 0.05), r);
   }
 });
 

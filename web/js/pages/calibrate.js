@@ -239,7 +239,8 @@ export function mount(container, {id, query}) {
     const r = residual(state.planes, state.sample, matrices, Number(threshold.value) || 0);
     const t2 = performance.now();
     state.lastStep = {placeMs: t1 - t0, residualMs: t2 - t1, residual: r, matrices};
-    const shown = Number.isNaN(r.median_m) ? 'no candidate point near a reference plane'
+    const shown = Number.isNaN(r.median_m)
+        ? `no point of ${state.candidate} lies near a plane of ${state.reference} in keyframes ${state.k}..${state.k + state.n - 1}`
         : `median ${formatNumber(r.median_m, 3)} m · ${(100 * r.within).toFixed(1)} % within ${r.threshold_m} m ` +
           `(${formatNumber(r.matched)} of ${formatNumber(r.count)} points near a reference plane)`;
     readout.textContent = `point-to-plane residual: ${shown}`;

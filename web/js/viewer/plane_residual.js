@@ -12,6 +12,8 @@ export const PLANE_DEFAULTS = {
   min_points: 6,
   // lambda_min / lambda_mid at most this: the voxel's points are a plane, not a blob or a line.
   max_flatness: 0.1,
+  // The dense lookup grid's largest size (64 MiB of Int32); beyond, a hash.
+  max_grid_cells: 1 << 24,
 };
 
 // Candidate points whose residual the page computes on every step.
@@ -62,7 +64,7 @@ export function symmetricEigen3([a00, a01, a02, a11, a12, a22]) {
 // The planes of a window of reference scans: scans = [{points: Float32Array (x, y, z in the
 // sensor frame), matrix: T_world_sensor (extrinsic.js layout)}].
 export function buildPlaneMap(scans, options = {}) {
-  const {voxel_m, min_points, max_flatness} = {...PLANE_DEFAULTS, ...options};
+  const {voxel_m, min_points, max_flatness, max_grid_cells} = {...PLANE_DEFAULTS, ...options};
   const origin = [0, 0, 0];
   let haveOrigin = false;
   const sums = new Map();  // key -> Float64Array [n, sx, sy, sz, sxx, sxy, sxz, syy, syz, szz]
@@ -89,7 +91,13 @@ export function buildPlaneMap(scans, options = {}) {
       s[4] += x * x; s[5] += x * y; s[6] += x * z; s[7] += y * y; s[8] += y * z; s[9] += z * z;
     }
   }
-  const planes = new Map();  // key -> Float64Array [cx, cy, cz, nx, ny, nz] (relative to origin)
+  // The planes in one Float64Array (cx, cy, cz, nx, ny, nz relative to the origin, 6 per
+  // plane) and a lookup from voxel to plane: a dense grid of plane numbers over the planes'
+  // bounding box (one array read per neighbour, what keeps a slider step fast) unless that
+  // box is huge, then the hash.
+  const found = [];
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
   for (const [k, s] of sums) {
     const n = s[0];
     if (n < min_points) continue;
@@ -98,9 +106,42 @@ export function buildPlaneMap(scans, options = {}) {
                  s[7] / n - c[1] * c[1], s[8] / n - c[1] * c[2], s[9] / n - c[2] * c[2]];
     const {values, vectors} = symmetricEigen3(cov);
     if (!(values[1] > 0) || Math.max(0, values[0]) > max_flatness * values[1]) continue;
-    planes.set(k, Float64Array.of(...c, ...vectors[0]));
+    const cell = [Math.floor(k / (SPAN * SPAN)) - HALF, Math.floor(k / SPAN) % SPAN - HALF, (k % SPAN) - HALF];
+    for (let d = 0; d < 3; d += 1) {
+      lo[d] = Math.min(lo[d], cell[d]);
+      hi[d] = Math.max(hi[d], cell[d]);
+    }
+    found.push([k, cell, c, vectors[0]]);
   }
-  return {planes, origin, voxel_m, referencePoints: scans.reduce((t, s) => t + s.points.length / 3, 0)};
+  const planes = new Float64Array(6 * found.length);
+  found.forEach(([, , c, normal], i) => planes.set([...c, ...normal], 6 * i));
+  const size = found.length ? hi.map((h, d) => h - lo[d] + 1) : [0, 0, 0];
+  let grid = null;
+  let hash = null;
+  if (size[0] * size[1] * size[2] <= max_grid_cells) {
+    grid = new Int32Array(size[0] * size[1] * size[2]).fill(-1);
+    found.forEach(([, cell], i) => {
+      grid[(cell[0] - lo[0]) + size[0] * ((cell[1] - lo[1]) + size[1] * (cell[2] - lo[2]))] = i;
+    });
+  } else {
+    hash = new Map(found.map(([k], i) => [k, i]));
+  }
+  return {planes, count: found.length, grid, hash, lo, size, origin, voxel_m,
+          referencePoints: scans.reduce((t, s) => t + s.points.length / 3, 0)};
+}
+
+// The plane number of voxel (ix, iy, iz), or -1.
+function planeAt(map, ix, iy, iz) {
+  if (map.hash) {
+    const found = map.hash.get(key(ix, iy, iz));
+    return found === undefined ? -1 : found;
+  }
+  const x = ix - map.lo[0];
+  const y = iy - map.lo[1];
+  const z = iz - map.lo[2];
+  const [nx, ny, nz] = map.size;
+  if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz) return -1;
+  return map.grid[x + nx * (y + ny * z)];
 }
 
 // Point-to-plane distance (m) of a world point to the plane whose centroid is nearest among
@@ -113,21 +154,23 @@ export function pointToPlane(map, x, y, z) {
   const ix = Math.floor(px / voxel_m);
   const iy = Math.floor(py / voxel_m);
   const iz = Math.floor(pz / voxel_m);
-  let best = null;
+  let best = -1;
   let bestSq = Infinity;
   for (let dx = -1; dx <= 1; dx += 1)
     for (let dy = -1; dy <= 1; dy += 1)
       for (let dz = -1; dz <= 1; dz += 1) {
-        const plane = planes.get(key(ix + dx, iy + dy, iz + dz));
-        if (!plane) continue;
-        const sq = (px - plane[0]) ** 2 + (py - plane[1]) ** 2 + (pz - plane[2]) ** 2;
+        const i = planeAt(map, ix + dx, iy + dy, iz + dz);
+        if (i < 0) continue;
+        const o = 6 * i;
+        const sq = (px - planes[o]) ** 2 + (py - planes[o + 1]) ** 2 + (pz - planes[o + 2]) ** 2;
         if (sq < bestSq) {
           bestSq = sq;
-          best = plane;
+          best = o;
         }
       }
-  if (!best) return NaN;
-  return Math.abs(best[3] * (px - best[0]) + best[4] * (py - best[1]) + best[5] * (pz - best[2]));
+  if (best < 0) return NaN;
+  return Math.abs(planes[best + 3] * (px - planes[best]) + planes[best + 4] * (py - planes[best + 1]) +
+                  planes[best + 5] * (pz - planes[best + 2]));
 }
 
 // Up to `size` candidate points spread evenly over a window's scans (the same picks for
