@@ -9,7 +9,7 @@
 // the same points and is ~0 at the true extrinsic; "reprocess" sends the job's stages and
 // options plus the override (and, once the server accepts `calibration` options, the new
 // job carries it). Printed, not asserted: the time per slider step on a 1 M-point window.
-//   node tests/web/calibrate_test.mjs --bin build/bin --web build/share/keel/web
+//   node tests/web/calibrate_test.mjs --bin build/bin --web build/share/keel/web [--out DIR (a screenshot)]
 // Exits 77 (CTest: skipped) with the reason when Chromium or node_modules are absent.
 import assert from 'node:assert/strict';
 import {createHash} from 'node:crypto';
@@ -223,6 +223,11 @@ test('the residual shown follows every step and equals plane_residual.js on the 
   assert.ok(atTruth.median < 1e-4, `median at the truth: ${atTruth.text}`);
   // A point near the corner's edges can match the other plane's voxel (nearest centroid).
   assert.ok(atTruth.within > 0.97, `within at the truth: ${atTruth.text}`);
+  if (args.out) {
+    fs.mkdirSync(args.out, {recursive: true});
+    await page.evaluate(() => new Promise((resolve) => window.keelCalibration.scene.requestRender(resolve)));
+    await page.screenshot({path: path.join(args.out, 'calibrate_at_truth.png')});
+  }
   assert.equal(atTruth.median, nodeResidual(0, 10, truth).median_m);
   // 10 cm up in the reference frame (level with the world but for the body's small yaw):
   // the floor's points (40 % of the fixture's) read 10 cm, the walls' slide along them and

@@ -62,23 +62,23 @@ export function mount(container, {id, query}) {
   }
 
   // ---- the panel ----------------------------------------------------------------------
-  const referenceSelect = h('select', {id: 'calib-reference', on: {change: () => chooseSensors(referenceSelect.value, '')}});
+  const referenceSelect = h('select', {id: 'calib-reference', on: {change: () => chooseSensors(referenceSelect.value, state.candidate)}});
   const candidateSelect = h('select', {id: 'calib-candidate', on: {change: () => chooseSensors(state.reference, candidateSelect.value)}});
-  const kInput = h('input', {type: 'number', id: 'calib-k', min: 0, step: 1, value: 0});
-  const nInput = h('input', {type: 'number', id: 'calib-n', min: 1, step: 1, value: DEFAULT_WINDOW});
+  const kInput = h('input', {type: 'number', id: 'calib-k', min: 0, step: 1, value: 0, on: {change: () => setWindow()}});
+  const nInput = h('input', {type: 'number', id: 'calib-n', min: 1, step: 1, value: DEFAULT_WINDOW, on: {change: () => setWindow()}});
   const windowButton = h('button', {type: 'button', id: 'calib-window', on: {click: () => setWindow()}}, 'Show window');
   const counts = h('p', {class: 'muted', id: 'calib-counts'});
   const inputs = {};
   const rows = VALUES.map(([key, label, unit, , step]) => {
     const range = h('input', {type: 'range', id: `calib-${key}-range`, step, on: {input: () => {
       inputs[key].number.value = range.value;
-      step_();
+      placeCandidate();
     }}});
     const number = h('input', {type: 'number', id: `calib-${key}`, step, class: 'num', on: {input: () => {
       const v = Number(number.value);
       if (number.value === '' || !Number.isFinite(v)) return;
       centreRange(key, v, false);
-      step_();
+      placeCandidate();
     }}});
     inputs[key] = {range, number};
     return h('label', {class: 'calib-value'}, h('span', null, `${label} (${unit})`), range, number);
@@ -87,7 +87,7 @@ export function mount(container, {id, query}) {
   const startAuto = h('button', {type: 'button', id: 'calib-start-auto', hidden: true, on: {click: () => startFrom('automatic')}},
                       'Start from the automatic result');
   const threshold = h('input', {type: 'number', id: 'calib-threshold', min: 0, step: 0.01, value: 0.05, class: 'num',
-                                on: {input: () => step_()}});
+                                on: {input: () => placeCandidate()}});
   const reprocessButton = h('button', {type: 'button', id: 'calib-reprocess', on: {click: reprocess}}, 'Reprocess with this extrinsic');
   const reprocessStatus = h('div', {id: 'calib-reprocess-status'});
   const controls = h('div', {id: 'calib-controls', hidden: true},
@@ -143,7 +143,7 @@ export function mount(container, {id, query}) {
 
   function startFrom(which) {
     setValues(which === 'automatic' ? automaticExtrinsic() : jobExtrinsic());
-    step_();
+    placeCandidate();
   }
 
   // ---- windows of scans ---------------------------------------------------------------
@@ -209,7 +209,7 @@ export function mount(container, {id, query}) {
     counts.dataset.points = String(state.windowPoints);
     if (referenceScans.length === 0) notice('warning', `${reference} has no scan in keyframes ${k}..${k + n - 1}`);
     if (candidateScans.length === 0) notice('warning', `${candidate} has no scan in keyframes ${k}..${k + n - 1}`);
-    step_();
+    placeCandidate();
     const box = new THREE.Box3().setFromObject(referenceGroup.children.length ? referenceGroup : candidateGroup);
     if (!box.isEmpty()) scene.fitBox(box);
     status.textContent = `Keyframes ${k}..${k + n - 1} of ${state.index.keyframes.length}`;
@@ -222,11 +222,13 @@ export function mount(container, {id, query}) {
     state.n = Math.max(1, Math.round(Number(nInput.value) || 1));
     kInput.value = String(state.k);
     nInput.value = String(state.n);
+    // The same window again (a change event, then the button): nothing to read or upload.
+    if (container.dataset.calibrateReady === `${state.reference}:${state.candidate}:${state.k}:${state.n}`) return;
     run(showWindow());
   }
 
   // ---- one step: the candidate's matrices and the residual ------------------------------
-  function step_() {
+  function placeCandidate() {
     if (!state.planes) return;
     const t0 = performance.now();
     const {xyz_m, rpy_deg} = values();
