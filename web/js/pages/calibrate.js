@@ -22,6 +22,7 @@ import {SAMPLE_POINTS, buildPlaneMap, residual, samplePoints} from '../viewer/pl
 import {Scene3d} from '../viewer/scene.js';
 
 const DEFAULT_WINDOW = 10;
+const CACHED_WINDOWS = 6;
 // The six values: key, label, unit, slider half-width around the starting value, step.
 const VALUES = [
   ['x', 'x', 'm', 0.5, 0.001], ['y', 'y', 'm', 0.5, 0.001], ['z', 'z', 'm', 0.5, 0.001],
@@ -147,7 +148,8 @@ export function mount(container, {id, query}) {
   }
 
   // ---- windows of scans ---------------------------------------------------------------
-  // A sensor's scans of keyframes k..k+N-1: one Range request, kept for the page's life.
+  // A sensor's scans of keyframes k..k+N-1: one Range request, kept while among the last
+  // CACHED_WINDOWS read.
   async function windowScans(name, k, n) {
     const cacheKey = `${name}:${k}:${n}`;
     if (!state.windows.has(cacheKey)) {
@@ -159,6 +161,9 @@ export function mount(container, {id, query}) {
       })();
       state.windows.set(cacheKey, promise);
       promise.catch(() => state.windows.delete(cacheKey));
+      // The oldest windows go (a 1 M-point window holds 12 MB).
+      for (const old of [...state.windows.keys()].slice(0, Math.max(0, state.windows.size - CACHED_WINDOWS)))
+        state.windows.delete(old);
     }
     return state.windows.get(cacheKey);
   }
