@@ -41,7 +41,12 @@ std::optional<std::vector<uint8_t>> lzf_decompress(const uint8_t* in, size_t siz
     if (distance > static_cast<size_t>(o - begin) || length > static_cast<size_t>(end - o))
       return std::nullopt;
     const uint8_t* from = o - distance;
-    for (size_t k = 0; k < length; ++k) o[k] = from[k];  // may overlap: byte by byte
+    if (distance >= length)
+      std::memcpy(o, from, length);
+    else if (distance == 1)
+      std::memset(o, *from, length);  // a run of one byte
+    else
+      for (size_t k = 0; k < length; ++k) o[k] = from[k];  // overlapping: byte by byte
     o += length;
   }
   if (o != end) return std::nullopt;

@@ -18,6 +18,7 @@
 #include "worker/io/cloud/scan_file.h"
 #include "worker/io/display_path.h"
 #include "worker/io/io_error.h"
+#include "worker/io/mapped_file.h"
 #include "worker/io/mesh/mesh_parse_util.h"
 #include "worker/io/text_lines.h"
 
@@ -39,7 +40,7 @@ std::vector<PackedField> visible_fields(const PcdLayout& layout) {
   return fields;
 }
 
-PcdLayout read_layout(const std::string& bytes, const std::string& name) {
+PcdLayout read_layout(std::string_view bytes, const std::string& name) {
   const std::string_view head(bytes.data(), std::min(bytes.size(), kPcdHeaderBytes));
   PcdLayout layout = parse_pcd_header(head, bytes.size(), name);
   if (layout.fields.empty() || layout.point_step == 0)
@@ -48,8 +49,10 @@ PcdLayout read_layout(const std::string& bytes, const std::string& name) {
 }
 
 // binary_compressed: uint32 compressed size, uint32 uncompressed size, then LZF of the body
-// stored field by field (every point's first field, then every point's second...).
-std::vector<uint8_t> decompressed_records(const std::string& bytes, const PcdLayout& h,
+// stored field by field (every point's first field, then every point's second...). The
+// columns are read where they are (PackedField::stride), not turned back into records: a
+// second body-sized buffer costs more than its copy on a machine where fresh pages are dear.
+std::vector<uint8_t> decompressed_columns(std::string_view bytes, const PcdLayout& h,
                                           const std::string& name) {
   const uint64_t body = h.points * h.point_step;
   if (bytes.size() < h.data_offset + 8)
@@ -75,16 +78,19 @@ std::vector<uint8_t> decompressed_records(const std::string& bytes, const PcdLay
     throw IoError(name + ": malformed PCD: the binary_compressed body is not valid LZF (" +
                   std::to_string(sizes[0]) + " bytes to unpack to " + std::to_string(sizes[1]) +
                   ")");
-  std::vector<uint8_t> records(body);
+  return std::move(*columns);
+}
+
+// The fields of decompressed_columns(): each its own column, one value every field width.
+std::vector<PackedField> column_fields(const PcdLayout& h) {
+  std::vector<PackedField> fields;
   size_t column_start = 0;
   for (const auto& f : h.fields) {
     const size_t width = field_size(f.type) * f.count;
-    const uint8_t* column = columns->data() + column_start;
-    for (uint64_t p = 0; p < h.points; ++p)
-      std::memcpy(records.data() + p * h.point_step + f.offset, column + p * width, width);
-    column_start += width * h.points;
+    if (f.name != "_") fields.push_back({f.name, f.type, column_start, f.count, width});
+    column_start += width * static_cast<size_t>(h.points);
   }
-  return records;
+  return fields;
 }
 
 template <typename T>
@@ -137,7 +143,7 @@ bool parse_value(FieldType type, std::string_view token, uint8_t* out) {
 // ascii: one row per point of values_per_point numbers (every COUNT element of every field,
 // padding included), blank lines skipped; rows short, long, missing or beyond POINTS refused
 // naming the line.
-std::vector<uint8_t> ascii_records(const std::string& bytes, const PcdLayout& h,
+std::vector<uint8_t> ascii_records(std::string_view bytes, const PcdLayout& h,
                                    const std::string& name) {
   std::vector<uint8_t> records(h.points * h.point_step);
   std::string_view rest(bytes);
@@ -260,7 +266,8 @@ PointCloud read_pcd(const fs::path& path, TimeNs t_ns, const ScanReadOptions& op
   const std::string name = display_path(path);
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw IoError(name + ": not found");
-  const std::string bytes = read_file_bytes(path);
+  const MappedFile mapped(path);
+  const std::string_view bytes = mapped.bytes();
   const PcdLayout h = read_layout(bytes, name);
   const size_t points = static_cast<size_t>(h.points);
   if (h.encoding == PcdEncoding::kBinary) {
@@ -274,11 +281,14 @@ PointCloud read_pcd(const fs::path& path, TimeNs t_ns, const ScanReadOptions& op
                                points, h.point_step, visible_fields(h)};
     return unpack_cloud(view, t_ns, options, name);
   }
-  const std::vector<uint8_t> records = h.encoding == PcdEncoding::kAscii
-                                           ? ascii_records(bytes, h, name)
-                                           : decompressed_records(bytes, h, name);
-  const PackedCloudView view{records.data(), points, h.point_step, visible_fields(h)};
-  return unpack_cloud(view, t_ns, options, name);
+  if (h.encoding == PcdEncoding::kBinaryCompressed) {
+    const std::vector<uint8_t> columns = decompressed_columns(bytes, h, name);
+    return unpack_cloud({columns.data(), points, h.point_step, column_fields(h)}, t_ns, options,
+                        name);
+  }
+  const std::vector<uint8_t> records = ascii_records(bytes, h, name);
+  return unpack_cloud({records.data(), points, h.point_step, visible_fields(h)}, t_ns, options,
+                      name);
 }
 
 void write_pcd(const fs::path& path, const PointCloud& cloud, const ScanWriteOptions& options) {
