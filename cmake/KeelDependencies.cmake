@@ -41,11 +41,29 @@ add_library(keel_suitesparseconfig INTERFACE)
 target_include_directories(keel_suitesparseconfig SYSTEM INTERFACE ${SUITESPARSE_CONFIG_INCLUDE_DIR})
 target_link_libraries(keel_suitesparseconfig INTERFACE ${SUITESPARSE_CONFIG_LIBRARY})
 
-# PCL as one interface target (its variables are not target-based on Debian 12).
+# PCL as one interface target (its variables are not target-based on Debian 12), without its
+# I/O: pcl_io brings VTK and ~70 shared libraries that every program start would load (Keel
+# reads and writes PCD itself). Tests that check Keel's files with PCL's reader link
+# keel_pcl_io.
+set(KEEL_PCL_LIBRARIES ${PCL_LIBRARIES})
+list(FILTER KEEL_PCL_LIBRARIES EXCLUDE REGEX "pcl_io|^VTK::|vtk")
 add_library(keel_pcl INTERFACE)
 target_include_directories(keel_pcl SYSTEM INTERFACE ${PCL_INCLUDE_DIRS})
-target_link_libraries(keel_pcl INTERFACE ${PCL_LIBRARIES})
+target_link_libraries(keel_pcl INTERFACE ${KEEL_PCL_LIBRARIES})
 target_compile_definitions(keel_pcl INTERFACE ${PCL_DEFINITIONS})
+add_library(keel_pcl_io INTERFACE)
+target_link_libraries(keel_pcl_io INTERFACE keel_pcl ${PCL_LIBRARIES})
+
+# OpenCV without imgcodecs for the programs (its Debian build pulls GDAL and ~140 shared
+# libraries; Keel decodes PNG and JPEG with libpng and libjpeg): keel_opencv. Tests encode
+# reference images with imgcodecs: keel_opencv_imgcodecs.
+find_package(PNG REQUIRED)
+find_package(JPEG REQUIRED)
+add_library(keel_opencv INTERFACE)
+target_include_directories(keel_opencv SYSTEM INTERFACE ${OpenCV_INCLUDE_DIRS})
+target_link_libraries(keel_opencv INTERFACE opencv_core opencv_imgproc opencv_features2d opencv_calib3d)
+add_library(keel_opencv_imgcodecs INTERFACE)
+target_link_libraries(keel_opencv_imgcodecs INTERFACE keel_opencv opencv_imgcodecs)
 
 # ROS1 bags without ROS (Debian 12 packages the rosbag C++ library alone): `pkg-config rosbag_storage` is broken on
 # Debian 12, so the include dirs and libraries are listed by hand.

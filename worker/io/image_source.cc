@@ -1,15 +1,13 @@
 #include "worker/io/image_source.h"
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
 
+#include "core/replaced_file.h"
 #include "worker/io/display_path.h"
+#include "worker/io/image_codec.h"
 #include "worker/io/image_header.h"
 #include "worker/io/io_error.h"
 #include "worker/io/text_lines.h"
@@ -18,24 +16,13 @@ namespace keel::io {
 
 namespace {
 
-ImageFrame from_mat(const cv::Mat& decoded, const std::string& source) {
-  cv::Mat mat = decoded;
-  if (mat.channels() == 4) cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
-  if (mat.channels() == 3) cv::cvtColor(mat, mat, cv::COLOR_BGR2RGB);
-  if (mat.channels() != 1 && mat.channels() != 3)
-    throw IoError(source + ": " + std::to_string(mat.channels()) +
-                  " channels; expected gray or RGB");
-  if (mat.depth() != CV_8U && mat.depth() != CV_16U)
-    throw IoError(source + ": unsupported pixel depth; expected 8 or 16 bit");
+ImageFrame to_frame(DecodedImage&& image) {
   ImageFrame frame;
-  frame.width = mat.cols;
-  frame.height = mat.rows;
-  frame.channels = mat.channels();
-  frame.bit_depth = mat.depth() == CV_8U ? 8 : 16;
-  const size_t row_bytes = mat.cols * mat.elemSize();
-  frame.pixels.resize(row_bytes * mat.rows);
-  for (int r = 0; r < mat.rows; ++r)
-    std::memcpy(frame.pixels.data() + r * row_bytes, mat.ptr(r), row_bytes);
+  frame.width = image.width;
+  frame.height = image.height;
+  frame.channels = image.channels;
+  frame.bit_depth = image.bit_depth;
+  frame.pixels = std::move(image.pixels);
   return frame;
 }
 
@@ -77,11 +64,9 @@ ImageFrame read_png_info(const std::filesystem::path& path) {
   return frame;
 }
 
-// Keel reads PNG and JPEG. cv::imdecode tries every codec OpenCV was built with, by signature
-// (Debian's: DICOM through GDCM, TIFF, OpenEXR, JPEG 2000, WebP...): fuzz_image found GDCM
-// aborting the process on bytes with "DICM" at offset 128. With a PNG or JPEG signature first,
-// imdecode picks libpng or libjpeg, which come before GDCM in its list. The size is checked
-// before OpenCV allocates for it (image_header.h).
+// Keel reads PNG and JPEG, by signature only (a general decoder that tries every format it
+// knows once let DICOM bytes reach a reader that aborts the process), and checks the size
+// before a codec allocates for it (image_header.h).
 ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source,
                         uint64_t max_pixels) {
   if (encoded.empty()) throw IoError(source + ": empty image (0 bytes)");
@@ -99,16 +84,8 @@ ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& 
     throw IoError(source + ": image of " + std::to_string(size->width) + " x " +
                   std::to_string(size->height) + " pixels, more than Keel reads (" +
                   std::to_string(max_pixels) + ")");
-  const cv::Mat buffer(1, static_cast<int>(encoded.size()), CV_8U,
-                       const_cast<uint8_t*>(encoded.data()));
-  cv::Mat mat;
-  try {  // OpenCV throws cv::Exception (not a runtime_error) for what it refuses outright
-    mat = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw IoError(source + ": cannot decode image: " + e.err);
-  }
-  if (mat.empty()) throw IoError(source + ": cannot decode image (truncated or not PNG/JPEG)");
-  return from_mat(mat, source);
+  return to_frame(*kind == ImageKind::kPng ? decode_png(encoded.data(), encoded.size(), source)
+                                           : decode_jpeg(encoded.data(), encoded.size(), source));
 }
 
 ImageFrame read_png(const std::filesystem::path& path) {
@@ -122,16 +99,8 @@ void write_png(const std::filesystem::path& path, const ImageFrame& image) {
       image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels)
     throw IoError(file +
                   ": write_png expects 8-bit gray or RGB pixels of width*height*channels bytes");
-  cv::Mat mat(image.height, image.width, image.channels == 1 ? CV_8UC1 : CV_8UC3,
-              const_cast<uint8_t*>(image.pixels.data()));
-  // `mat` wraps the caller's pixels: the BGR copy goes to a buffer of its own (converting in
-  // place swapped the caller's red and blue).
-  cv::Mat out;
-  if (image.channels == 3)
-    cv::cvtColor(mat, out, cv::COLOR_RGB2BGR);
-  else
-    out = mat;
-  if (!cv::imwrite(file, out)) throw IoError(file + ": cannot write PNG");
+  write_file_replacing(path,
+                       encode_png(image.pixels.data(), image.width, image.height, image.channels));
 }
 
 ImageFolderReader::ImageFolderReader(const std::filesystem::path& folder)

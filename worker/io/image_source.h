@@ -26,13 +26,13 @@ struct ImageFrame {
 // Width, height, channels and depth from a PNG's IHDR chunk, without decoding. Fails naming
 // the file when it is not a PNG or is truncated.
 ImageFrame read_png_info(const std::filesystem::path& path);
-// Decodes an encoded image (PNG, JPEG) with OpenCV into gray or RGB. Throws IoError naming
+// Decodes an encoded image (PNG, JPEG) into gray or RGB (image_codec.h). Throws IoError naming
 // `source` for anything else, a header without a size, more than `max_pixels` pixels
 // (image_header.h), or what the codec refuses.
 ImageFrame decode_image(const std::vector<uint8_t>& encoded, const std::string& source,
                         uint64_t max_pixels = kMaxImagePixels);
 ImageFrame read_png(const std::filesystem::path& path);
-// Writes 8-bit gray or RGB pixels as PNG (OpenCV).
+// Writes 8-bit gray or RGB pixels as PNG (libpng).
 void write_png(const std::filesystem::path& path, const ImageFrame& image);
 
 class ImageSource {

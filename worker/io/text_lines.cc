@@ -14,7 +14,15 @@ namespace keel::io {
 std::string read_file_bytes(const std::filesystem::path& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw IoError(display_path(path) + ": cannot open: " + std::strerror(errno));
+  // One allocation and one read of the whole file (its size from the open file); a file that
+  // grows meanwhile is read to its end in further chunks.
   std::string bytes;
+  std::error_code ec;
+  const uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!ec && size > 0) {
+    bytes.resize(static_cast<size_t>(size));
+    bytes.resize(std::fread(bytes.data(), 1, bytes.size(), file.get()));
+  }
   char buffer[1 << 16];
   size_t n;
   while ((n = std::fread(buffer, 1, sizeof(buffer), file.get())) > 0) bytes.append(buffer, n);

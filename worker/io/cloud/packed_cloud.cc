@@ -18,6 +18,64 @@ T load(const uint8_t* p) {
   return value;
 }
 
+// Calls visit(i, value) for every point's value of `field`, value typed as stored.
+template <typename Visit>
+void read_column(const PackedCloudView& view, const PackedField& field, Visit&& visit) {
+  auto run = [&](auto tag) {
+    using T = decltype(tag);
+    const uint8_t* p = view.data + field.offset;
+    const size_t step = field.stride ? field.stride : view.point_step;
+    for (size_t i = 0; i < view.num_points; ++i, p += step) {
+      T value;
+      std::memcpy(&value, p, sizeof(T));
+      visit(i, value);
+    }
+  };
+  switch (field.type) {
+    case FieldType::kInt8:
+      return run(int8_t{});
+    case FieldType::kUint8:
+      return run(uint8_t{});
+    case FieldType::kInt16:
+      return run(int16_t{});
+    case FieldType::kUint16:
+      return run(uint16_t{});
+    case FieldType::kInt32:
+      return run(int32_t{});
+    case FieldType::kUint32:
+      return run(uint32_t{});
+    case FieldType::kInt64:
+      return run(int64_t{});
+    case FieldType::kUint64:
+      return run(uint64_t{});
+    case FieldType::kFloat32:
+      return run(float{});
+    case FieldType::kFloat64:
+      return run(double{});
+  }
+}
+
+// Removes points with a NaN or infinite coordinate, keeping every field in step.
+void drop_non_finite(PointCloud& cloud) {
+  const size_t n = cloud.xyz.size();
+  size_t kept = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!cloud.xyz[i].allFinite()) continue;
+    if (kept != i) {
+      cloud.xyz[kept] = cloud.xyz[i];
+      if (!cloud.intensity.empty()) cloud.intensity[kept] = cloud.intensity[i];
+      if (!cloud.ring.empty()) cloud.ring[kept] = cloud.ring[i];
+      if (!cloud.time_s.empty()) cloud.time_s[kept] = cloud.time_s[i];
+    }
+    ++kept;
+  }
+  if (kept == n) return;
+  cloud.xyz.resize(kept);
+  if (!cloud.intensity.empty()) cloud.intensity.resize(kept);
+  if (!cloud.ring.empty()) cloud.ring.resize(kept);
+  if (!cloud.time_s.empty()) cloud.time_s.resize(kept);
+}
+
 double load_double(const uint8_t* p, FieldType type) {
   switch (type) {
     case FieldType::kInt8:
@@ -172,6 +230,7 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
   double raw_min = std::numeric_limits<double>::infinity();
   double raw_max = -raw_min;
   const uint8_t* base = view.data + field.offset;
+  const size_t step = field.stride ? field.stride : view.point_step;
   const PackedField* nsec = split ? view.find(spec.nsec_field) : nullptr;
   const std::string what =
       split ? source + ": fields '" + field.name + "' (" + to_string(field.type) + ") + '" +
@@ -192,9 +251,10 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
     // Exact: sec * 1e9 + nsec in int64 ns, minus the integer stamp when absolute.
     constexpr int64_t kMaxSec = std::numeric_limits<int64_t>::max() / 1000000000 - 1;
     const uint8_t* nsec_base = view.data + nsec->offset;
+    const size_t nsec_step = nsec->stride ? nsec->stride : view.point_step;
     for (size_t i = 0; i < n; ++i) {
-      const int64_t sec = load_int64(base + i * view.point_step, field.type);
-      const int64_t ns = load_int64(nsec_base + i * view.point_step, nsec->type);
+      const int64_t sec = load_int64(base + i * step, field.type);
+      const int64_t ns = load_int64(nsec_base + i * nsec_step, nsec->type);
       if (ns < 0 || ns >= 1000000000)
         throw IoError(what + ": point " + std::to_string(i) + " has " + std::to_string(ns) +
                       " ns; expected 0 <= nanoseconds < 1e9");
@@ -210,7 +270,7 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
     // Exact: integer stamps minus the integer scan stamp, in nanoseconds.
     const int64_t scale = ns_per_unit(spec.unit);
     for (size_t i = 0; i < n; ++i) {
-      const int64_t raw = load_int64(base + i * view.point_step, field.type);
+      const int64_t raw = load_int64(base + i * step, field.type);
       raw_min = std::min(raw_min, static_cast<double>(raw));
       raw_max = std::max(raw_max, static_cast<double>(raw));
       const bool overflow = raw > std::numeric_limits<int64_t>::max() / scale ||
@@ -226,7 +286,7 @@ std::vector<double> point_time_offsets(const PackedCloudView& view, const Packed
     const int64_t scale = ns_per_unit(spec.unit);
     const double max_whole = static_cast<double>(std::numeric_limits<int64_t>::max() / scale);
     for (size_t i = 0; i < n; ++i) {
-      const double raw = load_double(base + i * view.point_step, field.type);
+      const double raw = load_double(base + i * step, field.type);
       if (!std::isfinite(raw))
         throw IoError(what + ": point " + std::to_string(i) + " has time " + number_text(raw) +
                       "; expected finite values");
@@ -328,38 +388,36 @@ PointCloud unpack_cloud(const PackedCloudView& view, TimeNs t_ns, const ScanRead
   cloud.t_ns = t_ns;
   cloud.frame = options.frame;
   const size_t n = view.num_points;
-  cloud.xyz.reserve(n);
-  if (intensity) cloud.intensity.reserve(n);
-  if (ring) cloud.ring.reserve(n);
-  if (time) cloud.time_s.reserve(n);
-  const bool all_float = xyz[0]->type == FieldType::kFloat32 &&
-                         xyz[1]->type == FieldType::kFloat32 && xyz[2]->type == FieldType::kFloat32;
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* record = view.data + i * view.point_step;
-    Eigen::Vector3f p;
-    if (all_float) {
-      p = {load<float>(record + xyz[0]->offset), load<float>(record + xyz[1]->offset),
-           load<float>(record + xyz[2]->offset)};
-    } else {
-      for (int a = 0; a < 3; ++a)
-        p[a] = static_cast<float>(load_double(record + xyz[a]->offset, xyz[a]->type));
-    }
-    if (!options.keep_non_finite && !p.allFinite()) continue;
-    cloud.xyz.push_back(p);
-    if (intensity)
-      cloud.intensity.push_back(
-          static_cast<float>(load_double(record + intensity->offset, intensity->type)));
-    if (ring) {
+  // Field by field, each in one typed loop (a switch per field, not per value).
+  cloud.xyz.resize(n);
+  for (int a = 0; a < 3; ++a)
+    read_column(view, *xyz[a],
+                [&](size_t i, auto value) { cloud.xyz[i][a] = static_cast<float>(value); });
+  if (intensity) {
+    cloud.intensity.resize(n);
+    read_column(view, *intensity,
+                [&](size_t i, auto value) { cloud.intensity[i] = static_cast<float>(value); });
+  }
+  if (ring) {
+    cloud.ring.resize(n);
+    read_column(view, *ring, [&](size_t i, auto value) {
       // A ring is a laser's index: converting anything outside 0..65535 (or NaN) to uint16 is
       // undefined (UBSan, fuzz_scan_file: a float ring of -12208.1).
-      const double value = load_double(record + ring->offset, ring->type);
-      if (!(value >= 0.0 && value <= 65535.0 && value == std::floor(value)))
-        throw IoError(source + ": point " + std::to_string(i) + ": ring " + number_text(value) +
+      // Points dropped below for a non-finite coordinate are not checked (nor kept).
+      const double d = static_cast<double>(value);
+      const bool checked = options.keep_non_finite || cloud.xyz[i].allFinite();
+      if (!checked) return;
+      if (!(d >= 0.0 && d <= 65535.0 && d == std::floor(d)))
+        throw IoError(source + ": point " + std::to_string(i) + ": ring " + number_text(d) +
                       " is not a laser index (an integer in 0..65535)");
-      cloud.ring.push_back(static_cast<uint16_t>(value));
-    }
-    if (time) cloud.time_s.push_back(static_cast<float>(offsets[i]));
+      cloud.ring[i] = static_cast<uint16_t>(value);
+    });
   }
+  if (time) {
+    cloud.time_s.resize(n);
+    for (size_t i = 0; i < n; ++i) cloud.time_s[i] = static_cast<float>(offsets[i]);
+  }
+  if (!options.keep_non_finite) drop_non_finite(cloud);
   return cloud;
 }
 

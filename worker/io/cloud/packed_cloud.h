@@ -42,6 +42,10 @@ struct PackedField {
   FieldType type = FieldType::kFloat32;
   size_t offset = 0;  // bytes from the start of a point record
   size_t count = 1;   // elements (only the first is read)
+  // Bytes from one point's value to the next: 0 for point records (the view's point_step);
+  // a field's own width when the data are stored field by field (PCD binary_compressed), the
+  // offset then being where the field's column starts.
+  size_t stride = 0;
 };
 
 struct PackedCloudView {

@@ -30,6 +30,7 @@ struct Declared {
   std::vector<std::string_view> fields, sizes, types, counts;
   std::optional<uint64_t> width, height, points;
   std::string_view encoding;
+  size_t data_offset = 0;  // the byte after the DATA line
 };
 
 [[noreturn]] void malformed(const std::string& name, const std::string& what) {
@@ -89,6 +90,7 @@ Declared read_declared(std::string_view head, bool whole_file, const std::string
   Declared d;
   bool data_seen = false;
   std::vector<std::string_view> tokens;
+  const size_t head_size = head.size();
   while (!head.empty()) {
     const size_t end = head.find('\n');
     const std::string_view line = head.substr(0, end);
@@ -107,6 +109,7 @@ Declared read_declared(std::string_view head, bool whole_file, const std::string
       if (data_seen) malformed(name, "DATA is given twice");
       data_seen = true;
       d.encoding = tokens.size() > 1 ? tokens[1] : std::string_view();
+      d.data_offset = head_size - head.size();
     } else if (starts_with(key, "FIELDS") || starts_with(key, "COLUMNS")) {
       keep_values(tokens, "FIELDS", &d.fields, name);
     } else if (starts_with(key, "SIZE")) {
@@ -131,7 +134,8 @@ Declared read_declared(std::string_view head, bool whole_file, const std::string
 
 // Bytes of one point: the sum of SIZE x COUNT (a field without SIZE is a 4-byte float, as in
 // PCD v0.5 and PCL; without COUNT it holds one value).
-uint64_t point_bytes(const Declared& d, const std::string& name) {
+uint64_t point_bytes(const Declared& d, const std::string& name,
+                     std::vector<PackedField>* fields = nullptr) {
   if (d.fields.empty()) malformed(name, "no FIELDS");
   const size_t n = d.fields.size();
   for (const auto& [values, keyword] :
@@ -160,6 +164,15 @@ uint64_t point_bytes(const Declared& d, const std::string& name) {
                             std::to_string(kMaxPcdFieldCount) + " values per field)");
       count = *c;
     }
+    if (fields) {
+      const char type = d.types.empty() ? 'F' : d.types[k][0];
+      const std::optional<FieldType> field_type = pcd_field_type(type, size);
+      if (!field_type)
+        malformed(name, "field '" + std::string(d.fields[k]) + "' is TYPE F of SIZE " +
+                            std::to_string(size) + " (floats are 4 or 8 bytes)");
+      fields->push_back({std::string(d.fields[k]), *field_type, static_cast<size_t>(bytes),
+                         static_cast<size_t>(count)});
+    }
     bytes += size * count;
   }
   return bytes;
@@ -167,9 +180,35 @@ uint64_t point_bytes(const Declared& d, const std::string& name) {
 
 }  // namespace
 
+std::optional<FieldType> pcd_field_type(char type, uint64_t size) {
+  switch (type) {
+    case 'I':
+      return size == 1   ? FieldType::kInt8
+             : size == 2 ? FieldType::kInt16
+             : size == 4 ? FieldType::kInt32
+                         : FieldType::kInt64;
+    case 'U':
+      return size == 1   ? FieldType::kUint8
+             : size == 2 ? FieldType::kUint16
+             : size == 4 ? FieldType::kUint32
+                         : FieldType::kUint64;
+    case 'F':
+      if (size == 4) return FieldType::kFloat32;
+      if (size == 8) return FieldType::kFloat64;
+      return std::nullopt;
+    default:
+      return std::nullopt;
+  }
+}
+
 void check_pcd_header(std::string_view head, uint64_t file_size, const std::string& name) {
+  (void)parse_pcd_header(head, file_size, name);
+}
+
+PcdLayout parse_pcd_header(std::string_view head, uint64_t file_size, const std::string& name) {
   const Declared d = read_declared(head, head.size() >= file_size, name);
-  const uint64_t step = point_bytes(d, name);
+  PcdLayout layout;
+  const uint64_t step = point_bytes(d, name, &layout.fields);
   uint64_t values = 0;  // per point
   for (size_t k = 0; k < d.fields.size(); ++k)
     values += d.counts.empty() ? 1 : *parse_unsigned(d.counts[k]);
@@ -194,6 +233,26 @@ void check_pcd_header(std::string_view head, uint64_t file_size, const std::stri
     throw IoError(name + ": truncated PCD: " + declared + " points of " + std::to_string(values) +
                   " values do not fit in the whole file's " + std::to_string(file_size) + " bytes");
   }
+  if (d.encoding == "ascii")
+    layout.encoding = PcdEncoding::kAscii;
+  else if (d.encoding == "binary")
+    layout.encoding = PcdEncoding::kBinary;
+  else if (d.encoding == "binary_compressed")
+    layout.encoding = PcdEncoding::kBinaryCompressed;
+  else
+    malformed(name, "DATA is '" + std::string(d.encoding) +
+                        "' (expected ascii, binary or binary_compressed)");
+  // PCD v0.5 had neither WIDTH nor HEIGHT: an unorganised cloud of POINTS points.
+  layout.width = d.width.value_or(d.points.value_or(0));
+  layout.height = d.height.value_or(1);
+  layout.points = uint64_t{layout.width} * layout.height;
+  if (d.points && *d.points != layout.points)
+    malformed(name, "WIDTH x HEIGHT is " + std::to_string(layout.points) + ", POINTS " +
+                        std::to_string(*d.points));
+  layout.point_step = static_cast<size_t>(step);
+  layout.data_offset = d.data_offset;
+  layout.values_per_point = static_cast<size_t>(values);
+  return layout;
 }
 
 }  // namespace keel::io

@@ -8,11 +8,13 @@
 #include <string_view>
 #include <vector>
 
-#include "worker/io/display_path.h"
-#include "worker/io/io_error.h"
-#include "worker/io/mesh/mesh_parse_util.h"
+#include "core/replaced_file.h"
 #include "worker/io/cloud/ply_header.h"
 #include "worker/io/cloud/scan_file.h"
+#include "worker/io/display_path.h"
+#include "worker/io/io_error.h"
+#include "worker/io/mapped_file.h"
+#include "worker/io/mesh/mesh_parse_util.h"
 #include "worker/io/text_lines.h"
 #include "worker/io/text_writer.h"
 
@@ -160,7 +162,7 @@ bool representable(FieldType type, double value) {
 
 // Parses `count` ascii vertex lines into packed records; `position` and `line_number` end
 // after the last vertex line.
-std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLayout& h,
+std::vector<uint8_t> parse_ascii_body(std::string_view bytes, const PlyCloudLayout& h,
                                       const std::string& file, size_t& position,
                                       size_t& line_number) {
   std::vector<uint8_t> data(h.num_vertices * h.point_step);
@@ -172,7 +174,7 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLa
       throw IoError(file + ": truncated PLY: expected " + std::to_string(h.num_vertices) +
                     " vertices, found " + std::to_string(i));
     size_t newline = bytes.find('\n', position);
-    if (newline == std::string::npos) newline = bytes.size();
+    if (newline == std::string_view::npos) newline = bytes.size();
     const auto w = words(std::string_view(bytes.data() + position, newline - position));
     position = newline + 1;
     if (w.size() < h.fields.size())
@@ -244,7 +246,7 @@ std::vector<uint8_t> parse_ascii_body(const std::string& bytes, const PlyCloudLa
 
 // Skips the elements after the vertices (one line per item), then requires the rest of the
 // file to be blank: data the header does not declare means header and data disagree.
-void check_ascii_rest(const std::string& bytes, const PlyHeader& h, const std::string& file,
+void check_ascii_rest(std::string_view bytes, const PlyHeader& h, const std::string& file,
                       size_t position, size_t line_number) {
   // position is one past the end when the last vertex line has no newline.
   mesh_detail::LineCursor lines(std::string_view(bytes).substr(std::min(position, bytes.size())),
@@ -267,7 +269,7 @@ void check_ascii_rest(const std::string& bytes, const PlyHeader& h, const std::s
                   declared_elements(h) + ")");
 }
 
-uint64_t read_list_count(const std::string& bytes, size_t offset, PlyType type) {
+uint64_t read_list_count(std::string_view bytes, size_t offset, PlyType type) {
   const auto* p = reinterpret_cast<const unsigned char*>(bytes.data() + offset);
   switch (type) {
     case PlyType::kInt8:
@@ -284,7 +286,7 @@ uint64_t read_list_count(const std::string& bytes, size_t offset, PlyType type) 
 
 // Binary counterpart of check_ascii_rest: walks the elements after the vertices (list
 // lengths are read from the data), then requires the file to end there.
-void check_binary_rest(const std::string& bytes, const PlyCloudLayout& layout,
+void check_binary_rest(std::string_view bytes, const PlyCloudLayout& layout,
                        const std::string& file) {
   const PlyHeader& h = layout.header;
   size_t offset = h.body_offset + layout.num_vertices * layout.point_step;
@@ -334,7 +336,8 @@ ScanFileInfo read_ply_info(const fs::path& path) {
 
 PointCloud read_ply(const fs::path& path, TimeNs t_ns, const ScanReadOptions& options) {
   const std::string file = display_path(path);
-  const std::string bytes = read_file_bytes(path);
+  const MappedFile mapped(path);
+  const std::string_view bytes = mapped.bytes();
   const PlyCloudLayout h = parse_layout(bytes, file);
   const size_t body_bytes = bytes.size() - h.header.body_offset;
   if (h.header.format == PlyFormat::kAscii) {
@@ -364,19 +367,25 @@ void write_ply(const fs::path& path, const PointCloud& cloud, const ScanWriteOpt
     throw IoError(file + ": PLY has no compressed encoding (ascii or binary)");
   const PackedCloud packed = pack_cloud(cloud, options.time);
   const bool ascii = options.encoding == ScanEncoding::kAscii;
-  TextWriter w(path);
-  w.text("ply\nformat ").text(ascii ? "ascii" : "binary_little_endian").text(" 1.0\n");
-  w.text("element vertex ").integer(static_cast<long long>(packed.num_points)).text("\n");
+  std::string header = std::string("ply\nformat ") + (ascii ? "ascii" : "binary_little_endian") +
+                       " 1.0\nelement vertex " + std::to_string(packed.num_points) + "\n";
   for (const auto& f : packed.fields) {
     const char* type = ply_name(f.type);
     if (!type)
       throw IoError(file + ": PLY cannot store field '" + f.name + "' as " + to_string(f.type));
-    w.text("property ").text(type).text(" ").text(f.name).text("\n");
+    header += std::string("property ") + type + " " + f.name + "\n";
   }
-  w.text("end_header\n");
-  if (!ascii) {
-    w.text(std::string_view(reinterpret_cast<const char*>(packed.data.data()), packed.data.size()));
-  } else {
+  header += "end_header\n";
+  if (!ascii) {  // the packed records are the body: one write
+    ReplacedFile out(path);
+    out.append(header.data(), header.size());
+    out.append(reinterpret_cast<const char*>(packed.data.data()), packed.data.size());
+    out.commit();
+    return;
+  }
+  TextWriter w(path);
+  w.text(header);
+  {
     for (size_t i = 0; i < packed.num_points; ++i) {
       for (size_t f = 0; f < packed.fields.size(); ++f) {
         const uint8_t* p = packed.data.data() + i * packed.point_step + packed.fields[f].offset;
