@@ -16,6 +16,8 @@
 #include "tests/sim/calibration_error.h"
 #include "tests/worker/pipeline/sim_mission.h"
 #include "tests/worker/pipeline/stage_run.h"
+#include "worker/io/mission_reader.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/stages/map/artifacts.h"
 #include "worker/stages/map/stage.h"
 
@@ -142,6 +144,51 @@ TEST_F(SimCalibrationErrorTest, TheTruthAsAnOverrideGivesTheUnperturbedMap) {
       EXPECT_FALSE(map_a == slurp(c / map_ply_file(sensor))) << sensor;
     }
   }
+}
+
+// A bag mission whose mission.yaml has no T_body_sensor: the extrinsics come from /tf_static,
+// where keel-sim declared lidar_v's with its error; a relative override resolves against it.
+TEST_F(SimCalibrationErrorTest, TfStaticDeclaresTheErrorAndResolvesReferences) {
+  const fs::path sim_dir = temp_root() / "bag_sim";
+  sim::SimOptions o;
+  o.scenario = "usv-bridge";
+  o.seed = kSeed;
+  o.out_dir = sim_dir.string();
+  o.duration_s = 2.0;
+  o.sensors = {"lidar_h", "lidar_v"};
+  o.write_bag = true;
+  o.settings = {std::string("calibration_error.lidar_v=") + kLidarError};
+  sim::run_simulation(o);
+  const fs::path dir = temp_root() / "bag_mission";
+  fs::create_directories(dir);
+  for (const auto& entry : fs::directory_iterator(sim_dir))
+    if (entry.path().extension() != ".yaml")
+      fs::create_symlink(entry.path(), dir / entry.path().filename());
+  YAML::Node manifest = YAML::LoadFile((sim_dir / "mission_bag.yaml").string());
+  for (auto sensor : manifest["sensors"]) sensor.remove("T_body_sensor");
+  std::ofstream(dir / "mission.yaml") << YAML::Dump(manifest) << "\n";
+
+  const YAML::Node truth = YAML::LoadFile((sim_dir / "ground_truth" / "truth.yaml").string());
+  const Pose3 T_true_lidar_h = yaml_pose(truth["extrinsics"]["lidar_h"]);
+  const Pose3 T_true_lidar_v = yaml_pose(truth["extrinsics"]["lidar_v"]);
+  const Pose3 lidar_error = error_pose({0.05, -0.02, 0.01}, {1, -2, 0.5});
+  {
+    const JobExtrinsics e = job_extrinsics(load_job_mission(dir, nullptr));
+    EXPECT_EQ(e.at("lidar_h").source, "/tf_static");
+    EXPECT_EQ(e.at("lidar_v").source, "/tf_static");
+    EXPECT_TRUE(e.at("lidar_h").T_body_sensor.isApprox(T_true_lidar_h, 1e-9));
+    EXPECT_TRUE(e.at("lidar_v").T_body_sensor.isApprox(T_true_lidar_v * lidar_error, 1e-9));
+  }
+  const Pose3 relative = error_pose({0.2, 0, 0.2}, {0, 90, 0});
+  const io::Mission m = load_job_mission(
+      dir,
+      {{"lidar_v", {{"T_lidar_h_lidar_v", {{"xyz_m", {0.2, 0, 0.2}}, {"rpy_deg", {0, 90, 0}}}}}}});
+  io::MissionReader reader(m);
+  const JobExtrinsics e = job_extrinsics(reader);
+  EXPECT_EQ(e.at("lidar_h").source, "/tf_static");
+  EXPECT_EQ(e.at("lidar_v").source, "override T_lidar_h_lidar_v");
+  EXPECT_TRUE(e.at("lidar_v").T_body_sensor.isApprox(T_true_lidar_h * relative, 1e-9));
+  EXPECT_TRUE(reader.extrinsic("lidar_v")->isApprox(T_true_lidar_h * relative, 1e-9));
 }
 
 TEST(SimCalibrationErrorSettings, ParseAndErrors) {
