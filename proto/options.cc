@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "proto/calibration.h"
 #include "proto/contract_error.h"
 #include "proto/stages.h"
 
@@ -44,11 +45,47 @@ void validate_stage_list(const std::vector<std::string>& stages, const std::stri
   for (size_t i = 0; i < stages.size(); ++i) {
     const std::string item = path + "[" + std::to_string(i) + "]";
     if (!is_known_stage(stages[i]))
-      throw ContractError(item + ": unknown stage '" + stages[i] + "' (known: " + known_list() + ")");
+      throw ContractError(item + ": unknown stage '" + stages[i] + "' (known: " + known_list() +
+                          ")");
     for (size_t j = 0; j < i; ++j)
-      if (stages[j] == stages[i]) throw ContractError(item + ": stage '" + stages[i] + "' repeated");
+      if (stages[j] == stages[i])
+        throw ContractError(item + ": stage '" + stages[i] + "' repeated");
   }
 }
+
+namespace {
+
+// "calibration.<sensor>.<key>=<pose>" replaces the sensor's override (one key per sensor);
+// "calibration.<sensor>=<object>" sets it whole. Checked at once, so `--set` fails early.
+void apply_calibration_assignment(nlohmann::json& options, std::string_view assignment) {
+  const size_t eq = assignment.find('=');
+  const std::string key(assignment.substr(0, eq));
+  const std::string where = "option '" + std::string(assignment) + "'";
+  const std::string rest = key.substr(std::string(kCalibrationOption).size() + 1);
+  const size_t dot = rest.find('.');
+  const std::string sensor = rest.substr(0, dot);
+  const std::string field = dot == std::string::npos ? "" : rest.substr(dot + 1);
+  if (sensor.empty() ||
+      (dot != std::string::npos && (field.empty() || field.find('.') != std::string::npos)))
+    throw ContractError(where +
+                        ": expected calibration.<sensor>.T_body_sensor=<pose> or "
+                        "calibration.<sensor>.T_<reference>_<sensor>=<pose>");
+  const std::string text(assignment.substr(eq + 1));
+  const nlohmann::json value = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (value.is_discarded())
+    throw ContractError(key +
+                        ": expected a JSON pose {\"xyz_m\": [x, y, z], \"rpy_deg\": "
+                        "[roll, pitch, yaw]}, got '" +
+                        text + "'");
+  if (!options.is_object()) options = nlohmann::json::object();
+  nlohmann::json calibration = options.value(kCalibrationOption, nlohmann::json::object());
+  if (!calibration.is_object()) calibration = nlohmann::json::object();
+  calibration[sensor] = field.empty() ? value : nlohmann::json{{field, value}};
+  parse_calibration(nlohmann::json{{sensor, calibration[sensor]}});
+  options[kCalibrationOption] = std::move(calibration);
+}
+
+}  // namespace
 
 void apply_option_assignment(nlohmann::json& options, std::string_view assignment) {
   const size_t eq = assignment.find('=');
@@ -60,6 +97,7 @@ void apply_option_assignment(nlohmann::json& options, std::string_view assignmen
     throw ContractError(where + ": expected stage.option=value");
   const std::string stage(key.substr(0, dot));
   const std::string option(key.substr(dot + 1));
+  if (stage == kCalibrationOption) return apply_calibration_assignment(options, assignment);
   if (!is_known_stage(stage))
     throw ContractError(where + ": unknown stage '" + stage + "' (known: " + known_list() + ")");
   const std::string text(assignment.substr(eq + 1));
@@ -71,13 +109,19 @@ void apply_option_assignment(nlohmann::json& options, std::string_view assignmen
 
 void validate_options(const nlohmann::json& options, const std::string& path) {
   if (options.is_null()) return;
-  if (!options.is_object()) throw ContractError(path + ": expected object, got " + json_type_name(options));
+  if (!options.is_object())
+    throw ContractError(path + ": expected object, got " + json_type_name(options));
   for (const auto& item : options.items()) {
     const std::string child = path + "." + item.key();
+    if (item.key() == kCalibrationOption) {
+      parse_calibration(item.value(), child);
+      continue;
+    }
     if (!is_known_stage(item.key()))
       throw ContractError(child + ": unknown stage (known: " + known_list() + ")");
     if (!item.value().is_object())
-      throw ContractError(child + ": expected object of options, got " + json_type_name(item.value()));
+      throw ContractError(child + ": expected object of options, got " +
+                          json_type_name(item.value()));
   }
 }
 

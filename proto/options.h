@@ -19,8 +19,11 @@ void validate_stage_list(const std::vector<std::string>& stages, const std::stri
 
 // Applies "stage.option=value" to `options`. The value is JSON when it parses as JSON
 // (numbers, true/false, arrays), otherwise a string. Fails on a missing '.', '=' or stage.
+// "calibration.<sensor>.<key>=<pose JSON>" sets an extrinsic override instead
+// (proto/calibration.h), replacing that sensor's earlier one; checked at once.
 void apply_option_assignment(nlohmann::json& options, std::string_view assignment);
-// Checks that `options` is {"known_stage": {...}, ...}.
+// Checks that `options` is {"known_stage": {...}, ..., "calibration": {...}} (the overrides'
+// form: proto::parse_calibration).
 void validate_options(const nlohmann::json& options, const std::string& path);
 
 }  // namespace keel::proto

@@ -53,6 +53,40 @@ TEST_F(JobRoutesTest, CreateRejectsBadRequests) {
   EXPECT_NE(wrong_type.body.find("mission_id"), std::string::npos);
 }
 
+// A job's extrinsic overrides (docs/calibration.md): stored as given, refused naming the path.
+TEST_F(JobRoutesTest, CalibrationOptionsAreCheckedAtTheDoor) {
+  auto mission = create_mission("m1");
+  const nlohmann::json pose = {{"xyz_m", {0.1, 0, 0.4}}, {"rpy_deg", {0, 90, 0}}};
+  Response good =
+      post("/v1/jobs", {{"mission_id", mission["id"]},
+                        {"stages", {"ingest", "map"}},
+                        {"options", {{"calibration", {{"lidar_v", {{"T_body_sensor", pose}}}}}}}});
+  ASSERT_EQ(good.status, 201) << good.body;
+  EXPECT_EQ(json_of(good)["options"]["calibration"]["lidar_v"]["T_body_sensor"], pose);
+
+  Response bad =
+      post("/v1/jobs",
+           {{"mission_id", mission["id"]},
+            {"stages", {"ingest"}},
+            {"options",
+             {{"calibration",
+               {{"sonar", {{"T_body_sensor", {{"xyz_m", {1, 2}}, {"rpy_deg", {0, 0, 0}}}}}}}}}}});
+  EXPECT_EQ(bad.status, 400);
+  EXPECT_EQ(error_code_of(bad), "invalid_field");
+  EXPECT_NE(bad.body.find("options.calibration.sonar.T_body_sensor.xyz_m: expected 3 numbers"),
+            std::string::npos)
+      << bad.body;
+  Response bad_key =
+      post("/v1/reprocess", {{"mission_ids", {mission["id"]}},
+                             {"stages", {"ingest"}},
+                             {"options", {{"calibration", {{"sonar", {{"T_sonar", pose}}}}}}}});
+  EXPECT_EQ(bad_key.status, 400);
+  EXPECT_NE(bad_key.body.find("options.calibration.sonar.T_sonar: expected T_body_sensor or "
+                              "T_<reference>_sonar"),
+            std::string::npos)
+      << bad_key.body;
+}
+
 TEST_F(JobRoutesTest, IdempotencyKeyReturnsTheFirstJob) {
   auto mission = create_mission("m1");
   nlohmann::json body = {{"mission_id", mission["id"]}, {"stages", {"ingest"}}};

@@ -19,6 +19,7 @@
 #include "tests/sim/bag2_writer.h"
 #include "tests/sim/bag_writer.h"
 #include "tests/sim/bundle_files.h"
+#include "tests/sim/calibration_error.h"
 #include "tests/sim/gnss_sim.h"
 #include "tests/sim/pose_table.h"
 #include "tests/sim/rng.h"
@@ -98,6 +99,9 @@ std::string settings_help() {
       "motion.laps hull.fouling_patches hull.cad(=FILE) hull.cad_scale hull.cad_z_down(0/1) "
       "hull.cad_draft hull.cad_survey_x ";
   for (const char* key : kSwitchSettings) out += std::string(key) + "(0/1) ";
+  out +=
+      "calibration_error.<sensor>={\"xyz_m\":[x,y,z],\"rpy_deg\":[r,p,y]} (mission.yaml's "
+      "T_body_sensor = true * error; the truth stays in ground_truth/truth.yaml extrinsics) ";
   return out;
 }
 
@@ -338,7 +342,9 @@ SimSummary run_simulation(const SimOptions& options) {
     throw std::invalid_argument("--dvl-dropout-rate: expected a value in [0, 0.9]");
   SensorSettings settings;
   ScenarioOptions scenario_options;
-  apply_settings(options.settings, &settings, &scenario_options);
+  std::vector<std::string> numeric_settings = options.settings;
+  const CalibrationErrors calibration_errors = take_calibration_errors(&numeric_settings);
+  apply_settings(numeric_settings, &settings, &scenario_options);
   settings.dvl.scale = options.dvl_scale;
   settings.dvl.dropout_rate = options.dvl_dropout_rate;
   scenario_options.survey = options.survey;
@@ -347,6 +353,14 @@ SimSummary run_simulation(const SimOptions& options) {
   const std::vector<std::string> sensors = resolve_sensors(options, scenario);
   auto has = [&](const std::string& s) {
     return std::find(sensors.begin(), sensors.end(), s) != sensors.end();
+  };
+  for (const auto& [name, error] : calibration_errors)
+    if (!scenario.T_body_sensor.count(name))
+      throw std::invalid_argument("--set " + std::string(kCalibrationErrorPrefix) + name +
+                                  ": scenario " + scenario.name + " has no sensor '" + name + "'");
+  // What the mission declares (mission.yaml, /tf_static); the data follow the truth.
+  auto declared = [&](const std::string& name) {
+    return declared_extrinsic(calibration_errors, name, scenario.T_body_sensor.at(name));
   };
   const double duration =
       options.duration_s > 0.0 ? options.duration_s : scenario.default_duration_s;
@@ -393,7 +407,7 @@ SimSummary run_simulation(const SimOptions& options) {
     for (const auto& [name, T] : scenario.T_body_sensor) {
       const bool tray = std::find(scenario.tray_sensors.begin(), scenario.tray_sensors.end(),
                                   name) != scenario.tray_sensors.end();
-      if (!tray) edges.emplace_back("base_link", name, T);
+      if (!tray) edges.emplace_back("base_link", name, declared(name));
     }
     bag->transforms("/tf_static", t0, edges);
   }
@@ -418,7 +432,7 @@ SimSummary run_simulation(const SimOptions& options) {
         y << YAML::Key << key << YAML::Value << file;
       y << YAML::Key << "rate_hz" << YAML::Value << rate;
       y << YAML::Key << "T_body_sensor" << YAML::Value;
-      emit_pose(y, scenario.T_body_sensor.at(name));
+      emit_pose(y, declared(name));
       if (std::find(scenario.tray_sensors.begin(), scenario.tray_sensors.end(), name) !=
           scenario.tray_sensors.end())
         y << YAML::Key << "mounted_on" << YAML::Value << "servo";
@@ -792,6 +806,15 @@ SimSummary run_simulation(const SimOptions& options) {
       emit_pose(y, T);
     }
     y << YAML::EndMap;
+    // mission.yaml declares T_body_sensor = extrinsics[sensor] * calibration_error[sensor].
+    if (!calibration_errors.empty()) {
+      y << YAML::Key << "calibration_error" << YAML::Value << YAML::BeginMap;
+      for (const auto& [name, error] : calibration_errors) {
+        y << YAML::Key << name << YAML::Value;
+        emit_pose(y, error);
+      }
+      y << YAML::EndMap;
+    }
     if (hauv) {
       y << YAML::Key << "servo_angles" << YAML::Value << "servo.csv";
       y << YAML::Key << "T_world_cad" << YAML::Value;

@@ -56,7 +56,9 @@ struct SimOptions {
   Bag2Options bag2;
   int threads = 2;
   TimeNs t0_ns = 1700000000LL * 1000000000LL;  // mission start stamp
-  std::vector<std::string> settings;           // "key=value" overrides (see settings_help())
+  // "key=value" overrides (see settings_help()); "calibration_error.<sensor>=<pose JSON>"
+  // perturbs the sensor's declared extrinsic (calibration_error.h)
+  std::vector<std::string> settings;
 };
 
 struct SimSummary {

@@ -25,6 +25,10 @@ struct Mission {
   std::filesystem::path loop_closures_path;  // empty when absent
   std::filesystem::path ground_truth_path;   // empty when absent
   std::filesystem::path cad_mesh_path;       // empty when absent
+  // By sensor name: the job option that replaced its T_body_sensor in `manifest`
+  // ("override T_body_sensor", "override T_lidar_h_sonar"; docs/calibration.md); absent when
+  // the extrinsic is mission.yaml's or the bag's /tf_static.
+  std::map<std::string, std::string> extrinsic_sources;
 
   const proto::SensorSpec& sensor(std::string_view name) const { return manifest.sensor(name); }
   // Fails naming the sensor when it has no file/folder (a bag topic).

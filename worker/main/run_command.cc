@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "proto/calibration.h"
 #include "proto/contract_error.h"
 #include "proto/options.h"
 #include "worker/main/commands.h"
@@ -84,7 +85,8 @@ int run_local(const RunArgs& args) {
   }
   if (spec.stages.empty()) return usage_error("this worker has no stages built in");
   for (const auto& item : spec.options.items())
-    if (std::find(spec.stages.begin(), spec.stages.end(), item.key()) == spec.stages.end())
+    if (item.key() != proto::kCalibrationOption &&
+        std::find(spec.stages.begin(), spec.stages.end(), item.key()) == spec.stages.end())
       std::cerr << "keel-worker run: warning: options for stage '" << item.key()
                 << "', which does not run\n";
 

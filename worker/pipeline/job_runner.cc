@@ -7,7 +7,9 @@
 #include <sstream>
 #include <utility>
 
+#include "proto/calibration.h"
 #include "worker/io/display_path.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/pipeline/report.h"
 #include "worker/pipeline/report_html.h"
 
@@ -66,10 +68,12 @@ class ProgressForwarder {
 
 // report.json of the stages finished so far (in the job's order) and, for a failed job, its
 // error; written with report.html into work_dir. Returns the file names.
-std::vector<std::string> write_report(const JobSpec& spec, const JobResult& result) {
+std::vector<std::string> write_report(const JobSpec& spec, const JobResult& result,
+                                      const nlohmann::json& calibration) {
   ReportInput input;
   input.job = spec.report_job;
   input.mission = spec.report_mission;
+  input.calibration = calibration;
   input.stages = result.reports;
   input.stage_seconds = result.stage_seconds;
   for (const auto& stage : spec.stages)
@@ -79,7 +83,28 @@ std::vector<std::string> write_report(const JobSpec& spec, const JobResult& resu
   return write_report_files(spec.work_dir, build_report(input));
 }
 
+// The job's extrinsics and their sources for report.json, or null when the mission cannot be
+// read with them: then the first stage that reads it fails with the reason (a bad override
+// names its option path there).
+nlohmann::json calibration_section(const JobSpec& spec) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(spec.mission_dir / "mission.yaml", ec)) return nullptr;
+  try {
+    return calibration_report(
+        job_extrinsics(load_job_mission(spec.mission_dir, job_calibration(spec.options))));
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
 }  // namespace
+
+const nlohmann::json& job_calibration(const nlohmann::json& options) {
+  static const nlohmann::json none = nullptr;
+  if (!options.is_object()) return none;
+  const auto it = options.find(proto::kCalibrationOption);
+  return it == options.end() ? none : *it;
+}
 
 std::string to_string(JobOutcome outcome) {
   switch (outcome) {
@@ -103,10 +128,12 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     if (hooks.log) hooks.log(line);
   };
   auto canceled = [&] { return hooks.canceled && hooks.canceled(); };
+  // 0. The extrinsics every stage will use, for report.json.
+  const nlohmann::json calibration = calibration_section(spec);
   // 5. report.json and report.html, outside the last stage's artifacts.
   auto report_aside = [&] {
     try {
-      result.report_files = write_report(spec, result);
+      result.report_files = write_report(spec, result, calibration);
     } catch (const std::exception& e) {
       result.report_error = e.what();
     }
@@ -169,6 +196,7 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     context.job = spec.job;
     if (spec.options.is_object() && spec.options.contains(name))
       context.options = spec.options.at(name);
+    context.calibration = job_calibration(spec.options);
     context.reports = result.reports;
     ProgressForwarder progress(hooks, name);
     context.progress = [&progress](double value) { progress(value); };
@@ -212,7 +240,8 @@ JobResult JobRunner::run(const JobSpec& spec, const JobHooks& hooks) const {
     // 5. After the last stage, the report is among its artifacts.
     if (i + 1 == stages.size()) {
       try {
-        for (auto& file : write_report(spec, result)) stage_result.artifacts.push_back(file);
+        for (auto& file : write_report(spec, result, calibration))
+          stage_result.artifacts.push_back(file);
         report_with_last_stage = true;
       } catch (const std::exception& e) {
         return fail(name, e.what());

@@ -2,6 +2,8 @@
 // (leased from a server) and `keel-worker run` (local) both drive it through JobHooks.
 //
 // Steps of JobRunner::run:
+//   0. the extrinsics the stages will use (the job's `calibration` overrides applied,
+//      job_extrinsics.h), for report.json's `calibration` section;
 //   1. build every stage object first, so an unknown stage fails before any work is done;
 //   2. skip the stages completed earlier (their reports are given, their artifacts are
 //      already in work_dir);
@@ -36,14 +38,15 @@ struct CompletedStage {
 };
 
 struct JobSpec {
-  std::filesystem::path mission_dir;                  // holds mission.yaml
-  std::filesystem::path cad_path;                     // empty when the mission has no CAD mesh
-  std::filesystem::path work_dir;                     // created when missing
-  std::vector<std::string> stages;                    // in the order to run
-  nlohmann::json options = nlohmann::json::object();  // {"stage": {"option": value}}
-  std::vector<CompletedStage> completed;              // skipped; reports passed on
-  std::vector<InputJob> input_jobs;                   // the jobs a `compare` stage reads
-  nlohmann::json job = nlohmann::json::object();      // the job's own record (a lease's)
+  std::filesystem::path mission_dir;  // holds mission.yaml
+  std::filesystem::path cad_path;     // empty when the mission has no CAD mesh
+  std::filesystem::path work_dir;     // created when missing
+  std::vector<std::string> stages;    // in the order to run
+  // {"stage": {"option": value}, "calibration": {...}} (the overrides: docs/calibration.md)
+  nlohmann::json options = nlohmann::json::object();
+  std::vector<CompletedStage> completed;          // skipped; reports passed on
+  std::vector<InputJob> input_jobs;               // the jobs a `compare` stage reads
+  nlohmann::json job = nlohmann::json::object();  // the job's own record (a lease's)
   // What report.json says of the job ({"id", "stages", "options", ...}) and of its mission
   // ({"id", "name", ...} or {"path", "cad"}).
   nlohmann::json report_job = nlohmann::json::object();
@@ -78,6 +81,9 @@ struct JobResult {
   std::vector<std::string> report_files;
   std::string report_error;
 };
+
+// The `calibration` object of a job's options (docs/calibration.md), null when absent.
+const nlohmann::json& job_calibration(const nlohmann::json& options);
 
 using StageFactory = std::function<std::unique_ptr<Stage>(const std::string& name)>;
 

@@ -35,6 +35,8 @@ nlohmann::ordered_json build_report(const ReportInput& input) {
   report["keel_report"] = kReportVersion;
   report["job"] = nlohmann::ordered_json(input.job);
   report["mission"] = nlohmann::ordered_json(input.mission);
+  if (!input.calibration.is_null())
+    report["calibration"] = nlohmann::ordered_json(input.calibration);
   report["stages"] = std::move(stages);
   report["stage_seconds"] = std::move(seconds);
   if (!input.failure.is_null()) report["failed"] = nlohmann::ordered_json(input.failure);

@@ -2,6 +2,7 @@
 //
 //   {"keel_report": 1,
 //    "job": {...}, "mission": {...},
+//    "calibration": {"lidar_v": {"source": "mission.yaml", "T_body_sensor": {...}, ...}},
 //    "stages": {"ingest": {...}, "refine": {...}},   // in pipeline order
 //    "stage_seconds": {"ingest": 0.41, ...},
 //    "failed": {"stage": "map", "error": "..."}}      // only when the job failed
@@ -24,8 +25,11 @@ inline constexpr const char* kReportFileName = "report.json";
 struct ReportInput {
   nlohmann::json job = nlohmann::json::object();      // id, stages, options, ...
   nlohmann::json mission = nlohmann::json::object();  // id, name, blobs or local paths
-  std::vector<std::string> stage_order;               // the job's stages, in order
-  nlohmann::json stages = nlohmann::json::object();   // stage name -> its report section
+  // Per sensor with an extrinsic, the one the job used and its source (job_extrinsics.h's
+  // calibration_report); null when the mission could not be read.
+  nlohmann::json calibration = nullptr;
+  std::vector<std::string> stage_order;              // the job's stages, in order
+  nlohmann::json stages = nlohmann::json::object();  // stage name -> its report section
   std::map<std::string, double> stage_seconds;
   // A failed job's report: {"stage", "error"}; stage_order then lists the stages that finished.
   nlohmann::json failure = nullptr;
@@ -46,6 +50,5 @@ void write_json_atomically(const std::filesystem::path& path,
 // every stage for its section, so it lives with the registry in keel_pipeline.)
 std::vector<std::string> write_report_files(const std::filesystem::path& work_dir,
                                             const nlohmann::ordered_json& report);
-
 
 }  // namespace keel::pipeline

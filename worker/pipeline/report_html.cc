@@ -5,14 +5,15 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
-#include "worker/pipeline/html_text.h"
 #include "core/replaced_file.h"
+#include "proto/options.h"
+#include "worker/pipeline/html_text.h"
 #include "worker/pipeline/report.h"
-#include "worker/pipeline/trajectories_file.h"
 #include "worker/pipeline/report_html_parts.h"
 #include "worker/pipeline/stage.h"
-#include "proto/options.h"
+#include "worker/pipeline/trajectories_file.h"
 
 namespace keel::pipeline {
 
@@ -47,6 +48,31 @@ void collect_leaves(const Ref& ref, std::vector<std::vector<std::string>>& rows)
   rows.push_back({"<code>" + html::escape(ref.pointer()) + "</code>", ref.cell()});
 }
 
+// The extrinsics the job used and where each came from (docs/calibration.md).
+std::string calibration_table(const Ref& calibration) {
+  if (calibration.missing() || !calibration.json().is_object()) return "";
+  Table t{"calibration",
+          "Extrinsics used (T_body_sensor)",
+          {"sensor", "source", "x, y, z (m)", "roll, pitch, yaw (deg)"},
+          {}};
+  auto triple = [](const Ref& values, int decimals) {
+    std::string out;
+    for (const auto& v : values.json()) {
+      std::ostringstream text;
+      text.precision(decimals);
+      text << std::fixed << (v.is_number() ? v.get<double>() : 0.0);
+      out += (out.empty() ? "" : ", ") + text.str();
+    }
+    return html::escape(out);
+  };
+  for (const auto& item : calibration.json().items()) {
+    const Ref sensor = calibration[item.key()];
+    t.rows.push_back({html::escape(item.key()), html::escape(sensor["source"].text()),
+                      triple(sensor["xyz_m"], 3), triple(sensor["rpy_deg"], 2)});
+  }
+  return t.rows.empty() ? "" : render(t);
+}
+
 std::string summary_section(const Ref& report) {
   std::string out = "<section id=\"summary\">";
   const Ref job = report["job"];
@@ -71,6 +97,7 @@ std::string summary_section(const Ref& report) {
   for (const auto& item : report["stage_seconds"].json().items())
     times.rows.push_back({html::escape(item.key()), report["stage_seconds"][item.key()].cell("s")});
   if (!times.rows.empty()) out += render(times);
+  out += calibration_table(report["calibration"]);
   return out + "</section>";
 }
 

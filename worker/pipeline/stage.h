@@ -50,6 +50,9 @@ struct StageContext {
   std::filesystem::path cad_path;     // CAD mesh file, empty when the mission has none
   std::filesystem::path work_dir;     // artifacts of every stage of this job live here
   nlohmann::json options = nlohmann::json::object();  // this stage's options (--set stage.x=v)
+  // The job's extrinsic overrides, options.calibration (docs/calibration.md), or null; stages
+  // read the mission through load_job_mission (job_extrinsics.h), which applies them.
+  nlohmann::json calibration = nullptr;
   nlohmann::json reports = nlohmann::json::object();  // sections of earlier stages, by stage name
   std::vector<InputJob> input_jobs;  // `compare`: the earlier job A, then the later job B
   // The job's own record from its lease ({"id", "mission_id", "project", "options", ...});

@@ -114,6 +114,34 @@ TEST_F(WorkerCliTest, BadStageOptionFailsTheStage) {
   EXPECT_NE(err().find("known: gap_factor, rate_tolerance"), std::string::npos) << err();
 }
 
+// `--set calibration.<sensor>.<key>=<pose>` (docs/calibration.md): used, reported, checked.
+TEST_F(WorkerCliTest, RunTakesExtrinsicOverrides) {
+  const fs::path mission = write_tiny_mission();
+  const std::string out = (dir_ / "out").string();
+  ASSERT_EQ(run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out, "--set",
+                 R"(calibration.imu.T_body_sensor={"xyz_m":[1,2,3],"rpy_deg":[0,0,90]})"}),
+            0)
+      << err();
+  EXPECT_EQ(err().find("warning"), std::string::npos) << err();
+  const auto report = nlohmann::json::parse(read_file(dir_ / "out" / "report.json"));
+  EXPECT_EQ(report["calibration"]["imu"]["source"], "override T_body_sensor");
+  EXPECT_EQ(report["calibration"]["imu"]["T_body_sensor"]["translation"],
+            nlohmann::json({1.0, 2.0, 3.0}));
+  EXPECT_EQ(report["stages"]["ingest"]["sensors"]["imu"]["extrinsic"], "override T_body_sensor");
+
+  EXPECT_EQ(run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out, "--set",
+                 "calibration.imu.T_body_sensor=oops"}),
+            1);
+  EXPECT_NE(err().find("calibration.imu.T_body_sensor: expected a JSON pose"), std::string::npos)
+      << err();
+  EXPECT_EQ(run({"run", "--mission", mission.string(), "--stages", "ingest", "--out", out, "--set",
+                 R"(calibration.sonr.T_body_sensor={"xyz_m":[0,0,0],"rpy_deg":[0,0,0]})"}),
+            2);
+  EXPECT_NE(err().find("ingest: calibration.sonr: no sensor 'sonr' in the mission (sensors: imu)"),
+            std::string::npos)
+      << err();
+}
+
 TEST_F(WorkerCliTest, UsageErrorsExitOne) {
   const fs::path mission = write_tiny_mission();
   const std::string out = (dir_ / "out").string();

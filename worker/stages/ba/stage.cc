@@ -12,6 +12,7 @@
 
 #include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/mission_reader.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/stages/ba/dvl_returns.h"
 #include "worker/stages/ba/ground_truth_tracks.h"
 #include "worker/stages/ba/keyframes.h"
@@ -23,7 +24,7 @@ namespace keel::pipeline {
 StageResult BaStage::run(StageContext& context) {
   // Step 1.
   const BaStageOptions options = BaStageOptions::from_json(context.options);
-  const io::Mission mission = io::load_mission(context.mission_dir);
+  const io::Mission mission = load_job_mission(context);
   io::MissionReader reader(mission);
   const BaSensors sensors = pick_sensors(reader, options);
   ba::BaProblem problem;

@@ -194,7 +194,10 @@ json sensor_report(const io::MissionReader& reader, const proto::SensorSpec& sen
                                                  : sensor.images}};
   out.update(r);
   std::string extrinsic = "none";
-  if (sensor.T_body_sensor)
+  const auto& overridden = reader.mission().extrinsic_sources;
+  if (overridden.count(sensor.name))
+    extrinsic = overridden.at(sensor.name);
+  else if (sensor.T_body_sensor)
     extrinsic = "mission.yaml";
   else if (reader.extrinsic(sensor.name))
     extrinsic = "tf_static";

@@ -1,5 +1,5 @@
 // Stage `ingest` (docs/mission-format.md) as its numbered steps:
-//   1. options; mission.yaml loaded (io::load_mission);
+//   1. options; mission.yaml loaded with the job's extrinsic overrides (load_job_mission);
 //   2. every sensor's records read once (one scan in memory at a time, image headers only):
 //      counts, time spans, measured vs nominal rate, gaps, point statistics and the span of
 //      the per-point time field;
@@ -9,6 +9,7 @@
 #include "worker/stages/ingest/stage.h"
 
 #include "worker/io/mission_reader.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/pipeline/report_html_parts.h"
 #include "worker/stages/ingest/mission_report.h"
 
@@ -39,7 +40,7 @@ class IngestStage : public Stage {
   StageResult run(StageContext& context) override {
     // 1. Options and the mission.
     const IngestOptions options = ingest_option_table().from_json(context.options);
-    io::MissionReader reader(io::load_mission(context.mission_dir));
+    io::MissionReader reader(load_job_mission(context));
     const auto& manifest = reader.manifest();
     json warnings = json::array();
     const std::filesystem::path cad_path =

@@ -12,6 +12,7 @@
 #include "worker/inspect/inspect.h"
 #include "worker/io/mesh/mesh_reader.h"
 #include "worker/io/mission.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/stages/inspect/outputs.h"
 #include "worker/stages/inspect/report_json.h"
 #include "worker/stages/inspect/solution_input.h"
@@ -23,7 +24,7 @@ StageResult InspectStage::run(StageContext& context) {
   // Step 1.
   const InspectStageOptions options = InspectStageOptions::from_json(context.options);
   const BaSolution solution = read_ba_solution(context.work_dir / kBaSolutionFile);
-  const io::Mission mission = io::load_mission(context.mission_dir);
+  const io::Mission mission = load_job_mission(context);
   const std::filesystem::path cad =
       !context.cad_path.empty() ? context.cad_path : mission.cad_mesh_path;
   if (cad.empty())

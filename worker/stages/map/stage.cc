@@ -24,6 +24,7 @@
 
 #include "worker/io/mission_reader.h"
 #include "worker/pipeline/body_poses.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/stages/map/metrics.h"
 #include "worker/stages/map/origin_sidecars.h"
 #include "worker/stages/map/output_plan.h"
@@ -46,7 +47,7 @@ StageResult MapStage::run(StageContext& context) {
   const MapStageOptions options = MapStageOptions::from_json(context.options);
 
   // 2. The sensors to map.
-  io::MissionReader reader(io::load_mission(context.mission_dir));
+  io::MissionReader reader(load_job_mission(context));
   const SensorSelection selection = select_sensors(reader, options);
   context.check_canceled();
 

@@ -16,6 +16,7 @@
 
 #include "worker/io/mission_reader.h"
 #include "worker/io/tum.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/pipeline/trajectories_file.h"
 #include "worker/stages/refine/dvl_report.h"
 #include "worker/stages/refine/evaluation.h"
@@ -30,7 +31,7 @@ StageResult RefineStage::run(StageContext& context) {
   // Step 1: options and the mission.
   const RefineStageOptions options = RefineStageOptions::from_json(context.options);
   slam::RefineOptions solver_options = options.solver_options();
-  io::MissionReader reader(io::load_mission(context.mission_dir));
+  io::MissionReader reader(load_job_mission(context));
   context.check_canceled();
 
   // Step 2: keyframes.
