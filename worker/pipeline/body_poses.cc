@@ -1,11 +1,10 @@
-#include "worker/stages/map/poses.h"
+#include "worker/pipeline/body_poses.h"
 
 #include <stdexcept>
 #include <string>
 
 #include "worker/io/tum.h"
 #include "worker/mapping/odometry_correction.h"
-#include "worker/stages/refine/artifacts.h"
 
 namespace keel::pipeline {
 namespace {
@@ -22,14 +21,14 @@ json span_json(const Trajectory& poses) {
 }
 
 // The keyframe poses: the refined trajectory, else the recorded `map` poses, else none.
-Trajectory read_keyframes(const io::MissionReader& reader, const fs::path& work_dir, json& report) {
-  const fs::path refined_path = work_dir / kRefinedTrajectoryFile;
+Trajectory read_keyframes(const io::MissionReader& reader, const fs::path& refined_path,
+                          json& report) {
   std::error_code ec;
   Trajectory keyframes;
   if (fs::is_regular_file(refined_path, ec)) {
     keyframes = io::read_tum(refined_path);
     report["keyframes"] = span_json(keyframes);
-    report["keyframes"]["source"] = kRefinedTrajectoryFile;
+    report["keyframes"]["source"] = refined_path.filename().string();
   } else if (reader.has_trajectory("map")) {
     keyframes = reader.read_trajectory("map");
     report["keyframes"] = span_json(keyframes);
@@ -40,22 +39,23 @@ Trajectory read_keyframes(const io::MissionReader& reader, const fs::path& work_
 
 }  // namespace
 
-Poses build_poses(const io::MissionReader& reader, const MapStageOptions& options,
-                  const fs::path& work_dir) {
+Poses build_poses(const io::MissionReader& reader, const fs::path& refined_trajectory,
+                  bool odometry_correction, const std::string& stage) {
   Poses poses;
-  const Trajectory keyframes = read_keyframes(reader, work_dir, poses.report);
+  const Trajectory keyframes = read_keyframes(reader, refined_trajectory, poses.report);
   if (reader.has_trajectory("map")) poses.slam_keyframes = reader.read_trajectory("map");
 
   const bool has_odometry = reader.has_trajectory("odometry");
   if (keyframes.empty()) {
     if (!has_odometry)
-      throw std::runtime_error(
-          "map needs poses: no trajectory_refined.tum from a refine stage, and mission.yaml has "
-          "neither trajectories.map nor trajectories.odometry");
+      throw std::runtime_error(stage + " needs poses: no " +
+                               refined_trajectory.filename().string() +
+                               " from a refine stage, and mission.yaml has "
+                               "neither trajectories.map nor trajectories.odometry");
     poses.T_world_body = reader.read_trajectory("odometry");
     poses.report["keyframes"] = nullptr;
     poses.report["source"] = "trajectories.odometry as recorded (no keyframe poses to correct it)";
-  } else if (has_odometry && options.odometry_correction) {
+  } else if (has_odometry && odometry_correction) {
     const Trajectory odometry = reader.read_trajectory("odometry");
     const mapping::OdometryCorrection correction = mapping::correct_odometry(keyframes, odometry);
     poses.T_world_body = correction.refined;
@@ -74,7 +74,7 @@ Poses build_poses(const io::MissionReader& reader, const MapStageOptions& option
   }
   if (poses.slam_keyframes.empty()) poses.slam_keyframes = keyframes;
   if (poses.T_world_body.size() < 2)
-    throw std::runtime_error("map needs at least 2 poses to interpolate, found " +
+    throw std::runtime_error(stage + " needs at least 2 poses to interpolate, found " +
                              std::to_string(poses.T_world_body.size()));
   poses.report["trajectory"] = span_json(poses.T_world_body);
   return poses;

@@ -1,17 +1,17 @@
-// Step 3 of the map stage: the poses of Sec. VI-C (seed 000). Keyframes from
-// `trajectory_refined.tum` (an earlier `refine`) or the recorded `map` poses correct the
-// recorded high-rate `odometry` by Algorithm 2, so every scan between keyframes has a pose;
-// without odometry the keyframes are interpolated, without keyframes the odometry is used as
-// recorded.
+// The body poses scans are placed with (seed 000 Sec. VI-C), for `map` and `calibrate`:
+// keyframes from refine's trajectory (when that file exists) or the recorded `map` poses
+// correct the recorded high-rate `odometry` by Algorithm 2, so every scan between keyframes
+// has a pose; without odometry the keyframes are interpolated, without keyframes the
+// odometry is used as recorded.
 #pragma once
 
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <string>
 
 #include "core/pose.h"
 #include "worker/io/mission_reader.h"
-#include "worker/stages/map/options.h"
 
 namespace keel::pipeline {
 
@@ -21,8 +21,9 @@ struct Poses {
   nlohmann::json report = nlohmann::json::object();  // report.json's map.poses
 };
 
-// Throws std::runtime_error when the mission has no poses to map with, or fewer than two.
-Poses build_poses(const io::MissionReader& reader, const MapStageOptions& options,
-                  const std::filesystem::path& work_dir);
+// `refined_trajectory`: refine's TUM file, used when it exists. `stage` names the caller in
+// errors. Throws std::runtime_error when the mission has no poses, or fewer than two.
+Poses build_poses(const io::MissionReader& reader, const std::filesystem::path& refined_trajectory,
+                  bool odometry_correction, const std::string& stage);
 
 }  // namespace keel::pipeline

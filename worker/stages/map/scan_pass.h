@@ -22,7 +22,7 @@
 #include "worker/mapping/transform_tree.h"
 #include "worker/pipeline/stage.h"
 #include "worker/stages/map/options.h"
-#include "worker/stages/map/poses.h"
+#include "worker/pipeline/body_poses.h"
 #include "worker/stages/map/sensors.h"
 #include "worker/stages/map/tiled_maps.h"
 

@@ -1,7 +1,8 @@
 // Stage `map`, as numbered steps (stage.h says what it makes; each step's file, what it does):
 //   1. options (`--set map.x=v`, options.h);
 //   2. the scan sensors to map (sensors.h);
-//   3. poses (Sec. VI-C, poses.h), and on them the TF tree, a MapBuilder per sensor, the
+//   3. poses (Sec. VI-C, worker/pipeline/body_poses.h), and on them the TF tree, a MapBuilder per
+//   sensor, the
 //      SLAM-map baseline and the maps' tiles (scan_pass.h);
 //   4. every scan of every sensor through its MapBuilder, then the sensor's final filters over
 //      its tiles (scan_pass.h);
@@ -22,14 +23,15 @@
 #include <vector>
 
 #include "worker/io/mission_reader.h"
+#include "worker/pipeline/body_poses.h"
 #include "worker/stages/map/metrics.h"
 #include "worker/stages/map/origin_sidecars.h"
 #include "worker/stages/map/output_plan.h"
 #include "worker/stages/map/output_runner.h"
-#include "worker/stages/map/poses.h"
 #include "worker/stages/map/report_json.h"
 #include "worker/stages/map/scan_pass.h"
 #include "worker/stages/map/sensors.h"
+#include "worker/stages/refine/artifacts.h"
 
 namespace keel::pipeline {
 
@@ -49,7 +51,8 @@ StageResult MapStage::run(StageContext& context) {
   context.check_canceled();
 
   // 3. Poses, and the mapping on them.
-  const Poses poses = build_poses(reader, options, context.work_dir);
+  const Poses poses = build_poses(reader, context.work_dir / kRefinedTrajectoryFile,
+                                  options.odometry_correction, "map");
   ScanPass scans(options, selection, poses, context.work_dir);
 
   // 4. Every scan of every sensor. The outputs of a sensor whose map is complete start at once
