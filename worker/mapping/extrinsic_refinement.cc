@@ -42,12 +42,15 @@ Eigen::Vector3d to_world(const Problem& problem, const Eigen::Isometry3d& T, siz
 std::vector<Match> find_matches(const Problem& problem, const Eigen::Isometry3d& T, double gate_m) {
   std::vector<Match> matches(problem.points.size());
   const double gate2 = gate_m * gate_m;
+  const double reach = std::max(gate_m, problem.options.plane_extrapolation_m);
   parallel_for(problem.points.size(), problem.options.threads, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       double d2 = 0.0;
-      const uint32_t n = problem.map.nearest(to_world(problem, T, i), &d2);
+      const Eigen::Vector3d p = to_world(problem, T, i);
+      const uint32_t n = problem.map.nearest(p, &d2);
       const LocalPlane& plane = problem.map.plane(n);
-      if (d2 > gate2 || !plane.planar) continue;
+      if (!plane.planar || d2 > reach * reach) continue;
+      if (d2 > gate2 && std::abs(plane.normal.dot(p - plane.centroid)) > gate_m) continue;
       matches[i] = {true, plane.normal, plane.centroid};
     }
   });
@@ -164,7 +167,36 @@ Eigen::Isometry3d apply_right_perturbation(const Eigen::Isometry3d& T, const Vec
   return out;
 }
 
+std::vector<Eigen::Vector3f> reference_map_points(const std::vector<PlacedScan>& reference_scans,
+                                                  const Eigen::Isometry3d& T_body_reference) {
+  std::vector<Eigen::Vector3f> out;
+  for (const PlacedScan& scan : reference_scans) {
+    const Eigen::Isometry3d T_world_reference = scan.T_world_body * T_body_reference;
+    for (const Eigen::Vector3f& p : scan.points)
+      out.push_back((T_world_reference * p.cast<double>()).cast<float>());
+  }
+  return out;
+}
+
 ExtrinsicRefinementResult refine_extrinsic(const std::vector<PlacedScan>& reference_scans,
+                                           const std::vector<PlacedScan>& candidate_scans,
+                                           const Eigen::Isometry3d& T_body_reference,
+                                           const Eigen::Isometry3d& T_reference_candidate_initial,
+                                           const std::string& reference_name,
+                                           const std::string& candidate_name,
+                                           const ExtrinsicRefinementOptions& options) {
+  check_options(options);
+  const std::vector<Eigen::Vector3f> points =
+      reference_map_points(reference_scans, T_body_reference);
+  if (points.empty())
+    throw std::invalid_argument("refine_extrinsic: reference '" + reference_name +
+                                "' has no points");
+  const PlaneMap map(points, options.planes);
+  return refine_extrinsic(map, candidate_scans, T_body_reference, T_reference_candidate_initial,
+                          reference_name, candidate_name, options);
+}
+
+ExtrinsicRefinementResult refine_extrinsic(const PlaneMap& map,
                                            const std::vector<PlacedScan>& candidate_scans,
                                            const Eigen::Isometry3d& T_body_reference,
                                            const Eigen::Isometry3d& T_reference_candidate_initial,
@@ -174,18 +206,6 @@ ExtrinsicRefinementResult refine_extrinsic(const std::vector<PlacedScan>& refere
   check_options(options);
   ExtrinsicRefinementResult result;
   result.T_reference_candidate = T_reference_candidate_initial;
-
-  // 1. The reference map in world, and its planes.
-  std::vector<Eigen::Vector3f> reference_world;
-  for (const PlacedScan& scan : reference_scans) {
-    const Eigen::Isometry3d T_world_reference = scan.T_world_body * T_body_reference;
-    for (const Eigen::Vector3f& p : scan.points)
-      reference_world.push_back((T_world_reference * p.cast<double>()).cast<float>());
-  }
-  if (reference_world.empty())
-    throw std::invalid_argument("refine_extrinsic: reference '" + reference_name +
-                                "' has no points");
-  const PlaneMap map(reference_world, options.planes);
   result.reference_points = map.size();
   result.reference_planar = map.planar_count();
 

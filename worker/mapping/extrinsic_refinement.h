@@ -47,6 +47,11 @@ struct ExtrinsicRefinementOptions {
   // final gate.
   double max_correspondence_m = 1.0;
   double final_correspondence_m = 0.3;
+  // A point farther than the gate from every reference point still matches a plane whose
+  // nearest point is within this distance when the point lies within the gate of that plane
+  // (0: never). For a sonar against a lidar: one sees under the water, the other above it,
+  // and the piers' and walls' planes continue across the waterline.
+  double plane_extrapolation_m = 0.0;
   int max_iterations = 30;     // outer (correspondence) iterations
   int gauss_newton_steps = 3;  // IRLS steps per set of correspondences
   double converged_translation_m = 1e-5;
@@ -104,6 +109,20 @@ ExtrinsicRefinementResult refine_extrinsic(const std::vector<PlacedScan>& refere
                                            const std::string& reference_name,
                                            const std::string& candidate_name,
                                            const ExtrinsicRefinementOptions& options = {});
+
+// The same against a reference map built once (PlaneMap over reference_map_points below), for
+// several candidates of one reference; `options.planes` is then unused.
+ExtrinsicRefinementResult refine_extrinsic(const PlaneMap& reference_map,
+                                           const std::vector<PlacedScan>& candidate_scans,
+                                           const Eigen::Isometry3d& T_body_reference,
+                                           const Eigen::Isometry3d& T_reference_candidate_initial,
+                                           const std::string& reference_name,
+                                           const std::string& candidate_name,
+                                           const ExtrinsicRefinementOptions& options = {});
+
+// The reference scans placed in world: T_world_body * T_body_reference * p.
+std::vector<Eigen::Vector3f> reference_map_points(const std::vector<PlacedScan>& reference_scans,
+                                                  const Eigen::Isometry3d& T_body_reference);
 
 // T * (Exp(delta_rotation), delta_translation): the perturbation the result's covariance and
 // directions are expressed in.

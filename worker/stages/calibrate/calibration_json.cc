@@ -97,7 +97,6 @@ json candidate_json(const CalibrationSensor& reference, const CandidateOutcome& 
   out["iterations"] = r.iterations;
   out["converged"] = r.converged;
   out["metrics"] = {{"before", c.metrics_before}, {"after", c.metrics_after}};
-  out["seconds"] = c.seconds;
 
   const std::string key = "T_" + reference.name + "_" + c.sensor.name;
   const json pose = human_pose(r.T_reference_candidate);

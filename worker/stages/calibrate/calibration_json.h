@@ -29,7 +29,7 @@ struct CandidateOutcome {
   Pose3 T_reference_candidate_initial = Pose3::Identity();
   mapping::ExtrinsicRefinementResult result;
   nlohmann::json metrics_before = nullptr, metrics_after = nullptr;  // mapping::to_json
-  double seconds = 0.0;
+  double seconds = 0.0;  // report.json's timing only: calibration.json stays deterministic
 };
 
 nlohmann::json candidate_json(const CalibrationSensor& reference, const CandidateOutcome& c);

@@ -101,6 +101,15 @@ const OptionTable<CalibrateStageOptions>& calibrate_option_table() {
                      "", kRefinement)),
           option("final_correspondence_m", &Options::final_correspondence_m, positive_metres(),
                  doc("m", "last gate, and the residual histograms' range", "", kRefinement)),
+          option("sonar_plane_extrapolation_m", &Options::sonar_plane_extrapolation_m,
+                 at_least(0.0),
+                 doc("m",
+                     "a sonar point farther than the gate from every reference point still "
+                     "matches the plane of its nearest reference point within this distance, "
+                     "when it lies within the gate of that plane: a sonar sees under the water, "
+                     "the reference lidar above it, and they share the planes of piers and walls "
+                     "across the waterline, not points. 0 = as a lidar",
+                     "beyond the paper", kRefinement)),
           option("max_iterations", &Options::max_iterations, int_in_range(1, 1000),
                  doc("", "ICP iterations (new correspondences each)", "", kRefinement)),
           option("unobservable_ratio", &Options::unobservable_ratio, in_open_range(0.0, 1.0),
@@ -131,8 +140,10 @@ const OptionTable<CalibrateStageOptions>& calibrate_option_table() {
   return table;
 }
 
-mapping::ExtrinsicRefinementOptions CalibrateStageOptions::refinement() const {
+mapping::ExtrinsicRefinementOptions CalibrateStageOptions::refinement(
+    const std::string& candidate_type) const {
   mapping::ExtrinsicRefinementOptions o;
+  if (candidate_type == "sonar") o.plane_extrapolation_m = sonar_plane_extrapolation_m;
   o.loss = loss == "cauchy" ? mapping::RobustLoss::kCauchy : mapping::RobustLoss::kHuber;
   o.loss_scale_m = loss_scale_m;
   o.max_correspondence_m = max_correspondence_m;

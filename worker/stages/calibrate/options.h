@@ -31,6 +31,10 @@ struct CalibrateStageOptions {
   double loss_scale_m = 0.05;
   double max_correspondence_m = 1.0;
   double final_correspondence_m = 0.3;
+  // mapping::ExtrinsicRefinementOptions::plane_extrapolation_m for sonar candidates (lidars:
+  // 0). A sonar sees under the water and the reference lidar above it; they share the
+  // planes that continue across the waterline, not points.
+  double sonar_plane_extrapolation_m = 3.0;
   int max_iterations = 30;
   double unobservable_ratio = 1e-2;
   size_t min_overlap_points = 200;
@@ -42,7 +46,7 @@ struct CalibrateStageOptions {
   size_t metrics_max_points = 20000;
   int threads = 2;
 
-  mapping::ExtrinsicRefinementOptions refinement() const;
+  mapping::ExtrinsicRefinementOptions refinement(const std::string& candidate_type = "") const;
   static CalibrateStageOptions from_json(const nlohmann::json& options);  // options.cc
   nlohmann::ordered_json to_json() const;
 };

@@ -74,6 +74,8 @@ namespace keel::pipeline {
 std::string CalibrateStage::report_html(const report_html::Ref& section,
                                         const ReportHtmlInputs&) const {
   using namespace report_html;
+  if (!section["nothing_to_calibrate"].missing())
+    return paragraph("Nothing to calibrate: " + section["nothing_to_calibrate"].text() + ".");
   std::string out = paragraph("Reference: " + section["reference"]["sensor"].text() + " (" +
                               section["reference"]["source"].text() + "); " +
                               section["keyframes"].text() + " keyframes.");

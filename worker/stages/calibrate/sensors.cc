@@ -65,10 +65,11 @@ CalibrationSelection select_calibration_sensors(const io::MissionReader& reader,
           return s.type == SensorType::kLidar && is_range_scanner(s) && s.mounted_on.empty() &&
                  job_extrinsic(reader, s.name);
         });
-    if (first == manifest.sensors.end())
-      throw std::runtime_error(
-          "calibrate: the mission has no lidar with scans and an extrinsic to calibrate against "
-          "(set options.calibrate.reference)");
+    if (first == manifest.sensors.end()) {
+      selection.nothing_to_do =
+          "the mission has no lidar with scans and an extrinsic to calibrate against";
+      return selection;
+    }
     selection.reference = *job_extrinsic(reader, first->name);
   }
 
@@ -102,9 +103,9 @@ CalibrationSelection select_calibration_sensors(const io::MissionReader& reader,
     selection.candidates.push_back(*sensor);
   }
   if (selection.candidates.empty())
-    throw std::runtime_error("calibrate: no lidar or sonar with scans besides the reference '" +
-                             selection.reference.name +
-                             "' to calibrate (skipped: " + selection.skipped.dump() + ")");
+    selection.nothing_to_do =
+        "no lidar or sonar with scans and an extrinsic besides the reference '" +
+        selection.reference.name + "'";
   return selection;
 }
 

@@ -24,6 +24,9 @@ struct CalibrationSelection {
   CalibrationSensor reference;
   std::vector<CalibrationSensor> candidates;
   nlohmann::json skipped = nlohmann::json::array();  // [{"sensor", "reason"}]
+  // Why there is nothing to calibrate (no reference or no candidate found by default); empty
+  // otherwise. A job running every stage on a mission with one range sensor is not an error.
+  std::string nothing_to_do;
 };
 
 // The extrinsic of `sensor` for this job and its source; nullopt without one. The one place
@@ -31,8 +34,8 @@ struct CalibrationSelection {
 std::optional<CalibrationSensor> job_extrinsic(const io::MissionReader& reader,
                                                const std::string& sensor);
 
-// Throws proto::ContractError naming the option for an unknown or unsuitable sensor, and
-// std::runtime_error when there is no reference or no candidate.
+// Throws proto::ContractError naming the option for an unknown or unsuitable sensor named by
+// an option.
 CalibrationSelection select_calibration_sensors(const io::MissionReader& reader,
                                                 const CalibrateStageOptions& options);
 

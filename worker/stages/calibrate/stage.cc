@@ -90,6 +90,14 @@ StageResult CalibrateStage::run(StageContext& context) {
   io::MissionReader reader(io::load_mission(context.mission_dir));
   const CalibrationSelection selection = select_calibration_sensors(reader, options);
   context.check_canceled();
+  if (!selection.nothing_to_do.empty()) {
+    context.log("calibrate: nothing to calibrate: " + selection.nothing_to_do);
+    StageResult out;
+    out.report = {{"options", options.to_json()},
+                  {"nothing_to_calibrate", selection.nothing_to_do},
+                  {"skipped_sensors", selection.skipped}};
+    return out;
+  }
 
   // 3. Poses and keyframes.
   const fs::path refined = context.work_dir / kRefinedTrajectoryFile;
@@ -116,7 +124,14 @@ StageResult CalibrateStage::run(StageContext& context) {
 
   // 5. Each candidate against the reference.
   const CalibrationSensorScans& reference = scans.sensors.front();
-  const std::vector<mapping::PlacedScan> reference_scans = placed(reference);
+  const std::vector<Eigen::Vector3f> reference_points =
+      mapping::reference_map_points(placed(reference), selection.reference.T_body_sensor);
+  if (reference_points.empty())
+    throw std::runtime_error("calibrate: the reference sensor '" + reference.name +
+                             "' has no scan at any keyframe");
+  mapping::PlaneMapOptions plane_options = options.refinement().planes;
+  const mapping::PlaneMap reference_map(reference_points, plane_options);
+  timing["reference_map_s"] = seconds_since(start);
   const Pose3 T_reference_body = selection.reference.T_body_sensor.inverse();
   std::vector<CandidateOutcome> outcomes;
   for (size_t k = 0; k < selection.candidates.size(); ++k) {
@@ -126,9 +141,10 @@ StageResult CalibrateStage::run(StageContext& context) {
     c.sensor = selection.candidates[k];
     c.T_reference_candidate_initial = T_reference_body * c.sensor.T_body_sensor;
     const CalibrationSensorScans& candidate = scans.sensors[k + 1];
-    c.result = mapping::refine_extrinsic(
-        reference_scans, placed(candidate), selection.reference.T_body_sensor,
-        c.T_reference_candidate_initial, reference.name, candidate.name, options.refinement());
+    c.result = mapping::refine_extrinsic(reference_map, placed(candidate),
+                                         selection.reference.T_body_sensor,
+                                         c.T_reference_candidate_initial, reference.name,
+                                         candidate.name, options.refinement(c.sensor.type));
     if (!c.result.refused) {
       c.metrics_before = metrics_json(
           combined_cloud(reference, candidate, c.T_reference_candidate_initial), options, context);
@@ -136,6 +152,7 @@ StageResult CalibrateStage::run(StageContext& context) {
           combined_cloud(reference, candidate, c.result.T_reference_candidate), options, context);
     }
     c.seconds = seconds_since(candidate_start);
+    timing["candidates_s"][c.sensor.name] = c.seconds;
     context.log("calibrate: " + c.sensor.name + " " +
                 (c.result.refused ? "refused: " + c.result.reason
                                   : "refined in " + std::to_string(c.seconds) + " s"));
