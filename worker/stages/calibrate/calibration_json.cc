@@ -97,6 +97,16 @@ json candidate_json(const CalibrationSensor& reference, const CandidateOutcome& 
   out["iterations"] = r.iterations;
   out["converged"] = r.converged;
   out["metrics"] = {{"before", c.metrics_before}, {"after", c.metrics_after}};
+  json warnings = json::array();
+  if (!r.converged)
+    warnings.push_back("did not converge in " + std::to_string(r.iterations) +
+                       " iterations: the scene may not constrain " + c.sensor.name + " against " +
+                       reference.name +
+                       "; check the unobservable directions and the residuals before using it");
+  if (r.after.median_m > r.before.median_m)
+    warnings.push_back("the median residual grew (" + std::to_string(r.before.median_m) + " -> " +
+                       std::to_string(r.after.median_m) + " m)");
+  out["warnings"] = warnings;
 
   const std::string key = "T_" + reference.name + "_" + c.sensor.name;
   const json pose = human_pose(r.T_reference_candidate);

@@ -52,6 +52,7 @@ std::string candidate_section(const Ref& c) {
   std::string out = heading(name + ": " + c["status"].text(), "calibrate-" + name + "-heading");
   if (c["status"].text() == "refused") return out + paragraph(c["reason"].text());
   out += pose_table(c) + quality_table(c);
+  out += string_list(c["warnings"], "Warnings");
   const Ref unobservable = c["unobservable"];
   if (unobservable.json().empty()) {
     out += paragraph("Every direction is observable.");
