@@ -4,4 +4,4 @@
 // (worker/pipeline/stage_registry.cc). A new stage is one X(...) here and its folder.
 #pragma once
 
-#define KEEL_STAGES(X) X(ingest) X(refine) X(map) X(ba) X(inspect) X(compare)
+#define KEEL_STAGES(X) X(ingest) X(refine) X(calibrate) X(map) X(ba) X(inspect) X(compare)
