@@ -50,7 +50,14 @@ std::optional<CalibrationSensor> job_extrinsic(const io::MissionReader& reader,
   const SensorSpec* spec = reader.manifest().find_sensor(sensor);
   const std::optional<Pose3> T_body_sensor = reader.extrinsic(sensor);
   if (!spec || !T_body_sensor) return std::nullopt;
-  return CalibrationSensor{sensor, proto::to_string(spec->type), *T_body_sensor, "mission.yaml"};
+  // The job's override when it has one (pipeline/job_extrinsics.h), else mission.yaml's or
+  // the bag's.
+  const auto& overrides = reader.mission().extrinsic_sources;
+  const auto source = overrides.find(sensor);
+  return CalibrationSensor{sensor, proto::to_string(spec->type), *T_body_sensor,
+                           source != overrides.end() ? source->second
+                           : spec->T_body_sensor ? "mission.yaml"
+                                                 : "/tf_static"};
 }
 
 CalibrationSelection select_calibration_sensors(const io::MissionReader& reader,

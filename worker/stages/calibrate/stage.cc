@@ -17,6 +17,7 @@
 #include "worker/io/tum.h"
 #include "worker/mapping/map_metrics.h"
 #include "worker/pipeline/body_poses.h"
+#include "worker/pipeline/job_extrinsics.h"
 #include "worker/stages/calibrate/calibration_json.h"
 #include "worker/stages/calibrate/keyframe_scans.h"
 #include "worker/stages/calibrate/sensors.h"
@@ -87,7 +88,7 @@ StageResult CalibrateStage::run(StageContext& context) {
   const CalibrateStageOptions options = CalibrateStageOptions::from_json(context.options);
 
   // 2. The sensors and their extrinsics.
-  io::MissionReader reader(io::load_mission(context.mission_dir));
+  io::MissionReader reader(load_job_mission(context));
   const CalibrationSelection selection = select_calibration_sensors(reader, options);
   context.check_canceled();
   if (!selection.nothing_to_do.empty()) {
