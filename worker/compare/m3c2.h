@@ -80,6 +80,11 @@ struct M3c2Clouds {
 void apply_registration_error(std::vector<CoreChange>* cores, double registration_error_m,
                               double confidence_z = 1.96);
 
+// The same with each core's own registration error (per tile, compare/local_registration.h).
+void apply_registration_errors(std::vector<CoreChange>* cores,
+                               const std::vector<double>& registration_error_m,
+                               double confidence_z = 1.96);
+
 // Orients each normal towards the viewpoints (the sensor positions that saw the surface, so a
 // positive change is material added towards the sensor): the nearest within 30 m that looks
 // at the surface within 60 degrees of its normal, else the nearest; with no viewpoints,
