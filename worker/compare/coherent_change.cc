@@ -18,11 +18,11 @@ void require_coherent_change(std::vector<CoreChange>* cores, double radius_m, in
     if ((*cores)[i].defined()) positions.push_back((*cores)[i].position), defined.push_back(i);
   if (positions.empty()) return;
   const NearestIndex index(positions);
-  // Each core's sign of exceedance: +1, -1, or 0 within LoD95.
+  // Each core's sign of significant change: +1, -1, or 0 when not significant.
   std::vector<int> sign(defined.size());
   for (size_t k = 0; k < defined.size(); ++k) {
     const CoreChange& c = (*cores)[defined[k]];
-    sign[k] = std::abs(c.distance_m) > c.lod95_m ? (c.distance_m > 0 ? 1 : -1) : 0;
+    sign[k] = c.significant ? (c.distance_m > 0 ? 1 : -1) : 0;
   }
   std::vector<char> keep(defined.size(), 0);
   keel::parallel_for(defined.size(), threads, [&](size_t begin, size_t end) {

@@ -191,15 +191,17 @@ void apply_registration_error(std::vector<CoreChange>* cores, double registratio
 }
 
 void apply_registration_errors(std::vector<CoreChange>* cores,
-                               const std::vector<double>& registration_error_m,
-                               double confidence_z) {
-  if (registration_error_m.size() != cores->size())
+                               const std::vector<double>& registration_error_m, double confidence_z,
+                               const std::vector<double>& significance_reg_m,
+                               double significance_z) {
+  if (registration_error_m.size() != cores->size() || significance_reg_m.size() != cores->size())
     throw std::invalid_argument("registration errors: expected one per core point");
   for (size_t i = 0; i < cores->size(); ++i) {
     CoreChange& c = (*cores)[i];
     if (!c.defined()) continue;
     c.lod95_m = float(confidence_z * (c.statistical_m + registration_error_m[i]));
-    c.significant = std::abs(c.distance_m) > c.lod95_m;
+    c.significant =
+        std::abs(c.distance_m) > significance_z * (c.statistical_m + significance_reg_m[i]);
   }
 }
 

@@ -214,7 +214,8 @@ double tile_registration_error(const std::vector<CoreSample>& cores, double conf
     residual[i] = cores[i].distance_m, magnitude[i] = std::abs(cores[i].distance_m);
   const double spread = 1.4826 * median_of(magnitude);
   const double noise = neighbour_noise(cores, o.leave_out_radius_m);
-  const double band = std::max(o.significance_sigmas * std::max(noise, spread), o.stable_floor_m);
+  const double band =
+      std::max(o.significance_sigmas * std::max(noise, spread), o.calibration_floor_m);
   const std::vector<char> stable = stable_cores(cores, residual, band, o.leave_out_radius_m);
   std::vector<double> excess;
   for (size_t i = 0; i < cores.size(); ++i)

@@ -39,6 +39,9 @@ struct CoreSample {
 struct TileCorrectionOptions {
   double significance_sigmas = 3.0;
   double stable_floor_m = 0.01;  // the stable band is never narrower than this
+  // The same for the calibration of reg (tile_registration_error): wider, so that the
+  // registration's own error, which it measures, is not cut from its tail.
+  double calibration_floor_m = 0.02;
   double leave_out_radius_m = 0.5;
   double huber_k = 1.345;  // in noises: 95 % efficiency on Gaussian residuals
   // A direction is fixed when its eigenvalue of H is at least this fraction of trace(H) / 6.
@@ -87,7 +90,7 @@ std::vector<char> stable_cores(const std::vector<CoreSample>& cores,
 // the registration's error and noise correlated over a scan (a trajectory's) widen |d| beyond
 // it, by an amount this measures. The stable band is significance_sigmas times the larger of
 // neighbour_noise and the spread of all its cores (1.4826 median |d|), at least
-// stable_floor_m. `stable` (optional) receives which cores are stable. -1 with fewer than
+// calibration_floor_m. `stable` (optional) receives which cores are stable. -1 with fewer than
 // min_stable_cores stable cores.
 double tile_registration_error(const std::vector<CoreSample>& cores, double confidence_z,
                                const TileCorrectionOptions& options,

@@ -74,15 +74,22 @@ void registration_errors(const CompareStageOptions& options, MeasuredChange* mea
     if (c.defined())
       all.push_back({c.position.cast<double>(), c.normal.cast<double>(), double(c.distance_m),
                      double(c.statistical_m)});
-  *reg = std::max(0.0, compare::tile_registration_error(all, options.m3c2.confidence_z,
-                                                        options.tile_correction));
-  std::vector<double> per_core(measured->changes.size(), *reg);
-  if (options.local_registration_tile_m > 0)
-    per_core = compare::tile_registration_errors(
-        measured->changes, options.local_registration_tile_m, *reg, options.m3c2.confidence_z,
-        options.tile_correction, options.threads, &measured->tiles, &measured->stable);
-  compare::apply_registration_errors(&measured->changes, per_core, options.m3c2.confidence_z);
-  measured->reg_m = std::move(per_core);
+  // Each confidence's reg, per tile.
+  auto per_core = [&](double z, std::vector<compare::TileError>* tiles, std::vector<char>* stable) {
+    const double whole =
+        std::max(0.0, compare::tile_registration_error(all, z, options.tile_correction));
+    if (options.local_registration_tile_m <= 0)
+      return std::vector<double>(measured->changes.size(), whole);
+    return compare::tile_registration_errors(measured->changes, options.local_registration_tile_m,
+                                             whole, z, options.tile_correction, options.threads,
+                                             tiles, stable);
+  };
+  const double z = options.m3c2.confidence_z;
+  *reg = std::max(0.0, compare::tile_registration_error(all, z, options.tile_correction));
+  measured->reg_m = per_core(z, &measured->tiles, &measured->stable);
+  const std::vector<double> significance_reg = per_core(options.significance_z, nullptr, nullptr);
+  compare::apply_registration_errors(&measured->changes, measured->reg_m, z, significance_reg,
+                                     options.significance_z);
 }
 
 // `reg`: the registration error of Eq. (1); with options.registration_error_m < 0 it is set
@@ -126,7 +133,13 @@ MeasuredChange measure_change(StageContext& context, const CompareStageOptions& 
   out.changes =
       compare::m3c2({nullptr, nullptr, &normals_a, &normals_b, grid_a.get(), grid_b.get()},
                     cores.means, views, mo);
-  if (options.registration_error_m < 0) registration_errors(options, &out, reg);
+  if (options.registration_error_m < 0) {
+    registration_errors(options, &out, reg);
+  } else {
+    const std::vector<double> given(out.changes.size(), *reg);
+    compare::apply_registration_errors(&out.changes, given, mo.confidence_z, given,
+                                       options.significance_z);
+  }
   compare::require_coherent_change(&out.changes, options.significance_radius_m, options.threads);
   (*seconds)["m3c2"] = seconds_since(t);
   out.core_of = std::move(cores.voxel_of);
@@ -229,6 +242,7 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
                        {"confidence_z", options.m3c2.confidence_z},
                        {"registration_error_m", options.registration_error_m},
                        {"significance_radius_m", options.significance_radius_m},
+                       {"significance_z", options.significance_z},
                        {"local_registration_tile_m", options.local_registration_tile_m}};
   return report;
 }

@@ -140,6 +140,11 @@ const OptionTable<CompareStageOptions>& compare_option_table() {
                      "and, with its sign, at at least half the core points within this radius: "
                      "the 5 % of unchanged cores beyond a 95 % level are scattered, a change "
                      "covers a patch. 0: beyond LoD95 alone")),
+          option("significance_z", &Options::significance_z, positive(),
+                 doc("",
+                     "> 0. A core's change is significant when |M3C2| > z (statistical + reg) "
+                     "with reg calibrated at this confidence (2.576: 99 %), not at LoD95's: the "
+                     "95 % level leaves 5 % of unchanged structure beyond it by its definition")),
           option("histogram_bins", &Options::histogram_bins, int_in_range(1, 1000),
                  doc("", "in [1, 1000]. Bins of the change histogram")),
           option("histogram_range_m", &Options::histogram_range_m, positive(),

@@ -34,6 +34,10 @@ struct CompareStageOptions {
   // A core's change is significant only when at least half the core points within this radius
   // exceed LoD95 with its sign (compare/coherent_change.h); 0: beyond LoD95 alone.
   double significance_radius_m = 0.15;
+  // The z at which a core's change is significant, its reg calibrated to that confidence as
+  // LoD95's is to 95 %: 2.576 (99 %) leaves ~1 % of unchanged structure significant where the
+  // 95 % level would leave 5 %.
+  double significance_z = 2.576;
   int histogram_bins = 40;
   double histogram_range_m = 0.2;  // the change histogram spans +-this
   int draco_position_bits = 18;
