@@ -2,8 +2,10 @@
 // first survey, B a later one, each the --out of `keel-worker run`), timed, and its result
 // checked against B's truth.yaml `changes` (issue 16's targets):
 //   maps (usv-bridge): every change >= 3 cm detected as significant, with its sign (>= half of the
-//   points on it significant), and the fraction of significant points on unchanged structure (<= 1
-//   %); map comparison throughput (points of A + B per second of the stage, >= 1 M/s on 2 cores);
+//   points on it significant), its median M3C2 within 1 cm or 20 % of its depth (issue 34), and
+//   the fraction of significant points on unchanged structure (<= 1 %), with the fraction beyond
+//   LoD95 there (5 % when the 95 % level holds); map comparison throughput (points of A + B per
+//   second of the stage, >= 1 M/s on 2 cores);
 //   hulls (hauv-hull): each grown patch's height growth against the truth (within 1.5 cm),
 //   the new and the removed object found.
 // Usage: bench_compare --a DIR --b DIR --truth B/ground_truth/truth.yaml --out DIR
