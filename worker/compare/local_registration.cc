@@ -6,22 +6,25 @@
 #include <array>
 #include <cmath>
 #include <map>
-#include <optional>
+#include <memory>
 #include <stdexcept>
 
-#include "worker/compare/cell_sort.h"
 #include "core/parallel_for.h"
+#include "worker/compare/cell_sort.h"
+#include "worker/compare/point_grid.h"
+#include "worker/compare/voxel_moments.h"
 
 namespace keel::compare {
-namespace {
 
-using Key = std::array<int64_t, 3>;
-using Tiles = std::map<Key, std::vector<uint32_t>>;
-
-Key tile_of(const Eigen::Vector3f& p, double side) {
+TileKey tile_of(const Eigen::Vector3f& p, double side) {
   return {int64_t(std::floor(p.x() / side)), int64_t(std::floor(p.y() / side)),
           int64_t(std::floor(p.z() / side))};
 }
+
+namespace {
+
+using Key = TileKey;
+using Tiles = std::map<Key, std::vector<uint32_t>>;
 
 int bits_for(int64_t largest) {
   int bits = 0;
@@ -67,47 +70,25 @@ Tiles bucket(const std::vector<Eigen::Vector3f>& points, double side, int thread
   return tiles;
 }
 
-struct TileShift {
-  Pose3 T_a_b = Pose3::Identity();
-  double shift_m = 0.0;  // the translation at the tile's centre
-};
-
-// The tile's own transform when it is well determined and small, else nothing.
-std::optional<TileShift> register_tile(const std::vector<Eigen::Vector3f>& reference,
-                                       const Tiles& tiles_a, const Key& key,
-                                       const std::vector<Eigen::Vector3f>& b,
-                                       const LocalRegistrationOptions& o) {
-  const Eigen::Vector3d lo = Eigen::Vector3d(key[0], key[1], key[2]) * o.tile_m;
-  const Eigen::Vector3d hi = lo + Eigen::Vector3d::Constant(o.tile_m);
-  std::vector<Eigen::Vector3f> a;
-  for (int64_t dx = -1; dx <= 1; ++dx)
-    for (int64_t dy = -1; dy <= 1; ++dy)
-      for (int64_t dz = -1; dz <= 1; ++dz) {
-        const auto it = tiles_a.find({key[0] + dx, key[1] + dy, key[2] + dz});
-        if (it == tiles_a.end()) continue;
-        for (uint32_t i : it->second) {
-          const Eigen::Vector3d p = reference[i].cast<double>();
-          if ((p.array() >= lo.array() - o.margin_m).all() &&
-              (p.array() <= hi.array() + o.margin_m).all())
-            a.push_back(reference[i]);
-        }
-      }
-  if (a.size() < o.min_points) return std::nullopt;
-  StableRegistrationOptions ro = o.registration;
-  ro.threads = 1;  // the tiles run side by side
-  StableRegistration r;
-  try {
-    r = register_stable(a, b, Pose3::Identity(), ro);
-  } catch (const std::runtime_error&) {
-    return std::nullopt;  // no surfaces or too few stable pairs: the global transform stands
+// The defined cores grouped by tile, in key order.
+std::map<Key, std::vector<CoreSample>> cores_by_tile(const std::vector<CoreChange>& changes,
+                                                     double side,
+                                                     std::vector<std::vector<size_t>>* members) {
+  std::map<Key, std::vector<size_t>> index;
+  for (size_t i = 0; i < changes.size(); ++i)
+    if (changes[i].defined()) index[tile_of(changes[i].position, side)].push_back(i);
+  std::map<Key, std::vector<CoreSample>> out;
+  for (const auto& [key, list] : index) {
+    std::vector<CoreSample>& samples = out[key];
+    samples.reserve(list.size());
+    for (size_t i : list) {
+      const CoreChange& c = changes[i];
+      samples.push_back({c.position.cast<double>(), c.normal.cast<double>(), double(c.distance_m),
+                         double(c.statistical_m)});
+    }
+    if (members) members->push_back(list);
   }
-  const Eigen::Vector3d center = 0.5 * (lo + hi);
-  const double shift = (r.T_a_b * center - center).norm();
-  const double angle_deg = Eigen::AngleAxisd(r.T_a_b.linear()).angle() * 180.0 / M_PI;
-  if (!r.converged || r.stable < o.min_stable_pairs || r.conditioning < o.min_conditioning ||
-      shift > o.max_translation_m || angle_deg > o.max_rotation_deg)
-    return std::nullopt;
-  return TileShift{r.T_a_b, shift};
+  return out;
 }
 
 }  // namespace
@@ -115,41 +96,106 @@ std::optional<TileShift> register_tile(const std::vector<Eigen::Vector3f>& refer
 LocalRegistration register_tiles(const std::vector<Eigen::Vector3f>& reference,
                                  std::vector<Eigen::Vector3f>* moving,
                                  const LocalRegistrationOptions& o) {
-  if (!(o.tile_m > 0) || !(o.margin_m >= 0) || o.margin_m > o.tile_m)
-    throw std::invalid_argument("local registration: expected tile_m > 0, 0 <= margin_m <= tile_m");
-  const int threads = std::max(1, o.registration.threads);
-  const Tiles tiles_b = bucket(*moving, o.tile_m, threads);
-  const Tiles tiles_a = bucket(reference, o.tile_m, threads);
-  std::vector<Tiles::const_iterator> registered;  // B's tiles with enough points, in key order
-  for (auto it = tiles_b.begin(); it != tiles_b.end(); ++it)
-    if (it->second.size() >= o.min_points) registered.push_back(it);
+  if (!(o.tile_m > 0) || !(o.core_spacing_m > 0))
+    throw std::invalid_argument("local registration: expected tile_m > 0, core_spacing_m > 0");
+  validate(o.m3c2);
+  const int threads = std::max(1, o.threads);
+  LocalRegistration out;
+  if (reference.empty() || moving->empty()) return out;
 
-  // Each tile reads only its own points of B: the tiles register side by side, and move their
-  // points once all are done.
-  // Largest tiles first, so that no large one starts last while the other threads idle.
-  std::vector<size_t> order(registered.size());
+  // 1. The change at B's registration cores, as the measurement takes it (compare_maps.cc).
+  const size_t stride = std::max<size_t>(1, o.point_stride);
+  std::vector<Eigen::Vector3f> a, b;
+  a.reserve(reference.size() / stride + 1);
+  b.reserve(moving->size() / stride + 1);
+  for (size_t i = 0; i < reference.size(); i += stride) a.push_back(reference[i]);
+  for (size_t i = 0; i < moving->size(); i += stride) b.push_back((*moving)[i]);
+  std::unique_ptr<PointGrid> grid_a, grid_b;
+  VoxelMoments normals_a, normals_b, cores;
+  const double cell = 0.5 * o.m3c2.projection_scale_m, normal_voxel = o.m3c2.normal_scale_m / 4.0;
+  keel::parallel_for_each(5, threads, [&](size_t k) {
+    if (k == 0) grid_a = std::make_unique<PointGrid>(a, cell);
+    if (k == 1) grid_b = std::make_unique<PointGrid>(b, cell);
+    if (k == 2) cores = voxelize(b, o.core_spacing_m);
+    if (k == 3) normals_a = voxelize(a, normal_voxel);
+    if (k == 4) normals_b = voxelize(b, normal_voxel);
+  });
+  M3c2Options mo = o.m3c2;
+  mo.registration_error_m = 0.0;
+  mo.threads = threads;
+  mo.check_canceled = o.check_canceled;
+  const std::vector<CoreChange> changes = m3c2(
+      {nullptr, nullptr, &normals_a, &normals_b, grid_a.get(), grid_b.get()}, cores.means, {}, mo);
+  grid_a.reset();
+  grid_b.reset();
+
+  // 2. Each tile's correction from its cores, side by side, largest tiles first.
+  const std::map<Key, std::vector<CoreSample>> tiles = cores_by_tile(changes, o.tile_m, nullptr);
+  std::vector<const std::pair<const Key, std::vector<CoreSample>>*> list;
+  for (const auto& entry : tiles) list.push_back(&entry);
+  std::vector<size_t> order(list.size());
   for (size_t t = 0; t < order.size(); ++t) order[t] = t;
   std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
-    return registered[x]->second.size() > registered[y]->second.size();
+    return list[x]->second.size() > list[y]->second.size();
   });
-  std::vector<std::optional<TileShift>> shifts(registered.size());
+  out.tiles.resize(list.size());
   keel::parallel_for_each(order.size(), threads, [&](size_t k) {
     const size_t t = order[k];
-    std::vector<Eigen::Vector3f> b;
-    b.reserve(registered[t]->second.size());
-    for (uint32_t i : registered[t]->second) b.push_back((*moving)[i]);
-    shifts[t] = register_tile(reference, tiles_a, registered[t]->first, b, o);
+    const Key& key = list[t]->first;
+    TileRegistration& r = out.tiles[t];
+    r.key = key;
+    r.center_m =
+        (Eigen::Vector3d(key[0], key[1], key[2]) + Eigen::Vector3d::Constant(0.5)) * o.tile_m;
+    r.correction = correct_tile(list[t]->second, r.center_m, 0.5 * o.tile_m, o.tile);
   });
 
-  LocalRegistration out;
-  out.tiles = registered.size();
-  for (size_t t = 0; t < registered.size(); ++t) {
-    if (!shifts[t]) continue;
-    for (uint32_t i : registered[t]->second)
-      (*moving)[i] = (shifts[t]->T_a_b * (*moving)[i].cast<double>()).cast<float>();
-    ++out.adjusted;
-    out.correction_m.push_back(shifts[t]->shift_m);
+  // 3. The corrections applied to B's points.
+  std::map<Key, const TileRegistration*> applied;
+  for (const TileRegistration& r : out.tiles)
+    if (r.correction.applied()) applied[r.key] = &r, ++out.adjusted;
+  if (applied.empty()) return out;
+  const Tiles points = bucket(*moving, o.tile_m, threads);
+  std::vector<std::pair<const std::vector<uint32_t>*, Pose3>> moves;
+  for (const auto& [key, members] : points) {
+    const auto it = applied.find(key);
+    if (it != applied.end()) moves.emplace_back(&members, it->second->correction.T_corrected_b);
   }
+  keel::parallel_for_each(moves.size(), threads, [&](size_t m) {
+    for (uint32_t i : *moves[m].first)
+      (*moving)[i] = (moves[m].second * (*moving)[i].cast<double>()).cast<float>();
+  });
+  return out;
+}
+
+std::vector<double> tile_registration_errors(const std::vector<CoreChange>& changes, double tile_m,
+                                             double fallback_m, double confidence_z,
+                                             const TileCorrectionOptions& options, int threads,
+                                             std::vector<TileError>* figures,
+                                             std::vector<char>* stable) {
+  if (!(tile_m > 0)) throw std::invalid_argument("registration error: expected tile_m > 0");
+  std::vector<std::vector<size_t>> members;
+  const std::map<Key, std::vector<CoreSample>> tiles = cores_by_tile(changes, tile_m, &members);
+  std::vector<TileError> errors(tiles.size());
+  std::vector<std::vector<char>> masks(tiles.size());
+  std::vector<const std::pair<const Key, std::vector<CoreSample>>*> list;
+  for (const auto& entry : tiles) list.push_back(&entry);
+  keel::parallel_for_each(list.size(), threads, [&](size_t t) {
+    TileError& e = errors[t];
+    e.key = list[t]->first;
+    e.cores = list[t]->second.size();
+    e.registration_error_m =
+        tile_registration_error(list[t]->second, confidence_z, options, &masks[t]);
+    e.stable = size_t(std::count(masks[t].begin(), masks[t].end(), 1));
+  });
+  std::vector<double> out(changes.size(), fallback_m);
+  if (stable) stable->assign(changes.size(), 0);
+  for (size_t t = 0; t < errors.size(); ++t) {
+    for (size_t k = 0; k < members[t].size(); ++k) {
+      if (errors[t].registration_error_m >= 0) out[members[t][k]] = errors[t].registration_error_m;
+      if (stable) (*stable)[members[t][k]] = masks[t][k];
+    }
+  }
+  if (figures) *figures = std::move(errors);
   return out;
 }
 

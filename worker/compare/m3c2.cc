@@ -190,6 +190,21 @@ void apply_registration_error(std::vector<CoreChange>* cores, double registratio
   }
 }
 
+void apply_registration_errors(std::vector<CoreChange>* cores,
+                               const std::vector<double>& registration_error_m, double confidence_z,
+                               const std::vector<double>& significance_reg_m,
+                               double significance_z) {
+  if (registration_error_m.size() != cores->size() || significance_reg_m.size() != cores->size())
+    throw std::invalid_argument("registration errors: expected one per core point");
+  for (size_t i = 0; i < cores->size(); ++i) {
+    CoreChange& c = (*cores)[i];
+    if (!c.defined()) continue;
+    c.lod95_m = float(confidence_z * (c.statistical_m + registration_error_m[i]));
+    c.significant =
+        std::abs(c.distance_m) > significance_z * (c.statistical_m + significance_reg_m[i]);
+  }
+}
+
 std::vector<CoreChange> m3c2(const M3c2Clouds& clouds, const std::vector<Eigen::Vector3f>& cores,
                              const std::vector<Eigen::Vector3f>& viewpoints,
                              const M3c2Options& options) {

@@ -80,6 +80,14 @@ struct M3c2Clouds {
 void apply_registration_error(std::vector<CoreChange>* cores, double registration_error_m,
                               double confidence_z = 1.96);
 
+// The same with each core's own registration error (per tile, compare/local_registration.h);
+// `significant` is decided at significance_z with its own reg (each calibrated to its
+// confidence), lod95_m at confidence_z.
+void apply_registration_errors(std::vector<CoreChange>* cores,
+                               const std::vector<double>& registration_error_m, double confidence_z,
+                               const std::vector<double>& significance_reg_m,
+                               double significance_z);
+
 // Orients each normal towards the viewpoints (the sensor positions that saw the surface, so a
 // positive change is material added towards the sensor): the nearest within 30 m that looks
 // at the surface within 60 degrees of its normal, else the nearest; with no viewpoints,

@@ -10,6 +10,8 @@
 #include "core/parallel_for.h"
 #include "core/robust_spread.h"
 #include "worker/compare/c2c_distance.h"
+#include "worker/compare/coherent_change.h"
+#include "worker/compare/local_registration.h"
 #include "worker/compare/point_grid.h"
 #include "worker/compare/voxel_moments.h"
 #include "worker/io/cloud/ply_cloud_writer.h"
@@ -57,10 +59,41 @@ struct MeasuredChange {
   std::vector<float> c2c;
   std::vector<compare::CoreChange> changes;
   std::vector<uint32_t> core_of;  // each point of B's core point
+  std::vector<double> reg_m;      // each core's reg; empty: one for all
+  std::vector<compare::TileError> tiles;
+  std::vector<char> stable;  // each core on its tile's stable structure; empty: unknown
 };
 
+// Eq. (1)'s `reg` of every core point from the stable structure of its tile (and, where a
+// tile has too little, of the whole map: `reg`), and the level of detection's exceedance on
+// that stable structure (compare/local_registration.h tile_registration_errors).
+void registration_errors(const CompareStageOptions& options, MeasuredChange* measured,
+                         double* reg) {
+  std::vector<compare::CoreSample> all;
+  for (const auto& c : measured->changes)
+    if (c.defined())
+      all.push_back({c.position.cast<double>(), c.normal.cast<double>(), double(c.distance_m),
+                     double(c.statistical_m)});
+  // Each confidence's reg, per tile.
+  auto per_core = [&](double z, std::vector<compare::TileError>* tiles, std::vector<char>* stable) {
+    const double whole =
+        std::max(0.0, compare::tile_registration_error(all, z, options.tile_correction));
+    if (options.local_registration_tile_m <= 0)
+      return std::vector<double>(measured->changes.size(), whole);
+    return compare::tile_registration_errors(measured->changes, options.local_registration_tile_m,
+                                             whole, z, options.tile_correction, options.threads,
+                                             tiles, stable);
+  };
+  const double z = options.m3c2.confidence_z;
+  *reg = std::max(0.0, compare::tile_registration_error(all, z, options.tile_correction));
+  measured->reg_m = per_core(z, &measured->tiles, &measured->stable);
+  const std::vector<double> significance_reg = per_core(options.significance_z, nullptr, nullptr);
+  compare::apply_registration_errors(&measured->changes, measured->reg_m, z, significance_reg,
+                                     options.significance_z);
+}
+
 // `reg`: the registration error of Eq. (1); with options.registration_error_m < 0 it is set
-// from this map's change (see CompareStageOptions).
+// per tile from this map's change (see CompareStageOptions), `reg` the whole map's.
 MeasuredChange measure_change(StageContext& context, const CompareStageOptions& options,
                               const std::vector<Eigen::Vector3f>& a,
                               const std::vector<Eigen::Vector3f>& b,
@@ -101,12 +134,13 @@ MeasuredChange measure_change(StageContext& context, const CompareStageOptions& 
       compare::m3c2({nullptr, nullptr, &normals_a, &normals_b, grid_a.get(), grid_b.get()},
                     cores.means, views, mo);
   if (options.registration_error_m < 0) {
-    std::vector<double> deviation;
-    for (const auto& c : out.changes)
-      if (c.defined()) deviation.push_back(std::abs(c.distance_m));
-    *reg = 1.4826 * median_of(deviation);
-    compare::apply_registration_error(&out.changes, *reg, mo.confidence_z);
+    registration_errors(options, &out, reg);
+  } else {
+    const std::vector<double> given(out.changes.size(), *reg);
+    compare::apply_registration_errors(&out.changes, given, mo.confidence_z, given,
+                                       options.significance_z);
   }
+  compare::require_coherent_change(&out.changes, options.significance_radius_m, options.threads);
   (*seconds)["m3c2"] = seconds_since(t);
   out.core_of = std::move(cores.voxel_of);
   return out;
@@ -191,6 +225,8 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
     r["points_a"] = a.size();
     r["points_b"] = points_b;
     r["registration_error_m"] = reg;
+    r["level_of_detection"] = level_of_detection(measured.changes, measured.stable, measured.reg_m,
+                                                 measured.tiles, options);
     r["seconds"] = seconds;
     double total = 0;
     for (const auto& [k, v] : seconds.items()) total += v.get<double>();
@@ -205,6 +241,8 @@ json compare_maps(StageContext& context, const CompareStageOptions& options,
                        {"min_points", options.m3c2.min_points},
                        {"confidence_z", options.m3c2.confidence_z},
                        {"registration_error_m", options.registration_error_m},
+                       {"significance_radius_m", options.significance_radius_m},
+                       {"significance_z", options.significance_z},
                        {"local_registration_tile_m", options.local_registration_tile_m}};
   return report;
 }

@@ -20,6 +20,7 @@
 
 #include "core/point_cloud.h"
 #include "core/pose.h"
+#include "worker/compare/local_registration.h"
 #include "worker/compare/m3c2.h"
 #include "worker/io/draco/draco_codec.h"
 #include "worker/pipeline/stage.h"
@@ -45,6 +46,10 @@ nlohmann::json align_map(StageContext& context, const CompareStageOptions& optio
                          const std::string& map, const std::vector<Eigen::Vector3f>& a,
                          std::vector<Eigen::Vector3f>* b, MapAlignment* alignment);
 
+// The local registration's options from the stage's.
+compare::LocalRegistrationOptions local_registration_options(StageContext& context,
+                                                             const CompareStageOptions& options);
+
 // B's points with their change: where a core point's change is undefined its points hold the
 // attribute's no_data (docs/artifacts.md), so a viewer tells "unmeasured" from "unchanged".
 struct ChangeCloud {
@@ -58,5 +63,14 @@ ChangeCloud change_cloud(const std::vector<compare::CoreChange>& changes,
 // The report's figures of the change: counts, areas, distributions, the change histogram.
 nlohmann::json change_figures(const std::vector<compare::CoreChange>& changes,
                               const std::vector<float>& c2c, const CompareStageOptions& options);
+
+// How the level of detection holds: each tile's `reg`, and on the stable structure (where no
+// change is expected) the fraction of core points whose |M3C2| exceeds LoD95: 5 % when the
+// 95 % level means 95 %.
+nlohmann::json level_of_detection(const std::vector<compare::CoreChange>& changes,
+                                  const std::vector<char>& stable,
+                                  const std::vector<double>& registration_error_m,
+                                  const std::vector<compare::TileError>& tiles,
+                                  const CompareStageOptions& options);
 
 }  // namespace keel::pipeline

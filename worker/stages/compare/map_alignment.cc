@@ -80,20 +80,41 @@ json align_map(StageContext& context, const CompareStageOptions& options, const 
   if (!options.register_maps || options.local_registration_tile_m <= 0 || a == *b) return nullptr;
 
   const auto t = std::chrono::steady_clock::now();
-  compare::LocalRegistrationOptions lo;
-  lo.tile_m = options.local_registration_tile_m;
-  lo.margin_m = std::min(1.0, lo.tile_m);
-  lo.registration = options.registration;
-  lo.registration.threads = options.threads;
-  const compare::LocalRegistration local = compare::register_tiles(a, b, lo);
-  const RobustSpread shift = robust_spread(local.correction_m);
-  context.log(map + ": " + std::to_string(local.adjusted) + " of " + std::to_string(local.tiles) +
-              " tiles registered on their own");
-  return {{"tile_m", lo.tile_m},
-          {"tiles", local.tiles},
+  const compare::LocalRegistration local =
+      compare::register_tiles(a, b, local_registration_options(context, options));
+  std::vector<double> corrections;
+  json tiles = json::array();
+  for (const compare::TileRegistration& tile : local.tiles) {
+    const compare::TileCorrection& c = tile.correction;
+    if (c.applied()) corrections.push_back(c.correction_m);
+    tiles.push_back({{"center_m", {tile.center_m.x(), tile.center_m.y(), tile.center_m.z()}},
+                     {"status", c.status},
+                     {"cores", c.cores},
+                     {"stable_cores", c.stable},
+                     {"noise_m", c.noise_m},
+                     {"fixed_directions", c.fixed_directions},
+                     {"correction_m", c.applied() ? c.correction_m : 0.0}});
+  }
+  const RobustSpread shift = robust_spread(corrections);
+  context.log(map + ": " + std::to_string(local.adjusted) + " of " +
+              std::to_string(local.tiles.size()) + " tiles corrected on their stable structure");
+  return {{"tile_m", options.local_registration_tile_m},
+          {"tiles", local.tiles.size()},
           {"adjusted_tiles", local.adjusted},
           {"median_correction_m", shift.median},
+          {"per_tile", tiles},
           {"seconds", seconds_since(t)}};
+}
+
+compare::LocalRegistrationOptions local_registration_options(StageContext& context,
+                                                             const CompareStageOptions& options) {
+  compare::LocalRegistrationOptions lo;
+  lo.tile_m = options.local_registration_tile_m;
+  lo.m3c2 = options.m3c2;
+  lo.tile = options.tile_correction;
+  lo.threads = options.threads;
+  lo.check_canceled = [&context] { context.check_canceled(); };
+  return lo;
 }
 
 }  // namespace keel::pipeline

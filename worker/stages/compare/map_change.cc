@@ -109,4 +109,36 @@ json change_figures(const std::vector<compare::CoreChange>& changes, const std::
   return r;
 }
 
+json level_of_detection(const std::vector<compare::CoreChange>& changes,
+                        const std::vector<char>& stable,
+                        const std::vector<double>& registration_error_m,
+                        const std::vector<compare::TileError>& tiles,
+                        const CompareStageOptions& options) {
+  size_t on_stable = 0, exceeding = 0;
+  for (size_t i = 0; i < stable.size() && i < changes.size(); ++i) {
+    if (!stable[i] || !changes[i].defined()) continue;
+    ++on_stable;
+    exceeding += std::abs(changes[i].distance_m) > changes[i].lod95_m;
+  }
+  std::vector<float> reg;
+  for (size_t i = 0; i < registration_error_m.size() && i < changes.size(); ++i)
+    if (changes[i].defined()) reg.push_back(float(registration_error_m[i]));
+  json per_tile = json::array();
+  for (const compare::TileError& t : tiles)
+    per_tile.push_back({{"tile", t.key},
+                        {"cores", t.cores},
+                        {"stable_cores", t.stable},
+                        {"registration_error_m", t.registration_error_m}});
+  json r;
+  r["confidence_z"] = options.m3c2.confidence_z;
+  r["stable_core_points"] = on_stable;
+  // Null without a per-tile analysis (registration_error_m given).
+  r["exceedance_on_stable"] =
+      on_stable ? json(double(exceeding) / double(on_stable)) : json(nullptr);
+  r["registration_error_m"] = mapping::to_json(mapping::summarize(reg, options.histogram_bins));
+  r["tile_m"] = options.local_registration_tile_m;
+  r["per_tile"] = per_tile;
+  return r;
+}
+
 }  // namespace keel::pipeline

@@ -91,11 +91,16 @@ const OptionTable<CompareStageOptions>& compare_option_table() {
           option("local_registration_tile_m", &Options::local_registration_tile_m,
                  finite([](double v) { return v >= 0; }, "a number >= 0 (0: off)"),
                  doc("m",
-                     "≥ 0. After the global registration, each cubic tile of B of this side is "
-                     "registered again on stable structure (with 1 m of A around it), kept "
-                     "when converged, well conditioned and within 10 cm / 0.5°: two surveys' "
-                     "maps each carry their own trajectory's few-cm errors, which one rigid "
-                     "transform cannot remove. 0: off",
+                     "≥ 0. After the global registration, each cubic tile of B of this side gets "
+                     "its own rigid correction, estimated from the M3C2 change at B's core "
+                     "points every 0.25 m on the structure stable in both surveys (cores beyond "
+                     "3 noises, at least 1 cm, and those within 0.5 m of them left out; Huber "
+                     "loss), applied only along the directions that structure constrains "
+                     "(eigenvalues of its normal matrix), and only when it leaves at least half "
+                     "the tile's cores stable and stays within 10 cm / 0.5°: two surveys' maps "
+                     "each carry their own trajectory's few-cm errors, which one rigid "
+                     "transform cannot remove, and a change must not pull its tile. The tiles "
+                     "also give `registration_error_m`. 0: off",
                      "ours")),
           part_option("normal_scale_m", &Options::m3c2, &M3c2Options::normal_scale_m, positive(),
                       doc("m",
@@ -122,11 +127,24 @@ const OptionTable<CompareStageOptions>& compare_option_table() {
           option("registration_error_m", &Options::registration_error_m,
                  finite([](double) { return true; }, "a number (< 0: from the registration)"),
                  doc("m",
-                     "reg of Eq. (1). < 0: 1.4826 × the median |M3C2 change| over all core "
-                     "points after registration (the change's spread over the whole "
-                     "structure, which a few real changes do not move); ≥ 0: this value",
-                     "Lague et al. take the ICP's RMS; on keel-sim's bridge that RMS (2.7 cm) "
-                     "mixes the relief walls' texture into it")),
+                     "reg of Eq. (1). < 0: per tile of `local_registration_tile_m` (the whole "
+                     "map when 0), the smallest reg with which |M3C2| ≤ LoD95 at 95 % of the "
+                     "tile's stable core points (changed cores, and cores within 0.5 m of them, "
+                     "left out); ≥ 0: this value everywhere",
+                     "Lague et al. take the ICP's RMS; calibrated here, since correlated noise "
+                     "and registration error make that miss its 95 %")),
+          option("significance_radius_m", &Options::significance_radius_m,
+                 finite([](double v) { return v >= 0 && v <= 10; }, "a length in [0, 10] m"),
+                 doc("m",
+                     "in [0, 10]. A core point's change is significant when |M3C2| > LoD95 there "
+                     "and, with its sign, at at least half the core points within this radius: "
+                     "the 5 % of unchanged cores beyond a 95 % level are scattered, a change "
+                     "covers a patch. 0: beyond LoD95 alone")),
+          option("significance_z", &Options::significance_z, positive(),
+                 doc("",
+                     "> 0. A core's change is significant when |M3C2| > z (statistical + reg) "
+                     "with reg calibrated at this confidence (2.576: 99 %), not at LoD95's: the "
+                     "95 % level leaves 5 % of unchanged structure beyond it by its definition")),
           option("histogram_bins", &Options::histogram_bins, int_in_range(1, 1000),
                  doc("", "in [1, 1000]. Bins of the change histogram")),
           option("histogram_range_m", &Options::histogram_range_m, positive(),

@@ -7,6 +7,7 @@
 
 #include "worker/compare/m3c2.h"
 #include "worker/compare/stable_registration.h"
+#include "worker/compare/tile_correction.h"
 #include "worker/pipeline/option_table.h"
 
 namespace keel::pipeline {
@@ -21,12 +22,22 @@ struct CompareStageOptions {
   // Piecewise registration after the global one (compare/local_registration.h): tiles of this
   // side; 0 turns it off.
   double local_registration_tile_m = 10.0;
+  // Which structure of a tile is stable, and when its correction is applied; its stable
+  // structure also gives the tile's `reg` (compare/tile_correction.h).
+  compare::TileCorrectionOptions tile_correction;
   compare::M3c2Options m3c2;
-  // reg of Lague et al.'s Eq. (1), assumed uniform over the structure as they do: < 0 (the
-  // default) takes 1.4826 x the median absolute M3C2 distance of all core points after
-  // registration, the spread of the measured change over the whole structure, which real
-  // changes (a small part of a structure) do not move; a number >= 0 overrides it.
+  // reg of Lague et al.'s Eq. (1): < 0 (the default) measures it per tile of
+  // local_registration_tile_m (the whole map without tiles) on the tile's stable structure,
+  // calibrated so that LoD95 holds 95 % there (compare/tile_correction.h); a number >= 0 is
+  // taken for every core point.
   double registration_error_m = -1.0;
+  // A core's change is significant only when at least half the core points within this radius
+  // exceed LoD95 with its sign (compare/coherent_change.h); 0: beyond LoD95 alone.
+  double significance_radius_m = 0.15;
+  // The z at which a core's change is significant, its reg calibrated to that confidence as
+  // LoD95's is to 95 %: 2.576 (99 %) leaves ~1 % of unchanged structure significant where the
+  // 95 % level would leave 5 %.
+  double significance_z = 2.576;
   int histogram_bins = 40;
   double histogram_range_m = 0.2;  // the change histogram spans +-this
   int draco_position_bits = 18;

@@ -35,12 +35,12 @@ std::string maps_part(const Ref& maps) {
   std::string out = heading("Maps: change along the local normal (M3C2)", "compare-maps");
   out += paragraph("Normals face " + maps["normals_face"].text() + ".");
   if (!maps["registration"].missing()) out += registration_table(maps["registration"]);
-  Table t{
-      "compare-maps-table",
-      "Per map: B's change against A",
-      {"map", "points A", "points B", "core points", "defined", "compared area", "significant area",
-       "significant fraction", "added", "removed", "reg. error", "points/s"},
-      {}};
+  Table t{"compare-maps-table",
+          "Per map: B's change against A",
+          {"map", "points A", "points B", "core points", "defined", "compared area",
+           "significant area", "significant fraction", "added", "removed", "reg. error",
+           "LoD95 exceeded on stable", "tiles corrected", "points/s"},
+          {}};
   const Ref per_map = maps["maps"];
   for (const auto& item : per_map.json().items()) {
     const Ref m = per_map[item.key()];
@@ -49,9 +49,34 @@ std::string maps_part(const Ref& maps) {
                       m["compared_area_m2"].cell("m^2"), m["significant_area_m2"].cell("m^2"),
                       m["significant_fraction"].cell(), m["significant_added_area_m2"].cell("m^2"),
                       m["significant_removed_area_m2"].cell("m^2"),
-                      m["registration_error_m"].cell("m"), m["points_per_second"].cell()});
+                      m["registration_error_m"].cell("m"),
+                      m["level_of_detection"]["exceedance_on_stable"].cell(),
+                      m["local_registration"]["adjusted_tiles"].cell() + " / " +
+                          m["local_registration"]["tiles"].cell(),
+                      m["points_per_second"].cell()});
   }
   out += render(t);
+  out += paragraph(
+      "LoD95 exceeded on stable: the fraction of core points on each tile's stable structure "
+      "whose |M3C2| exceeds LoD95 (5 % when the 95 % level holds; reg is calibrated per tile "
+      "to that). A core's change is significant when its neighbours within "
+      "significance_radius_m agree.");
+  for (const auto& item : per_map.json().items()) {
+    const Ref tiles = per_map[item.key()]["local_registration"]["per_tile"];
+    if (tiles.missing()) continue;
+    Table r{
+        "compare-tiles-" + item.key(),
+        "Local registration per tile, " + item.key(),
+        {"centre", "status", "cores", "stable cores", "noise", "fixed directions", "correction"},
+        {}};
+    for (size_t i = 0; i < tiles.json().size(); ++i) {
+      const Ref x = tiles[i];
+      r.rows.push_back({x["center_m"].cell(), x["status"].cell(), x["cores"].cell(),
+                        x["stable_cores"].cell(), x["noise_m"].cell("m"),
+                        x["fixed_directions"].cell(), x["correction_m"].cell("m")});
+    }
+    out += render(r);
+  }
   for (const auto& item : per_map.json().items()) {
     const Ref h = per_map[item.key()]["change_histogram"];
     out += figure(
