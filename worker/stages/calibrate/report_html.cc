@@ -62,8 +62,10 @@ std::string candidate_section(const Ref& c) {
       out += "<li>" + html::escape(unobservable[i]["description"].text()) + "</li>";
     out += "</ul>";
   }
-  out += "<p>Offered, not applied: <code>keel reprocess JOB --set '" +
-         html::escape(c["reprocess"]["set"][0].text()) + "'</code></p>";
+  out +=
+      "<p>Offered, not applied: <code>keel reprocess --mission MISSION --stages "
+      "ingest,refine,map --set '" +
+      html::escape(c["reprocess"]["set"][0].text()) + "'</code></p>";
   return out;
 }
 
