@@ -92,6 +92,12 @@ TEST(CalibrateSensors, FilesFollowTheContract) {
   const std::string html = stage->report_html(report_html::Ref(section, "/calibrate"), {});
   EXPECT_NE(html.find("keel reprocess"), std::string::npos);
   EXPECT_NE(html.find("T_reference_lidar_v"), std::string::npos);
+  // Every cell of the quality table reads a value of the report (none is a dash).
+  const size_t quality = html.find("calibrate-lidar_v-quality");
+  ASSERT_NE(quality, std::string::npos);
+  EXPECT_EQ(html.substr(quality, html.find("</table>", quality) - quality).find("&#8212;"),
+            std::string::npos)
+      << html.substr(quality);
 }
 
 }  // namespace
