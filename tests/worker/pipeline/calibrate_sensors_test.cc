@@ -79,9 +79,10 @@ TEST(CalibrateSensors, FilesFollowTheContract) {
   // The override offered is the refined extrinsic, under T_<reference>_<candidate>.
   EXPECT_EQ(c["reprocess"]["options"]["calibration"]["lidar_v"]["T_lidar_h_lidar_v"],
             c["refined"]["T_reference_candidate"]);
-  EXPECT_EQ(c["reprocess"]["set"][0],
-            "calibration.lidar_v.T_lidar_h_lidar_v=" +
-                c["refined"]["T_reference_candidate"].dump());
+  const std::string set = c["reprocess"]["set"][0];
+  const std::string prefix = "calibration.lidar_v.T_lidar_h_lidar_v=";
+  ASSERT_EQ(set.rfind(prefix, 0), 0u) << set;
+  EXPECT_EQ(json::parse(set.substr(prefix.size())), c["refined"]["T_reference_candidate"]);
   EXPECT_EQ(c["covariance"].size(), 6u);
   const CalibrationScans scans = read_calibration_scans(work / kCalibrationScansFile);
   EXPECT_EQ(scans.reference, "lidar_h");
@@ -91,6 +92,12 @@ TEST(CalibrateSensors, FilesFollowTheContract) {
   const std::string html = stage->report_html(report_html::Ref(section, "/calibrate"), {});
   EXPECT_NE(html.find("keel reprocess"), std::string::npos);
   EXPECT_NE(html.find("T_reference_lidar_v"), std::string::npos);
+  // Every cell of the quality table reads a value of the report (none is a dash).
+  const size_t quality = html.find("calibrate-lidar_v-quality");
+  ASSERT_NE(quality, std::string::npos);
+  EXPECT_EQ(html.substr(quality, html.find("</table>", quality) - quality).find("&#8212;"),
+            std::string::npos)
+      << html.substr(quality);
 }
 
 }  // namespace

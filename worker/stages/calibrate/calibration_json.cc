@@ -19,6 +19,14 @@ std::string triple(const Eigen::Vector3d& v) {
   return text;
 }
 
+// {"xyz_m": .., "rpy_deg": ..} in the contract's order, for people to read and paste.
+std::string ordered_dump(const json& pose) {
+  nlohmann::ordered_json out;
+  out["xyz_m"] = pose.at("xyz_m");
+  out["rpy_deg"] = pose.at("rpy_deg");
+  return out.dump();
+}
+
 }  // namespace
 
 json human_pose(const Pose3& T) {
@@ -110,9 +118,9 @@ json candidate_json(const CalibrationSensor& reference, const CandidateOutcome& 
 
   const std::string key = "T_" + reference.name + "_" + c.sensor.name;
   const json pose = human_pose(r.T_reference_candidate);
-  out["reprocess"] = {
-      {"options", {{"calibration", {{c.sensor.name, {{key, pose}}}}}}},
-      {"set", json::array({"calibration." + c.sensor.name + "." + key + "=" + pose.dump()})}};
+  out["reprocess"] = {{"options", {{"calibration", {{c.sensor.name, {{key, pose}}}}}}},
+                      {"set", json::array({"calibration." + c.sensor.name + "." + key + "=" +
+                                           ordered_dump(pose)})}};
   return out;
 }
 

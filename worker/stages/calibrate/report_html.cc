@@ -39,10 +39,10 @@ std::string quality_table(const Ref& c) {
   t.rows.push_back({"residual median", before["median_m"].cell("m"), after["median_m"].cell("m")});
   t.rows.push_back({"residual p90", before["p90_m"].cell("m"), after["p90_m"].cell("m")});
   const Ref mb = c["metrics"]["before"], ma = c["metrics"]["after"];
-  t.rows.push_back({"surface density", mb["surface_density"]["mean"].cell("points/m^2"),
-                    ma["surface_density"]["mean"].cell("points/m^2")});
+  t.rows.push_back({"surface density", mb["surface_density_per_m2"]["mean"].cell("points/m^2"),
+                    ma["surface_density_per_m2"]["mean"].cell("points/m^2")});
   t.rows.push_back(
-      {"roughness", mb["roughness"]["mean"].cell("m"), ma["roughness"]["mean"].cell("m")});
+      {"roughness", mb["roughness_m"]["mean"].cell("m"), ma["roughness_m"]["mean"].cell("m")});
   t.rows.push_back({"planarity", mb["planarity"]["mean"].cell(), ma["planarity"]["mean"].cell()});
   return render(t);
 }
@@ -62,8 +62,10 @@ std::string candidate_section(const Ref& c) {
       out += "<li>" + html::escape(unobservable[i]["description"].text()) + "</li>";
     out += "</ul>";
   }
-  out += "<p>Offered, not applied: <code>keel reprocess JOB --set '" +
-         html::escape(c["reprocess"]["set"][0].text()) + "'</code></p>";
+  out +=
+      "<p>Offered, not applied: <code>keel reprocess --mission MISSION --stages "
+      "ingest,refine,map --set '" +
+      html::escape(c["reprocess"]["set"][0].text()) + "'</code></p>";
   return out;
 }
 
