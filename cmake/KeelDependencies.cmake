@@ -12,6 +12,8 @@ pkg_check_modules(PQXX REQUIRED IMPORTED_TARGET libpqxx)
 # zstd and lz4 (MCAP chunk compression) have no CMake config on Debian 12: pkg-config.
 pkg_check_modules(ZSTD REQUIRED IMPORTED_TARGET libzstd)
 pkg_check_modules(LZ4 REQUIRED IMPORTED_TARGET liblz4)
+# bzip2: ROS1 bag chunks (worker/io/bag/ros1_chunk.cc).
+find_package(BZip2 REQUIRED)
 find_package(LibArchive REQUIRED)
 # PROJ (libproj-dev, 9.1): WGS 84 <-> local ENU; pkg-config (its CMake package is named by version).
 pkg_check_modules(PROJ REQUIRED IMPORTED_TARGET proj)
@@ -65,8 +67,11 @@ target_link_libraries(keel_opencv INTERFACE opencv_core opencv_imgproc opencv_fe
 add_library(keel_opencv_imgcodecs INTERFACE)
 target_link_libraries(keel_opencv_imgcodecs INTERFACE keel_opencv opencv_imgcodecs)
 
-# ROS1 bags without ROS (Debian 12 packages the rosbag C++ library alone): `pkg-config rosbag_storage` is broken on
-# Debian 12, so the include dirs and libraries are listed by hand.
+# ROS1's own C++ bag library and message types, for keel-sim and tests only: keel-sim writes
+# its ROS1 bags with it, an independent writer for Keel's own reader (worker/io/bag/ros1_bag.h),
+# and tests serialise messages with roscpp. keel, keel-worker and keel-server do not link it
+# (it pulls class_loader, roslib, rospack and libpython3.11). `pkg-config rosbag_storage` is
+# broken on Debian 12, so the include dirs and libraries are listed by hand.
 add_library(keel_rosbag INTERFACE)
 target_include_directories(keel_rosbag SYSTEM INTERFACE
   /usr/include/pluginlib /usr/include/class_loader /usr/include/rcpputils

@@ -20,12 +20,14 @@ packages=(
   systemd nginx-light
   # single-node Slurm for deploy/slurm_workers; iproute2 for the multi-host test's namespaces
   slurm-wlm munge iproute2
-  # ROS1 bags without ROS: Debian 12 packages the rosbag C++ library and the messages alone
+  # ROS1 bag chunks: Keel reads bags itself (worker/io/bag/ros1_bag.h), bz2 through libbz2 and
+  # lz4 through liblz4 (below)
+  libbz2-dev
+  # keel-sim and tests only: ROS1's C++ bag library and messages, the independent writer of
+  # keel-sim's bags and of the message tests (keel, keel-worker, keel-server do not link them)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
-  libtf2-msgs-dev libstd-msgs-dev
-  # their bz2 and lz4 chunks, decompressed by Keel to check them before rosbag reads them
-  libbz2-dev libroslz4-dev
-  # ROS 2 bags (MCAP chunk compression) and their fuzzers (clang 14's libFuzzer)
+  libtf2-msgs-dev libstd-msgs-dev libroslz4-dev
+  # ROS 2 bags (MCAP chunk compression; lz4 ROS1 chunks too) and their fuzzers (clang 14's libFuzzer)
   libzstd-dev liblz4-dev clang libclang-rt-14-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -1,21 +1,10 @@
-// ROS 1 bags (worker/io/bag/bag_reader.h): any bytes open and read every topic as what its type
-// says, or are refused naming the bag (and topic, message).
-#include <rosbag/bag.h>
-
+// ROS 1 bags (worker/io/bag/bag_reader.h on Keel's own reader, ros1_bag.h): any bytes open
+// and read every topic as what its type says, or are refused naming the bag (and topic,
+// message).
 #include <stdexcept>
 
 #include "tests/fuzz/fuzz_util.h"
 #include "worker/io/bag/bag_reader.h"
-
-// rosbag::Bag's constructor loads its encryption plugins through class_loader, which unloads
-// them with the last Bag. Reloaded for every input, their static initializers register exit
-// handlers that are never freed: each input then "leaks" a few blocks, libFuzzer re-runs it
-// under LeakSanitizer, and the harness ran at 26 inputs/s instead of 200. One Bag kept for the
-// process keeps the plugins loaded.
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  static rosbag::Bag keeps_plugins_loaded;
-  return 0;
-}
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   namespace io = keel::io;

@@ -1,5 +1,6 @@
 // Writes simulated data as a ROS1 bag (rosbag_storage, no ROS runtime). ROS headers stay
-// in bag_writer.cc.
+// in bag_writer.cc. It stays on ROS1's own library, apart from Keel's reader
+// (worker/io/bag/ros1_bag.h), so that the bags the tests read are not Keel's own writing.
 #pragma once
 
 #include <memory>

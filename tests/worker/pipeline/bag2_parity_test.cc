@@ -1,4 +1,4 @@
-// One keel-sim mission recorded three ways (a ROS1 bag read by rosbag_storage, the reference,
+// One keel-sim mission recorded three ways (a ROS1 bag written by rosbag_storage, the reference,
 // and ROS 2 bags in MCAP and SQLite3, one of them split into files with lz4 chunks): the
 // ingest report, the refined trajectory and the maps must be the same from each.
 #include <gtest/gtest.h>

@@ -1,55 +1,15 @@
 #include "worker/io/bag/a50_messages.h"
 
-#include <cstring>
 #include <string>
 
 #include "worker/io/bag/bag_format_error.h"
 #include "worker/io/bag/cdr_reader.h"
+#include "worker/io/bag/ros1_reader.h"
 
 namespace keel::io {
 namespace {
 
 constexpr size_t kBeamBytesRos1 = 8 + 4 * 8 + 1;  // id, 4 float64, bool
-
-// ROS1 fields in order, packed little endian; each read checks its bytes are there.
-class Ros1Reader {
- public:
-  Ros1Reader(const uint8_t* data, size_t size) : data_(data), size_(size) {}
-
-  template <typename T>
-  T read(const char* field) {
-    need(sizeof(T), field);
-    T v;
-    std::memcpy(&v, data_ + at_, sizeof(T));  // little-endian host (x86-64, arm64)
-    at_ += sizeof(T);
-    return v;
-  }
-  double f64(const char* field) { return read<double>(field); }
-  uint32_t u32(const char* field) { return read<uint32_t>(field); }
-  // An array's count, checked against the bytes left for `min_element_bytes` each.
-  uint32_t count(const char* field, size_t min_element_bytes) {
-    const uint32_t n = u32(field);
-    need(uint64_t(n) * min_element_bytes, field);
-    return n;
-  }
-  void skip_string(const char* field) {
-    const uint32_t n = count(field, 1);
-    at_ += n;
-  }
-
- private:
-  void need(uint64_t bytes, const char* field) const {
-    if (bytes > size_ - at_)
-      throw BagFormatError("ROS1: field '" + std::string(field) + "' needs " +
-                           std::to_string(bytes) + " bytes at offset " + std::to_string(at_) +
-                           "; the " + std::to_string(size_) + "-byte message has " +
-                           std::to_string(size_ - at_) + " left");
-  }
-
-  const uint8_t* data_;
-  size_t size_;
-  size_t at_ = 0;
-};
 
 void check_nanoseconds(uint64_t nsec) {
   if (nsec >= 1000000000u)
@@ -67,12 +27,12 @@ A50Dvl decode_a50_ros1(const uint8_t* data, size_t size) {
   const uint32_t nsec = r.u32("header.stamp.nsec");
   check_nanoseconds(nsec);
   m.stamp_ns = static_cast<TimeNs>(sec) * 1000000000 + nsec;
-  r.skip_string("header.frame_id");
+  r.string("header.frame_id");
   m.time_ms = r.f64("time");
   for (int i = 0; i < 3; ++i) m.velocity_m_s(i) = r.f64("velocity");
   m.fom_m_s = r.f64("fom");
   m.altitude_m = r.f64("altitude");
-  const uint32_t beams = r.count("beams", kBeamBytesRos1);
+  const uint32_t beams = r.sequence("beams", kBeamBytesRos1);
   m.beams.resize(beams);
   for (A50Beam& b : m.beams) {
     b.id = r.read<int64_t>("beams[].id");
@@ -84,7 +44,7 @@ A50Dvl decode_a50_ros1(const uint8_t* data, size_t size) {
   }
   m.velocity_valid = r.read<uint8_t>("velocity_valid") != 0;
   m.status = r.read<int64_t>("status");
-  r.skip_string("form");
+  r.string("form");
   return m;
 }
 

@@ -1,4 +1,5 @@
-// ROS1 bags through Debian's rosbag_storage (no ROS install), kept out of this header.
+// ROS1 bags as typed topics, read by Keel itself (ros1_bag.h: ROS bag format 2.0; messages
+// decoded by ros1_messages.h), without any ROS library.
 #pragma once
 
 #include <filesystem>
