@@ -4,7 +4,7 @@
 pass/fail; the output is meant to be pasted into docs/performance.md.
 
   /usr/bin/python3 tests/bench/peers_bench.py BIN_DIR [--runs 5] [--work DIR] [--copies 40]
-      [--only startup,voxel,ror,metrics]
+      [--ror-runs N] [--only startup,voxel,ror,metrics]
 
 The map: the real VLP-16 sweep ../shared/data/test_scan_vlp16.pcd (25,760 points) taken COPIES
 times (default 40: 1,030,400 points); copy 0 is the sweep itself, copy k >= 1 is the sweep plus
@@ -201,12 +201,12 @@ def bench_startup(args, keel):
         row(label, [run_once(c["cmd"], c.get("env"))[0] for _ in range(args.runs)])
 
 
-def bench_filter(args, keel, work, ply, name, chain, o3d_args):
+def bench_filter(args, keel, work, ply, name, chain, o3d_args, runs=None):
     a = {"cmd": [keel, "filter", "--in", str(ply), "--out", str(work / f"keel_{name}.ply"),
                  "--chain", json.dumps(chain), "--json"]}
     b = {"cmd": [PY, str(HERE), "--open3d-side", name, str(ply), str(work / f"o3d_{name}.ply"),
                  *map(str, o3d_args)]}
-    ta, tb, ratios, outa, outb = paired(args.runs, a, b)
+    ta, tb, ratios, outa, outb = paired(runs or args.runs, a, b)
     report(f"{name}: {json.dumps(chain)} vs Open3D", "keel-worker filter", "Open3D (python3)",
            ta, tb, ratios)
     keel_out, keel_s = keel_filter_seconds(outa)
@@ -225,7 +225,7 @@ def bench_ror(args, keel, work, ply, xyz):
     # counts the point itself and keeps it when that count > nb_points, i.e. >= nb_points others.
     keel_out, o3d_out = bench_filter(args, keel, work, ply, "ror",
                                      [{"type": "ror", "radius": radius, "min_neighbors": others}],
-                                     [radius, others])
+                                     [radius, others], args.ror_runs)
     t0 = time.monotonic()
     brute = ror_brute_force_keep(xyz, radius, others)
     kept = int(brute.sum())
@@ -277,6 +277,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("bin", help="folder holding keel-worker (e.g. build/bin)")
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--ror-runs", type=int, help="runs of the ROR case (default: --runs)")
     ap.add_argument("--copies", type=int, default=40)
     ap.add_argument("--work", help="folder for the map and outputs (default: a temporary one)")
     ap.add_argument("--only", default="startup,voxel,ror,metrics")
