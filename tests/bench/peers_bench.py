@@ -147,11 +147,11 @@ def ror_brute_force_keep(xyz, radius, others):
 
 
 # ---------------------------------------------------------------- timing
-def run_once(cmd, env=None):
+def run_once(cmd, env=None, any_exit=False):
     t0 = time.monotonic()
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
     seconds = time.monotonic() - t0
-    if p.returncode != 0:
+    if p.returncode != 0 and not any_exit:
         raise SystemExit(f"failed ({p.returncode}): {' '.join(map(str, cmd))}\n"
                          f"{p.stderr.decode(errors='replace')[-2000:]}")
     return seconds, p.stdout.decode(errors="replace")
@@ -194,11 +194,12 @@ def bench_startup(args, keel):
     cases = [("keel-worker --help", {"cmd": [keel, "--help"]}),
              ("/usr/bin/python3 -c 'import open3d'", {"cmd": [PY, "-c", "import open3d"]})]
     if shutil.which("CloudCompare"):
+        # Nothing to do: it loads its plugins, says so and exits 1.
         cases.append(("CloudCompare -SILENT (nothing to do)",
                       {"cmd": ["CloudCompare", "-SILENT"], "env": CC_ENV}))
     for label, c in cases:
-        run_once(c["cmd"], c.get("env"))
-        row(label, [run_once(c["cmd"], c.get("env"))[0] for _ in range(args.runs)])
+        run_once(c["cmd"], c.get("env"), any_exit=True)
+        row(label, [run_once(c["cmd"], c.get("env"), any_exit=True)[0] for _ in range(args.runs)])
 
 
 def bench_filter(args, keel, work, ply, name, chain, o3d_args, runs=None):
