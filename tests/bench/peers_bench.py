@@ -157,10 +157,11 @@ def run_once(cmd, env=None, any_exit=False):
     return seconds, p.stdout.decode(errors="replace")
 
 
-def paired(runs, a, b):
+def paired(runs, a, b, warm_up=True):
     """A B A B ... after one warm-up of each; (A times, B times, A/B ratios, A's last stdout,
     B's last stdout)."""
-    run_once(a["cmd"], a.get("env")); run_once(b["cmd"], b.get("env"))
+    if warm_up:
+        run_once(a["cmd"], a.get("env")); run_once(b["cmd"], b.get("env"))
     ta, tb, outa, outb = [], [], "", ""
     for _ in range(runs):
         s, outa = run_once(a["cmd"], a.get("env")); ta.append(s)
@@ -202,12 +203,12 @@ def bench_startup(args, keel):
         row(label, [run_once(c["cmd"], c.get("env"), any_exit=True)[0] for _ in range(args.runs)])
 
 
-def bench_filter(args, keel, work, ply, name, chain, o3d_args, runs=None):
+def bench_filter(args, keel, work, ply, name, chain, o3d_args, runs=None, warm_up=True):
     a = {"cmd": [keel, "filter", "--in", str(ply), "--out", str(work / f"keel_{name}.ply"),
                  "--chain", json.dumps(chain), "--json"]}
     b = {"cmd": [PY, str(HERE), "--open3d-side", name, str(ply), str(work / f"o3d_{name}.ply"),
                  *map(str, o3d_args)]}
-    ta, tb, ratios, outa, outb = paired(runs or args.runs, a, b)
+    ta, tb, ratios, outa, outb = paired(runs or args.runs, a, b, warm_up)
     report(f"{name}: {json.dumps(chain)} vs Open3D", "keel-worker filter", "Open3D (python3)",
            ta, tb, ratios)
     keel_out, keel_s = keel_filter_seconds(outa)
@@ -224,9 +225,11 @@ def bench_ror(args, keel, work, ply, xyz):
     # Keel: keep a point with >= min_neighbors OTHER points within the radius (the kd-tree count
     # includes the point itself and must reach min_neighbors + 1). Open3D 0.16: SearchRadius
     # counts the point itself and keeps it when that count > nb_points, i.e. >= nb_points others.
+    # No warm-up run here: Open3D's takes minutes (it lists every neighbour within r of every
+    # point), and the map is in the page cache from the cases before.
     keel_out, o3d_out = bench_filter(args, keel, work, ply, "ror",
                                      [{"type": "ror", "radius": radius, "min_neighbors": others}],
-                                     [radius, others], args.ror_runs)
+                                     [radius, others], args.ror_runs, warm_up=False)
     t0 = time.monotonic()
     brute = ror_brute_force_keep(xyz, radius, others)
     kept = int(brute.sum())
@@ -250,7 +253,8 @@ def bench_metrics(args, keel, work, ply):
     save = ["-SAVE_CLOUDS", "FILE", str(work / "cc_metrics.ply")]
     b = {"cmd": cc + ["-DENSITY", str(r), "-TYPE", "SURFACE", "-ROUGH", str(r), "-FEATURE",
                       "PLANARITY", str(r)] + save, "env": CC_ENV}
-    ta, tb, ratios, outa, _ = paired(args.runs, a, b)
+    # No warm-up: CloudCompare's run takes minutes at 1 M points; the map is in the page cache.
+    ta, tb, ratios, outa, _ = paired(args.runs, a, b, warm_up=False)
     report(f"metrics r {r} m: Keel density+roughness+planarity vs CloudCompare's "
            f"-DENSITY SURFACE, -ROUGH, -FEATURE PLANARITY", "keel-worker metrics",
            "CloudCompare -SILENT", ta, tb, ratios)
