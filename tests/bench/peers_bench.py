@@ -258,7 +258,9 @@ def bench_metrics(args, keel, work, ply):
     report(f"metrics r {r} m: Keel density+roughness+planarity vs CloudCompare's "
            f"-DENSITY SURFACE, -ROUGH, -FEATURE PLANARITY", "keel-worker metrics",
            "CloudCompare -SILENT", ta, tb, ratios)
-    io_only = [run_once(cc + save, CC_ENV)[0] for _ in range(args.runs)]
+    # Saved elsewhere: cc_metrics.ply keeps the metrics for the comparison below.
+    io_only = [run_once(cc + ["-SAVE_CLOUDS", "FILE", str(work / "cc_io_only.ply")], CC_ENV)[0]
+               for _ in range(args.runs)]
     row("CloudCompare -SILENT load + save only", io_only)
     keel_s = json.loads(outa).get("seconds", float("nan"))
     cc_s = statistics.median(tb) - statistics.median(io_only)
@@ -273,7 +275,7 @@ def bench_metrics(args, keel, work, ply):
             print(f"  mean {k:<10} Keel {np.nanmean(ours[k]):.6g}  CloudCompare "
                   f"{np.nanmean(theirs[col]):.6g}")
     except Exception as e:  # the figures above stand without this check
-        print(f"  (per-point means not compared: {e})")
+        print(f"  (per-point means not compared: {e!r})")
 
 
 def main():
