@@ -1,10 +1,12 @@
 // `keel-worker filter --in FILE.pcd|.ply --out FILE.pcd|.ply --chain JSON_OR_FILE
 //  [--threads 2] [--json]`: applies a filter chain of seed 000 Table III (the JSON the `map`
 // stage takes in its *_filters options, docs/map-filters.md) to one point cloud file and
-// prints the point counts in and out of every filter.
+// prints the point counts in and out of every filter (--json: and the seconds spent reading,
+// filtering and writing).
 // Exit codes: 0 done, 1 usage or unreadable input.
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -66,16 +68,31 @@ nlohmann::json load_chain(const std::string& text) {
 int run_filter(const FilterArgs& args) {
   const mapping::FilterChain chain =
       mapping::filter_chain_from_json(load_chain(args.chain), "--chain");
+  // Each phase's wall time for --json, so a benchmark can tell the work from the I/O and
+  // the process start-up (tests/bench/peers_bench.py).
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+  };
+  auto t0 = Clock::now();
   PointCloud cloud = io::read_scan_file(args.in, 0);
+  const double read_s = seconds_since(t0);
   const size_t points_in = cloud.size();
+  t0 = Clock::now();
   const std::vector<mapping::FilterStep> steps =
       mapping::apply_filter_chain(chain, cloud, args.threads);
+  const double filter_s = seconds_since(t0);
+  t0 = Clock::now();
   io::write_scan_file(args.out, cloud);
+  const double write_s = seconds_since(t0);
   if (args.json) {
     nlohmann::ordered_json out = {{"in", args.in},
                                   {"out", args.out},
                                   {"points_in", points_in},
                                   {"points_out", cloud.size()},
+                                  {"read_seconds", read_s},
+                                  {"filter_seconds", filter_s},
+                                  {"write_seconds", write_s},
                                   {"filters", nlohmann::json::array()}};
     for (const auto& step : steps)
       out["filters"].push_back({{"filter", step.filter},
