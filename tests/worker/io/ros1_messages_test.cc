@@ -10,6 +10,8 @@
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/TwistWithCovarianceStamped.h>
 #include <gtest/gtest.h>
+
+#include <deque>
 #include <nav_msgs/Odometry.h>
 #include <ros/serialization.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -37,6 +39,13 @@ std::vector<uint8_t> serialize(const T& message) {
   return bytes;
 }
 
+// Decoded messages point into their bytes (frame ids, point and pixel data): every message's
+// bytes are kept for the whole test.
+std::deque<std::vector<uint8_t>>& kept_bytes() {
+  static std::deque<std::vector<uint8_t>> bytes;
+  return bytes;
+}
+
 // Decodes roscpp's bytes with `decode` (returned for the caller to compare) and checks that
 // every prefix is refused and the MD5 Keel expects is roscpp's.
 template <typename T, typename Decode>
@@ -44,7 +53,7 @@ auto decode_exact(const T& message, Decode decode) {
   const std::string type = ros::message_traits::datatype<T>();
   SCOPED_TRACE(type);
   EXPECT_EQ(ros1::md5_of(type), ros::message_traits::md5sum<T>());
-  const std::vector<uint8_t> bytes = serialize(message);
+  const std::vector<uint8_t>& bytes = kept_bytes().emplace_back(serialize(message));
   for (size_t n = 0; n < bytes.size(); ++n) {
     const std::vector<uint8_t> prefix(bytes.begin(), bytes.begin() + n);
     EXPECT_THROW(decode(prefix.data(), prefix.size()), BagFormatError) << "prefix of " << n;
