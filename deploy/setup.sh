@@ -14,6 +14,8 @@ packages=(
   libspdlog-dev libyaml-cpp-dev libssl-dev libarchive-dev
   # WGS 84 <-> the world frame's local ENU (core/geodesy.h)
   libproj-dev
+  # PNG and JPEG camera images (worker/io/image_codec.cc)
+  libpng-dev libjpeg-dev
   # PostgreSQL store for several replicas (issue 14); tests start a private server
   libpqxx-dev postgresql
   # deploy/ checks (tests/deploy): systemd-analyze, nginx -t
