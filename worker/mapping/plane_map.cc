@@ -1,28 +1,18 @@
 #include "worker/mapping/plane_map.h"
 
-#include <nanoflann.hpp>
-
 #include <Eigen/Eigenvalues>
 
 #include <stdexcept>
 
 #include "core/parallel_for.h"
 
+#include "worker/mapping/kd_points.h"
+
 namespace keel::mapping {
 namespace {
 
-struct PointSet {
-  std::vector<Eigen::Vector3f> points;
-  size_t kdtree_get_point_count() const { return points.size(); }
-  float kdtree_get_pt(size_t index, size_t axis) const { return points[index][axis]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointSet>,
-                                                 PointSet, 3, uint32_t>;
+using PointSet = KdPoints;
+using Tree = KdTree;
 
 LocalPlane fit_plane(const PointSet& set, const std::vector<uint32_t>& indices,
                      const std::vector<float>& squared_distances, size_t found,

@@ -3,28 +3,17 @@
 // futex calls (perf), and it cannot stop a count early. nanoflann's result sets can.
 #include "worker/mapping/radius_search.h"
 
-#include <nanoflann.hpp>
-
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
 
+#include "worker/mapping/kd_points.h"
+
 namespace keel::mapping {
 namespace {
 
-// nanoflann's dataset adaptor over the points, stored in Morton order.
-struct PointSet {
-  std::vector<Eigen::Vector3f> points;
-  size_t kdtree_get_point_count() const { return points.size(); }
-  float kdtree_get_pt(size_t index, size_t axis) const { return points[index][axis]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;  // let nanoflann compute it
-  }
-};
-
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointSet>,
-                                                 PointSet, 3, uint32_t>;
+using PointSet = KdPoints;  // stored in Morton order
+using Tree = KdTree;
 
 // Spreads the low 21 bits of v so that two zero bits separate each (Morton interleaving).
 uint64_t spread_bits(uint64_t v) {
